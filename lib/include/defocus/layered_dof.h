@@ -1,0 +1,48 @@
+// Depth of field of a layered scene: spread each layer with its own
+// per-pixel CoC, composite back to front with "over" on the spread alpha.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <OpenImageIO/imagebuf.h>
+
+#include <defocus/aperture.h>
+#include <defocus/camera.h>
+#include <defocus/scene.h>
+
+namespace defocus {
+
+/// The CoC radius |c|/2 in pixels of every pixel of `depth` (one float
+/// channel) over `roi`.
+bool coc_radius(OIIO::ImageBuf& dst, const OIIO::ImageBuf& depth,
+                const CircleOfConfusion& coc, OIIO::ROI roi = {},
+                int nthreads = 0);
+
+struct RenderSettings {
+    Camera camera;
+    Aperture aperture = Aperture::Box;
+    /// Clip the result to the display window; otherwise it covers the
+    /// input data window grown by the blur.
+    bool crop = false;
+};
+
+/// What one layer looked like to the renderer, for -v.
+struct LayerReport {
+    std::string name;
+    int64_t pixels = 0;  ///< pixels with alpha > 0
+    double depth_min = 0, depth_max = 0;
+    double coc_min = 0, coc_max = 0;  ///< signed CoC diameters, pixels
+};
+
+/// Renders the defocused, flattened premultiplied RGBA of a sanitized
+/// scene (see sanitize()). Layers are taken back to front by their
+/// alpha-weighted mean inverse depth; `report`, when given, lists them in
+/// that order. The result keeps the scene's display window.
+bool render_layered_dof(OIIO::ImageBuf& dst, const Scene& scene,
+                        const RenderSettings& settings,
+                        std::vector<LayerReport>* report = nullptr,
+                        int nthreads = 0);
+
+}  // namespace defocus

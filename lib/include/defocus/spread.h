@@ -1,0 +1,45 @@
+// Spreading filters on one layer, in the style of ImageBufAlgo: each takes
+// const ImageBuf inputs, an ROI and a thread count, writes `dst`, and
+// returns false with dst.geterror() set on failure.
+//
+// Inputs for all of them:
+//   src     premultiplied colour (any number of channels, usually RGBA);
+//   radius  one float channel: the CoC radius |c|/2 in pixels of each
+//           source pixel, over at least `roi`.
+// `roi` is the region of src to spread (default: src's data window).
+#pragma once
+
+#include <OpenImageIO/imagebuf.h>
+
+#include <defocus/footprint.h>
+
+namespace defocus {
+
+using OIIO::ImageBuf;
+using OIIO::ROI;
+
+/// The data window a spread of `roi` covers when no pixel's footprint
+/// reaches further than `max_coc_radius` allows for the box.
+ROI box_spread_extent(const ROI& roi, double max_coc_radius);
+
+/// Constant-time rectangle spreading (Kosloff, Tao & Barsky 2009): each
+/// pixel spreads over the square with the area of its CoC disc, with
+/// fractional edge coverage, through corner deltas and two prefix sums.
+/// dst covers box_spread_extent(roi, max radius) in float; the sum of dst
+/// equals the sum of src.
+bool spread_box(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
+                ROI roi = {}, int nthreads = 0);
+
+/// Direct spreading: every pixel adds psf(radius) times its value to its
+/// neighbours. O(r²) per pixel; the reference the fast filters must equal.
+/// dst covers `roi` grown by the largest footprint.
+bool spread_direct(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
+                   const Psf& psf, ROI roi = {}, int nthreads = 0);
+
+/// Gathering, the baseline the tests show failing: each output pixel is the
+/// psf-weighted average of its neighbours at its *own* radius. dst covers
+/// `roi`.
+bool gather(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
+            const Psf& psf, ROI roi = {}, int nthreads = 0);
+
+}  // namespace defocus

@@ -1,0 +1,59 @@
+// The gather baseline: what compositing packages' defocus nodes do, kept
+// so the tests can show its artifacts.
+#include <defocus/spread.h>
+
+#include <algorithm>
+#include <vector>
+
+#include <OpenImageIO/parallel.h>
+
+#include "float_pixels.h"
+#include "spread_common.h"
+
+namespace defocus {
+
+bool gather(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
+            const Psf& psf, ROI roi, int nthreads)
+{
+    if (!check_spread_inputs(dst, src, radius, roi))
+        return false;
+    const int nc = src.nchannels();
+    const FloatPixels pixels(src, roi);
+    const FloatPixels radii(radius, ROI(roi.xbegin, roi.xend, roi.ybegin,
+                                        roi.yend, 0, 1, 0, 1));
+    ROI window = roi;
+    window.chend = nc;
+    dst.reset(output_spec(src, window));
+    float* out = static_cast<float*>(dst.localpixels());
+    OIIO::parallel_for(roi.ybegin, roi.yend, [&](int y) {
+        std::vector<double> sum(nc);
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            // The adjoint of spreading with this pixel's own footprint,
+            // renormalised over the part that lies inside the image.
+            const Footprint fp = psf(*radii(x, y));
+            std::fill(sum.begin(), sum.end(), 0.0);
+            double wsum = 0.0;
+            for (int j = 0; j < fp.height; ++j) {
+                const int sy = y - (fp.y0 + j);
+                if (sy < roi.ybegin || sy >= roi.yend)
+                    continue;
+                for (int i = 0; i < fp.width; ++i) {
+                    const int sx = x - (fp.x0 + i);
+                    if (sx < roi.xbegin || sx >= roi.xend)
+                        continue;
+                    const double w = fp.at(i, j);
+                    const float* v = pixels(sx, sy);
+                    for (int c = 0; c < nc; ++c)
+                        sum[c] += w * v[c];
+                    wsum += w;
+                }
+            }
+            float* o = out + (size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)) * nc;
+            for (int c = 0; c < nc; ++c)
+                o[c] = wsum > 0.0 ? float(sum[c] / wsum) : 0.0f;
+        }
+    }, OIIO::paropt(nthreads));
+    return true;
+}
+
+}  // namespace defocus

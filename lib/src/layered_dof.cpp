@@ -1,0 +1,141 @@
+#include <defocus/layered_dof.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/parallel.h>
+
+#include <defocus/spread.h>
+
+namespace defocus {
+
+using namespace OIIO;
+
+bool coc_radius(ImageBuf& dst, const ImageBuf& depth,
+                const CircleOfConfusion& coc, ROI roi, int nthreads)
+{
+    if (!roi.defined())
+        roi = depth.roi();
+    ImageSpec spec(roi, TypeFloat);
+    spec.nchannels = 1;
+    spec.channelnames = { "radius" };
+    dst.reset(spec);
+    parallel_for(roi.ybegin, roi.yend, [&](int y) {
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const float z = *static_cast<const float*>(depth.pixeladdr(x, y));
+            *static_cast<float*>(dst.pixeladdr(x, y)) = float(coc.radius(z));
+        }
+    }, paropt(nthreads));
+    return true;
+}
+
+namespace {
+
+/// Depth statistics of the covered pixels of a layer.
+struct LayerDepth {
+    double mean_inverse_depth = 0;  ///< alpha-weighted; orders the layers
+    LayerReport report;
+};
+
+LayerDepth measure(const Layer& layer, const CircleOfConfusion& coc)
+{
+    LayerDepth d;
+    d.report.name = layer.name;
+    d.report.depth_min = INFINITY;
+    d.report.depth_max = -INFINITY;
+    double weight = 0, weighted = 0;
+    const ROI roi = layer.color.roi();
+    for (int y = roi.ybegin; y < roi.yend; ++y)
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const float a = static_cast<const float*>(layer.color.pixeladdr(x, y))[3];
+            if (a <= 0.0f)
+                continue;
+            const double z = *static_cast<const float*>(layer.depth.pixeladdr(x, y));
+            ++d.report.pixels;
+            d.report.depth_min = std::min(d.report.depth_min, z);
+            d.report.depth_max = std::max(d.report.depth_max, z);
+            weight += a;
+            weighted += a * (std::isinf(z) ? 0.0 : 1.0 / z);
+        }
+    if (d.report.pixels == 0)
+        d.report.depth_min = d.report.depth_max = 0.0;
+    d.mean_inverse_depth = weight > 0 ? weighted / weight : 0.0;
+    d.report.coc_min = coc.diameter(d.report.depth_min);
+    d.report.coc_max = coc.diameter(d.report.depth_max);
+    return d;
+}
+
+}  // namespace
+
+bool render_layered_dof(ImageBuf& dst, const Scene& scene,
+                        const RenderSettings& settings,
+                        std::vector<LayerReport>* report, int nthreads)
+{
+    const CircleOfConfusion coc(settings.camera, scene.spec.full_width);
+    std::vector<LayerDepth> depths;
+    for (const Layer& layer : scene.layers)
+        depths.push_back(measure(layer, coc));
+    std::vector<size_t> order(scene.layers.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+        return depths[a].mean_inverse_depth < depths[b].mean_inverse_depth;
+    });
+
+    ImageBuf result;
+    for (size_t i : order) {
+        const Layer& layer = scene.layers[i];
+        if (report)
+            report->push_back(depths[i].report);
+        if (depths[i].report.pixels == 0)
+            continue;
+        ImageBuf radius, spread;
+        if (!coc_radius(radius, layer.depth, coc, {}, nthreads)
+            || !spread_box(spread, layer.color, radius, {}, nthreads)) {
+            dst.errorfmt("layer '{}': {}", layer.name,
+                         radius.has_error() ? radius.geterror() : spread.geterror());
+            return false;
+        }
+        if (!result.initialized()) {
+            result = std::move(spread);
+            continue;
+        }
+        ImageBuf composite;
+        if (!ImageBufAlgo::over(composite, spread, result, {}, nthreads)) {
+            dst.errorfmt("layer '{}': {}", layer.name, composite.geterror());
+            return false;
+        }
+        result = std::move(composite);
+    }
+
+    const ROI display(scene.spec.full_x, scene.spec.full_x + scene.spec.full_width,
+                      scene.spec.full_y, scene.spec.full_y + scene.spec.full_height,
+                      0, 1, 0, 4);
+    if (!result.initialized()) {  // nothing is covered: a transparent frame
+        ImageSpec empty(display, TypeFloat);
+        empty.channelnames = { "R", "G", "B", "A" };
+        empty.alpha_channel = 3;
+        result.reset(empty);
+        ImageBufAlgo::zero(result);
+    }
+    if (settings.crop) {
+        ImageBuf cropped;
+        ImageBufAlgo::crop(cropped, result, display, nthreads);
+        result = std::move(cropped);
+    }
+    ImageSpec& spec   = result.specmod();
+    spec.full_x       = display.xbegin;
+    spec.full_y       = display.ybegin;
+    spec.full_width   = display.width();
+    spec.full_height  = display.height();
+    spec.extra_attribs = scene.spec.extra_attribs;
+    // These describe one part of the input, not the flattened result.
+    for (const char* part_only : { "name", "view", "oiio:subimages",
+                                   "openexr:chunkCount", "oiio:subimagename" })
+        spec.erase_attribute(part_only);
+    dst = std::move(result);
+    return true;
+}
+
+}  // namespace defocus

@@ -1,0 +1,75 @@
+#include "spread_common.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <vector>
+
+#include <OpenImageIO/parallel.h>
+
+namespace defocus {
+
+using OIIO::ROI;
+
+bool check_spread_inputs(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
+                         const OIIO::ImageBuf& radius, ROI& roi)
+{
+    if (!src.initialized() || !radius.initialized()) {
+        dst.errorfmt("spread: uninitialized input");
+        return false;
+    }
+    if (radius.nchannels() != 1) {
+        dst.errorfmt("spread: the radius image must have one channel, not {}",
+                     radius.nchannels());
+        return false;
+    }
+    if (!roi.defined())
+        roi = src.roi();
+    roi.chbegin = 0;
+    roi.chend   = src.nchannels();
+    roi.zbegin = 0;
+    roi.zend   = 1;
+    if (!src.roi().contains(roi) || !radius.roi().contains(roi.xbegin, roi.ybegin)
+        || !radius.roi().contains(roi.xend - 1, roi.yend - 1)) {
+        dst.errorfmt("spread: the region {} is not inside both the image {} and the radius {}",
+                     roi, src.roi(), radius.roi());
+        return false;
+    }
+    return true;
+}
+
+double max_radius(OIIO::ImageBuf& dst, const FloatPixels& image, int nthreads)
+{
+    const ROI& roi = image.roi();
+    std::vector<double> row_max(roi.height(), 0.0);
+    OIIO::parallel_for(roi.ybegin, roi.yend, [&](int y) {
+        double m = 0.0;
+        for (int x = roi.xbegin; x < roi.xend; ++x)
+            m = std::max(m, double(*image(x, y)));
+        row_max[y - roi.ybegin] = m;
+    }, OIIO::paropt(nthreads));
+    const double m = row_max.empty() ? 0.0 : *std::max_element(row_max.begin(), row_max.end());
+    // Beyond this a footprint would not fit in memory: a clamped CoC never
+    // comes near it.
+    const double limit = 1 << 20;
+    if (!(m <= limit)) {
+        dst.errorfmt("spread: CoC radius {} is out of range (limit {})", m, limit);
+        return -1.0;
+    }
+    return m;
+}
+
+ImageSpec output_spec(const OIIO::ImageBuf& src, const ROI& window)
+{
+    ImageSpec spec(window, OIIO::TypeFloat);
+    spec.nchannels = src.nchannels();
+    spec.channelnames = src.spec().channelnames;
+    spec.alpha_channel = src.spec().alpha_channel;
+    spec.full_x = src.spec().full_x;
+    spec.full_y = src.spec().full_y;
+    spec.full_width = src.spec().full_width;
+    spec.full_height = src.spec().full_height;
+    return spec;
+}
+
+}  // namespace defocus
