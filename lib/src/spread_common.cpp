@@ -38,14 +38,16 @@ bool check_spread_inputs(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
     return true;
 }
 
-double max_radius(OIIO::ImageBuf& dst, const FloatPixels& image, int nthreads)
+double max_radius(OIIO::ImageBuf& dst, const FloatPixels& pixels,
+                  const FloatPixels& radii, int nthreads)
 {
-    const ROI& roi = image.roi();
+    const ROI& roi = radii.roi();
     std::vector<double> row_max(roi.height(), 0.0);
     OIIO::parallel_for(roi.ybegin, roi.yend, [&](int y) {
         double m = 0.0;
         for (int x = roi.xbegin; x < roi.xend; ++x)
-            m = std::max(m, double(*image(x, y)));
+            if (!is_zero(pixels(x, y), pixels.nchannels()))
+                m = std::max(m, double(*radii(x, y)));
         row_max[y - roi.ybegin] = m;
     }, OIIO::paropt(nthreads));
     const double m = row_max.empty() ? 0.0 : *std::max_element(row_max.begin(), row_max.end());

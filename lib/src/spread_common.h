@@ -9,15 +9,6 @@ namespace defocus {
 
 using OIIO::ImageSpec;
 
-/// Validates the common inputs of a spreading filter and fills in a
-/// default roi (src's data window). On failure sets dst's error.
-bool check_spread_inputs(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
-                         const OIIO::ImageBuf& radius, OIIO::ROI& roi);
-
-/// The largest CoC radius of a one-channel radius image, or a negative
-/// value (with dst's error set) when one is infinite or absurdly large.
-double max_radius(OIIO::ImageBuf& dst, const FloatPixels& radii, int nthreads);
-
 inline bool is_zero(const float* v, int nc)
 {
     for (int c = 0; c < nc; ++c)
@@ -25,6 +16,17 @@ inline bool is_zero(const float* v, int nc)
             return false;
     return true;
 }
+
+/// Validates the common inputs of a spreading filter and fills in a
+/// default roi (src's data window). On failure sets dst's error.
+bool check_spread_inputs(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
+                         const OIIO::ImageBuf& radius, OIIO::ROI& roi);
+
+/// The largest CoC radius of a pixel that carries light (pixels that are
+/// all zero spread nothing, whatever their radius), or a negative value
+/// (with dst's error set) when one is infinite or absurdly large.
+double max_radius(OIIO::ImageBuf& dst, const FloatPixels& pixels,
+                  const FloatPixels& radii, int nthreads);
 
 /// A float spec over `window` with src's channel names and alpha channel.
 ImageSpec output_spec(const OIIO::ImageBuf& src, const OIIO::ROI& window);

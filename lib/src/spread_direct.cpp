@@ -22,7 +22,7 @@ bool spread_direct(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
     const FloatPixels pixels(src, roi);
     const FloatPixels radii(radius, ROI(roi.xbegin, roi.xend, roi.ybegin,
                                         roi.yend, 0, 1, 0, 1));
-    const double rmax = max_radius(dst, radii, nthreads);
+    const double rmax = max_radius(dst, pixels, radii, nthreads);
     if (rmax < 0.0)
         return false;
     // Footprints grow with the radius, so the largest bounds them all.

@@ -1,0 +1,204 @@
+// The defocus tool end to end: a generated multi-part scene, and every bad
+// input ending in a one-line error, a non-zero exit and no output file.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/imageio.h>
+#include <OpenImageIO/strutil.h>
+
+#include "test_support.h"
+
+using namespace defocus_test;
+using namespace OIIO;
+
+namespace {
+
+const std::string defocus_bin = DEFOCUS_BIN;
+const std::string camera = " --focal 50 --fstop 1.8 --focus 4";
+
+std::string example_scene()
+{
+    static std::string path;
+    if (path.empty()) {
+        path = scratch_dir("example") + "/scene.exr";
+        std::string log;
+        REQUIRE(run(std::string(MAKE_EXAMPLE_SCENE_BIN) + " " + path
+                        + " --width 320 --height 180", log) == 0);
+    }
+    return path;
+}
+
+/// Runs defocus; the output and exit status.
+int defocus(const std::string& args, std::string& output)
+{
+    return run(defocus_bin + " " + args, output);
+}
+
+/// True when the text is one line (ending in a newline) mentioning `what`.
+bool one_line_naming(const std::string& text, const std::string& what)
+{
+    return Strutil::contains(text, what) && text.find('\n') == text.size() - 1;
+}
+
+bool no_nan(const ImageBuf& image)
+{
+    ImageBufAlgo::PixelStats stats = ImageBufAlgo::computePixelStats(image);
+    for (size_t c = 0; c < stats.nancount.size(); ++c)
+        if (stats.nancount[c] || stats.infcount[c])
+            return false;
+    return true;
+}
+
+/// Writes a one-part scene with the given channels and values.
+void write_scene(const std::string& path, const std::vector<std::string>& channels,
+                 const std::vector<float>& pixel, int size = 16)
+{
+    ImageSpec spec(size, size, int(channels.size()), TypeFloat);
+    spec.channelnames = channels;
+    ImageBuf image(spec);
+    ImageBufAlgo::fill(image, pixel);
+    REQUIRE(image.write(path));
+}
+
+}  // namespace
+
+TEST_CASE("defocus renders a generated multi-part scene")
+{
+    const std::string dir = scratch_dir("cli_scene");
+    const std::string out = dir + "/out.exr";
+    std::string log;
+    REQUIRE(defocus(example_scene() + " -o " + out + camera + " -v", log) == 0);
+    CHECK(Strutil::contains(log, "leaves"));
+    CHECK(Strutil::contains(log, "layers, back to front"));
+
+    ImageBuf result(out), input(example_scene());
+    REQUIRE(result.init_spec(out, 0, 0));
+    const ImageSpec& spec = result.spec();
+    // The display window and metadata of the input, the camera recorded.
+    CHECK(spec.full_width == 320);
+    CHECK(spec.full_height == 180);
+    CHECK(spec.nchannels == 4);
+    CHECK(spec.format == TypeHalf);
+    CHECK(spec.get_float_attribute("defocus:focalLength") == 50.0f);
+    CHECK(spec.get_float_attribute("defocus:fNumber") == 1.8f);
+    CHECK(spec.get_float_attribute("defocus:focusDistance") == 4.0f);
+    CHECK(spec.get_string_attribute("defocus:aperture") == "box");
+    CHECK(spec.get_string_attribute("defocus:exampleCamera") != "");
+    CHECK(spec.get_string_attribute("compression") == "zip");
+    // The blur grows the data window beyond the input's overscan.
+    CHECK(spec.x < -16);
+    CHECK(no_nan(result));
+
+    // --crop clips to the display window; -d and --compression are obeyed.
+    const std::string cropped = dir + "/cropped.exr";
+    REQUIRE(defocus(example_scene() + " -o " + cropped + camera
+                        + " --crop -d float --compression piz", log) == 0);
+    ImageBuf c(cropped);
+    REQUIRE(c.init_spec(cropped, 0, 0));
+    CHECK(c.spec().x == 0);
+    CHECK(c.spec().width == 320);
+    CHECK(c.spec().format == TypeFloat);
+    CHECK(c.spec().get_string_attribute("compression") == "piz");
+    // No temporary files are left beside the outputs.
+    std::vector<std::string> files;
+    Filesystem::get_directory_entries(dir, files);
+    CHECK(files.size() == 2);
+}
+
+TEST_CASE("bad pixels are handled, counted and never reach the output")
+{
+    const std::string dir = scratch_dir("cli_bad_pixels");
+    // Three pixels of NaN colour, bad depths, and transparent light.
+    ImageSpec spec(8, 8, 5, TypeFloat);
+    spec.channelnames = { "R", "G", "B", "A", "Z" };
+    ImageBuf image(spec);
+    ImageBufAlgo::fill(image, { 0.5f, 0.5f, 0.5f, 1.0f, 2.0f });
+    const float nan_color[5] = { NAN, 0.5f, 0.5f, 1.0f, 2.0f };
+    const float inf_alpha[5] = { 0.5f, 0.5f, 0.5f, INFINITY, 2.0f };
+    const float zero_z[5] = { 0.5f, 0.5f, 0.5f, 1.0f, 0.0f };
+    const float nan_z[5] = { 0.5f, 0.5f, 0.5f, 1.0f, NAN };
+    const float negative_z[5] = { 0.5f, 0.5f, 0.5f, 1.0f, -3.0f };
+    const float glow[5] = { 4.0f, 4.0f, 4.0f, 0.0f, 1e10f };
+    image.setpixel(1, 1, nan_color);
+    image.setpixel(2, 1, inf_alpha);
+    image.setpixel(3, 3, zero_z);
+    image.setpixel(4, 3, nan_z);
+    image.setpixel(5, 3, negative_z);
+    image.setpixel(6, 6, glow);
+    const std::string in = dir + "/bad.exr", out = dir + "/out.exr";
+    REQUIRE(image.write(in));
+    std::string log;
+    REQUIRE(defocus(in + " -o " + out + camera + " -v", log) == 0);
+    CHECK(Strutil::contains(log, "2 with NaN/inf colour dropped"));
+    CHECK(Strutil::contains(log, "3 with bad depth taken as infinitely far"));
+    CHECK(Strutil::contains(log, "1 transparent with colour cleared"));
+    ImageBuf result(out);
+    REQUIRE(result.read());
+    CHECK(no_nan(result));
+    const auto stats = ImageBufAlgo::computePixelStats(result);
+    CHECK(stats.max[0] <= 0.5f + 1e-3f);  // the alpha-0 glow carried no light
+}
+
+TEST_CASE("every bad input ends in a one-line error and no output")
+{
+    const std::string dir = scratch_dir("cli_errors");
+    const std::string out = dir + "/out.exr";
+    const std::string not_image = dir + "/notes.exr";
+    Filesystem::write_text_file(not_image, "this is not an image\n");
+    const std::string no_alpha = dir + "/no_alpha.exr";
+    write_scene(no_alpha, { "R", "G", "B", "Z" }, { 1, 1, 1, 2 });
+    const std::string no_depth = dir + "/no_depth.exr";
+    write_scene(no_depth, { "R", "G", "B", "A" }, { 1, 1, 1, 1 });
+
+    struct Case {
+        std::string args, mentions;
+    };
+    const std::vector<Case> cases = {
+        { dir + "/missing.exr -o " + out + camera, "missing.exr: no such file" },
+        { not_image + " -o " + out + camera, "notes.exr" },
+        { no_alpha + " -o " + out + camera, "no A channel" },
+        { no_depth + " -o " + out + camera, "no Z channel" },
+        { example_scene() + " -o " + out + " --focal 50 --fstop abc --focus 4",
+          "--fstop: 'abc' is not a number" },
+        { example_scene() + " -o " + out + " --focal 50 --fstop 1.8 --focus -2",
+          "--focus" },
+        { example_scene() + " -o " + out + " --focal 50 --fstop 0 --focus 4",
+          "out of range" },
+        { example_scene() + " -o " + out + camera + " --max-blur 1e9", "--max-blur" },
+        { example_scene() + " -o " + out + camera + " --threads x", "--threads" },
+        { example_scene() + " -o " + out + camera + " --aperture heart", "heart" },
+        { example_scene() + " -o " + out + camera + " -d int7", "int7" },
+        { example_scene() + " -o " + out + " --focal 50", "--focus" },
+        { example_scene() + camera, "-o" },
+        { example_scene() + " -o " + out + camera + " --bogus", "bogus" },
+        { example_scene() + " -o " + dir + "/no/such/dir/out.exr" + camera, "out.exr" },
+        { example_scene() + " -o " + example_scene() + camera, "overwrite the input" },
+    };
+    for (const Case& c : cases) {
+        INFO("defocus " << c.args);
+        std::string log;
+        const int status = defocus(c.args, log);
+        INFO(log);
+        CHECK(status != 0);
+        CHECK(status < 128);  // exited, not killed by a signal
+        CHECK(one_line_naming(log, c.mentions));
+        CHECK_FALSE(Filesystem::exists(out));
+    }
+    std::vector<std::string> files;
+    Filesystem::get_directory_entries(dir, files);
+    CHECK(files.size() == 3);  // only the inputs written above
+}
+
+TEST_CASE("--help teaches the options")
+{
+    std::string log;
+    REQUIRE(defocus("--help", log) == 0);
+    for (const char* option : { "--focal", "--fstop", "--focus", "--sensor", "--lens",
+                                "--max-blur", "--aperture", "-o", "-d", "--compression",
+                                "--crop", "-v", "--threads", "Examples" })
+        CHECK(Strutil::contains(log, option));
+}

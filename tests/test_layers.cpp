@@ -1,0 +1,157 @@
+// Layered depth of field on a two-layer scene: partial occlusion and no
+// intensity leakage, where the gather baseline shows both artifacts.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include <OpenImageIO/imagebufalgo.h>
+
+#include <defocus/layered_dof.h>
+#include <defocus/spread.h>
+
+#include "test_support.h"
+
+using namespace defocus;
+using namespace defocus_test;
+using OIIO::ImageBuf;
+using OIIO::ROI;
+
+namespace {
+
+// A red opaque square at depth 1 in front of a green striped wall at 10.
+const ROI frame(0, 120, 0, 80);
+const ROI square(40, 80, 20, 60);
+const float near_z = 1.0f, far_z = 10.0f;
+
+float wall_green(int x) { return 0.2f + 0.6f * float((x / 4) % 2); }
+
+Scene two_layer_scene()
+{
+    Scene scene;
+    scene.source = "synthetic";
+    scene.spec = OIIO::ImageSpec(120, 80, 4, OIIO::TypeFloat);
+    Layer wall { "wall", zero_image(frame, 4), zero_image(frame, 1) };
+    Layer card { "card", zero_image(square, 4), zero_image(square, 1) };
+    for (int y = frame.ybegin; y < frame.yend; ++y)
+        for (int x = frame.xbegin; x < frame.xend; ++x) {
+            const float green[4] = { 0, wall_green(x), 0, 1 };
+            wall.color.setpixel(x, y, green);
+            wall.depth.setpixel(x, y, &far_z);
+        }
+    OIIO::ImageBufAlgo::fill(card.color, { 1.0f, 0.0f, 0.0f, 1.0f });
+    OIIO::ImageBufAlgo::fill(card.depth, { near_z });
+    card.color.specmod().alpha_channel = wall.color.specmod().alpha_channel = 3;
+    scene.layers.push_back(std::move(card));  // out of order on purpose
+    scene.layers.push_back(std::move(wall));
+    return scene;
+}
+
+Camera camera_focused_at(double z)
+{
+    // k = f^2/(N s) W = 0.1 * (100/36) * 120 = 33.3 px: a 30 px CoC for the
+    // out-of-focus layer whichever is in focus.
+    Camera cam;
+    cam.focal_length_mm = 100;
+    cam.fstop = 1;
+    cam.sensor_width_mm = 36;
+    cam.focus_distance = z;
+    return cam;
+}
+
+ImageBuf layered(double focus)
+{
+    RenderSettings settings;
+    settings.camera = camera_focused_at(focus);
+    ImageBuf out;
+    REQUIRE(render_layered_dof(out, two_layer_scene(), settings));
+    return out;
+}
+
+/// The gather baseline works on the flat render: the sharp composite with
+/// the depth of the front-most surface.
+ImageBuf gathered(double focus)
+{
+    ImageBuf color = zero_image(frame, 4), depth = zero_image(frame, 1);
+    for (int y = frame.ybegin; y < frame.yend; ++y)
+        for (int x = frame.xbegin; x < frame.xend; ++x) {
+            const bool card = square.contains(x, y);
+            const float rgba[4] = { card ? 1.0f : 0.0f, card ? 0.0f : wall_green(x), 0, 1 };
+            color.setpixel(x, y, rgba);
+            depth.setpixel(x, y, card ? &near_z : &far_z);
+        }
+    ImageBuf radius, out;
+    REQUIRE(coc_radius(radius, depth, CircleOfConfusion(camera_focused_at(focus), 120)));
+    REQUIRE(gather(out, color, radius, box_footprint));
+    return out;
+}
+
+float channel_at(const ImageBuf& image, int x, int y, int c)
+{
+    float p[4];
+    image.getpixel(x, y, p);
+    return p[c];
+}
+
+}  // namespace
+
+TEST_CASE("a blurred background never leaks over an in-focus foreground")
+{
+    const ImageBuf out = layered(near_z);
+    // Inside the sharp card: exactly the card, no wall light.
+    for (int y = square.ybegin; y < square.yend; ++y)
+        for (int x = square.xbegin; x < square.xend; ++x) {
+            REQUIRE(channel_at(out, x, y, 0) == Approx(1.0f).margin(1e-6));
+            REQUIRE(channel_at(out, x, y, 1) == Approx(0.0f).margin(1e-6));
+        }
+    // Outside it: no card light either (the card is in focus).
+    for (int x = 20; x < 40; ++x)
+        REQUIRE(channel_at(out, x, 40, 0) == Approx(0.0f).margin(1e-6));
+    // The wall itself is blurred: its 4-pixel stripes are averaged away.
+    CHECK(std::abs(channel_at(out, 10, 10, 1) - channel_at(out, 12, 10, 1)) < 0.1f);
+}
+
+TEST_CASE("gathering leaks the in-focus card into the blurred wall")
+{
+    const ImageBuf out = gathered(near_z);
+    // Wall pixels beside the card average its red into a halo.
+    CHECK(channel_at(out, 36, 40, 0) > 0.1f);
+}
+
+TEST_CASE("a blurred foreground is see-through at its edges (partial occlusion)")
+{
+    const ImageBuf out = layered(far_z);
+    // The card spreads past its silhouette...
+    const float outside = channel_at(out, 36, 40, 0);
+    CHECK(outside > 0.1f);
+    CHECK(outside < 0.9f);
+    // ...and the sharp wall shows through just inside it.
+    CHECK(channel_at(out, 43, 40, 1) > 0.05f);
+    // Far from the card the wall is sharp: its stripes are intact.
+    CHECK(channel_at(out, 4, 5, 1) == Approx(wall_green(4)).margin(1e-5));
+    CHECK(channel_at(out, 0, 5, 1) == Approx(wall_green(0)).margin(1e-5));
+    // Coverage: alpha stays 1 wherever the opaque wall is.
+    for (int x = 0; x < 120; x += 7)
+        REQUIRE(channel_at(out, x, 40, 3) == Approx(1.0f).margin(1e-5));
+}
+
+TEST_CASE("gathering gives a blurred foreground a sharp silhouette")
+{
+    const ImageBuf out = gathered(far_z);
+    // In-focus wall pixels only average themselves: no card beyond its edge.
+    CHECK(channel_at(out, 36, 40, 0) == 0.0f);
+    CHECK(channel_at(out, 39, 40, 0) == 0.0f);
+}
+
+TEST_CASE("layers are composited back to front whatever their file order")
+{
+    RenderSettings settings;
+    settings.camera = camera_focused_at(near_z);
+    std::vector<LayerReport> report;
+    ImageBuf out;
+    REQUIRE(render_layered_dof(out, two_layer_scene(), settings, &report));
+    REQUIRE(report.size() == 2);
+    CHECK(report[0].name == "wall");
+    CHECK(report[1].name == "card");
+    CHECK(report[1].coc_min == Approx(0.0).margin(1e-9));
+    CHECK(report[0].coc_min == Approx(100.0 / 3.0 * 0.9).epsilon(1e-6));
+}

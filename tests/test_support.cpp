@@ -1,0 +1,116 @@
+#include "test_support.h"
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebufalgo.h>
+
+namespace defocus_test {
+
+using namespace OIIO;
+
+ImageBuf zero_image(const ROI& roi, int nchannels)
+{
+    ImageSpec spec(roi.width(), roi.height(), nchannels, TypeFloat);
+    spec.x = roi.xbegin;
+    spec.y = roi.ybegin;
+    spec.full_x = roi.xbegin;
+    spec.full_y = roi.ybegin;
+    ImageBuf image(spec);
+    ImageBufAlgo::zero(image);
+    return image;
+}
+
+double Random::uniform()
+{
+    m_state = m_state * 6364136223846793005ull + 1442695040888963407ull;
+    return double(m_state >> 11) * (1.0 / 9007199254740992.0);
+}
+
+double channel_sum(const ImageBuf& image, int c)
+{
+    double sum = 0.0;
+    for (ImageBuf::ConstIterator<float> it(image); !it.done(); ++it)
+        sum += it[c];
+    return sum;
+}
+
+double worst_relative_error(const ImageBuf& a, const ImageBuf& b, double rel,
+                            double abs)
+{
+    const ROI all = roi_union(a.roi(), b.roi());
+    double worst = 0.0;
+    std::vector<float> pa(a.nchannels()), pb(b.nchannels());
+    for (int y = all.ybegin; y < all.yend; ++y)
+        for (int x = all.xbegin; x < all.xend; ++x) {
+            a.getpixel(x, y, pa.data());  // zero outside the data window
+            b.getpixel(x, y, pb.data());
+            for (int c = 0; c < b.nchannels(); ++c) {
+                const double e = std::abs(double(pa[c]) - pb[c])
+                                 / (std::abs(pb[c]) * rel + abs);
+                if (!(e <= worst))
+                    worst = e;  // NaN propagates
+            }
+        }
+    return worst;
+}
+
+namespace {
+double srgb_encode_clamped(double v)
+{
+    v = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
+    return std::min(1.0, std::max(0.0, v));
+}
+}  // namespace
+
+double garden_psnr(const ImageBuf& result, const ImageBuf& truth)
+{
+    const ImageSpec& t = truth.spec();
+    double sq = 0.0;
+    float a[4], b[4];
+    for (int y = t.full_y; y < t.full_y + t.full_height; ++y)
+        for (int x = t.full_x; x < t.full_x + t.full_width; ++x) {
+            result.getpixel(x, y, a, 3);
+            truth.getpixel(x, y, b, 3);
+            for (int c = 0; c < 3; ++c) {
+                const double d = srgb_encode_clamped(a[c]) - srgb_encode_clamped(b[c]);
+                sq += d * d;
+            }
+        }
+    const double mse = sq / (3.0 * t.full_width * t.full_height);
+    return 10.0 * std::log10(1.0 / mse);
+}
+
+int run(const std::string& command, std::string& output)
+{
+    output.clear();
+    FILE* pipe = popen((command + " 2>&1").c_str(), "r");
+    if (!pipe)
+        return -1;
+    std::array<char, 4096> buf;
+    size_t n;
+    while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0)
+        output.append(buf.data(), n);
+    const int status = pclose(pipe);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+std::string shared_data()
+{
+    const char* env = std::getenv("DEFOCUS_SHARED_DATA");
+    const std::string dir = env ? env : DEFOCUS_SHARED_DATA;
+    return Filesystem::is_directory(dir) ? dir : "";
+}
+
+std::string scratch_dir(const std::string& name)
+{
+    const std::string dir = std::string(DEFOCUS_TEST_SCRATCH) + "/" + name;
+    Filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    return dir;
+}
+
+}  // namespace defocus_test

@@ -1,0 +1,48 @@
+// Helpers shared by the tests: synthetic layers, the garden metric, paths.
+#pragma once
+
+#include <cstdlib>
+#include <string>
+
+#include <OpenImageIO/imagebuf.h>
+
+namespace defocus_test {
+
+using OIIO::ImageBuf;
+using OIIO::ROI;
+
+/// A float image of `nchannels` over `roi`, all zero.
+ImageBuf zero_image(const ROI& roi, int nchannels);
+
+/// Deterministic uniform random values in [0, 1).
+class Random {
+public:
+    explicit Random(unsigned seed) : m_state(seed * 2654435761u + 1u) {}
+    double uniform();
+private:
+    unsigned long long m_state;
+};
+
+/// Sum of channel `c` over the whole data window, in double.
+double channel_sum(const ImageBuf& image, int c);
+
+/// Largest |a - b| / (|b| * rel + abs) over the union of both windows,
+/// missing pixels being zero: <= 1 means a matches b within the bar.
+double worst_relative_error(const ImageBuf& a, const ImageBuf& b, double rel,
+                            double abs);
+
+/// The garden README's metric: PSNR in dB of R, G, B over the display
+/// window of `truth`, after sRGB encoding and clamping to [0, 1].
+double garden_psnr(const ImageBuf& result, const ImageBuf& truth);
+
+/// Runs a shell command, returns its exit status; stdout+stderr into `output`.
+int run(const std::string& command, std::string& output);
+
+/// The shared data folder (../shared/data beside the source tree, or
+/// $DEFOCUS_SHARED_DATA), or "" when it is absent.
+std::string shared_data();
+
+/// A fresh empty scratch directory for one test.
+std::string scratch_dir(const std::string& name);
+
+}  // namespace defocus_test
