@@ -58,8 +58,8 @@ std::string parse_command_line(int argc, const char* argv[], Options& opt,
         "(premultiplied R,G,B,A and Z in each part, each with its own data\n"
         "window), or a single RGBA+Z image taken as one layer. Each layer is\n"
         "spread with its own per-pixel circle of confusion and the layers are\n"
-        "composited back to front. Depth is planar camera-space depth in the\n"
-        "unit of --focus (metres, for most renderers).");
+        "composited back to front. Depth (Z) is planar camera-space depth in\n"
+        "metres, as --focus is.");
     ap.epilog(
         "Examples:\n"
         "  defocus shot.exr -o shot_dof.exr --focal 85 --fstop 1.4 --focus 3\n"
@@ -80,7 +80,7 @@ std::string parse_command_line(int argc, const char* argv[], Options& opt,
     ap.arg("--focal MM").help("Focal length in mm (default: 50)").action(store(focal));
     ap.arg("--fstop N").help("Aperture f-number (default: 2.8)").action(store(fstop));
     ap.arg("--focus DIST")
-        .help("Focus distance, in the unit of the depth channel (required)")
+        .help("Focus distance in metres (required)")
         .action(store(focus));
     ap.arg("--sensor MM")
         .help("Horizontal filmback width in mm, spanning the display window "

@@ -1,5 +1,8 @@
 #include <defocus/scene_io.h>
 
+#include <cstdio>
+
+#include <OpenEXR/ImfCheckFile.h>
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
@@ -68,6 +71,18 @@ bool read_layer(ImageInput& in, int subimage, const std::string& filename,
     return true;
 }
 
+bool is_openexr(const std::string& filename)
+{
+    unsigned char magic[4] = { 0, 0, 0, 0 };
+    if (FILE* f = Filesystem::fopen(filename, "rb")) {
+        const size_t n = fread(magic, 1, 4, f);
+        fclose(f);
+        return n == 4 && magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31
+               && magic[3] == 0x01;
+    }
+    return false;
+}
+
 }  // namespace
 
 bool read_scene(const std::string& filename, Scene& scene, std::string& error)
@@ -78,6 +93,15 @@ bool read_scene(const std::string& filename, Scene& scene, std::string& error)
     }
     if (Filesystem::is_directory(filename)) {
         error = filename + ": is a directory, not an image";
+        return false;
+    }
+    // OpenImageIO 2.4 crashes or hangs on some corrupt EXRs; OpenEXR's own
+    // checker (the code behind exrcheck) survives them, so it vets every
+    // EXR before OIIO reads it. It returns true when it finds a problem.
+    if (is_openexr(filename)
+        && Imf::checkOpenEXRFile(filename.c_str(), /*reduceMemory=*/true,
+                                 /*reduceTime=*/true, /*enableCoreCheck=*/true)) {
+        error = filename + ": corrupt or truncated OpenEXR file";
         return false;
     }
     auto in = ImageInput::open(filename);

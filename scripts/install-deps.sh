@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages defocus builds and tests with, if missing.
+set -euo pipefail
+
+packages=(
+    cmake g++ make pkg-config
+    libopenimageio-dev openimageio-tools   # image I/O, ImageBuf, ArgParse, threads
+    libopenexr-dev openexr                 # multi-part and deep EXR, file checks
+    catch2                                 # tests
+    libbenchmark-dev                       # benchmark programs
+)
+
+missing=()
+for p in "${packages[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+    echo "Installing: ${missing[*]}"
+    sudo=""
+    [ "$(id -u)" -ne 0 ] && sudo="sudo"
+    $sudo apt-get update -q
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
