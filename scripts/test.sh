@@ -5,5 +5,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 bash scripts/build.sh
+data="${DEFOCUS_SHARED_DATA:-$(cd .. && pwd)/shared/data}"
+[ -d "$data" ] || echo "note: no shared data at $data: the tests that need it are skipped"
 cd build
 ctest --output-on-failure -j"$(nproc)"
