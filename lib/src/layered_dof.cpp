@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <new>
 #include <numeric>
 
 #include <OpenImageIO/imagebufalgo.h>
@@ -39,44 +40,62 @@ struct LayerDepth {
     LayerReport report;
 };
 
-LayerDepth measure(const Layer& layer, const CircleOfConfusion& coc)
+/// Per-row partial sums of measure(), reduced after the parallel pass.
+struct RowDepth {
+    int64_t pixels = 0;
+    double zmin = INFINITY, zmax = -INFINITY;
+    double weight = 0, weighted_inverse = 0;
+};
+
+LayerDepth measure(const Layer& layer, const CircleOfConfusion& coc, int nthreads)
 {
-    LayerDepth d;
-    d.report.name = layer.name;
-    d.report.depth_min = INFINITY;
-    d.report.depth_max = -INFINITY;
-    double weight = 0, weighted = 0;
     const ROI roi = layer.color.roi();
-    for (int y = roi.ybegin; y < roi.yend; ++y)
+    std::vector<RowDepth> rows(roi.height());
+    parallel_for(roi.ybegin, roi.yend, [&](int y) {
+        RowDepth& r = rows[y - roi.ybegin];
         for (int x = roi.xbegin; x < roi.xend; ++x) {
             const float a = static_cast<const float*>(layer.color.pixeladdr(x, y))[3];
             if (a <= 0.0f)
                 continue;
             const double z = *static_cast<const float*>(layer.depth.pixeladdr(x, y));
-            ++d.report.pixels;
-            d.report.depth_min = std::min(d.report.depth_min, z);
-            d.report.depth_max = std::max(d.report.depth_max, z);
-            weight += a;
-            weighted += a * (std::isinf(z) ? 0.0 : 1.0 / z);
+            ++r.pixels;
+            r.zmin = std::min(r.zmin, z);
+            r.zmax = std::max(r.zmax, z);
+            r.weight += a;
+            r.weighted_inverse += a * (std::isinf(z) ? 0.0 : 1.0 / z);
         }
-    if (d.report.pixels == 0)
-        d.report.depth_min = d.report.depth_max = 0.0;
-    d.mean_inverse_depth = weight > 0 ? weighted / weight : 0.0;
-    d.report.coc_min = coc.diameter(d.report.depth_min);
-    d.report.coc_max = coc.diameter(d.report.depth_max);
+    }, paropt(nthreads));
+    RowDepth total;
+    for (const RowDepth& r : rows) {
+        total.pixels += r.pixels;
+        total.zmin = std::min(total.zmin, r.zmin);
+        total.zmax = std::max(total.zmax, r.zmax);
+        total.weight += r.weight;
+        total.weighted_inverse += r.weighted_inverse;
+    }
+    LayerDepth d;
+    d.mean_inverse_depth = total.weight > 0 ? total.weighted_inverse / total.weight : 0.0;
+    LayerReport& rep = d.report;
+    rep.name = layer.name;
+    rep.pixels = total.pixels;
+    rep.depth_min = total.pixels ? total.zmin : 0.0;
+    rep.depth_max = total.pixels ? total.zmax : 0.0;
+    rep.coc_min = total.pixels ? coc.diameter(rep.depth_min) : 0.0;
+    rep.coc_max = total.pixels ? coc.diameter(rep.depth_max) : 0.0;
     return d;
 }
 
 }  // namespace
 
-bool render_layered_dof(ImageBuf& dst, const Scene& scene,
-                        const RenderSettings& settings,
-                        std::vector<LayerReport>* report, int nthreads)
+namespace {
+
+bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& settings,
+                   std::vector<LayerReport>* report, int nthreads)
 {
     const CircleOfConfusion coc(settings.camera, scene.spec.full_width);
     std::vector<LayerDepth> depths;
     for (const Layer& layer : scene.layers)
-        depths.push_back(measure(layer, coc));
+        depths.push_back(measure(layer, coc, nthreads));
     std::vector<size_t> order(scene.layers.size());
     std::iota(order.begin(), order.end(), 0);
     std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
@@ -136,6 +155,22 @@ bool render_layered_dof(ImageBuf& dst, const Scene& scene,
         spec.erase_attribute(part_only);
     dst = std::move(result);
     return true;
+}
+
+}  // namespace
+
+bool render_layered_dof(ImageBuf& dst, const Scene& scene,
+                        const RenderSettings& settings,
+                        std::vector<LayerReport>* report, int nthreads)
+{
+    // Errors are reported, never thrown through the API; running out of
+    // memory on a huge blur is the one exception the filters can raise.
+    try {
+        return render_layers(dst, scene, settings, report, nthreads);
+    } catch (const std::bad_alloc&) {
+        dst.errorfmt("out of memory (the layers and the blur are too large)");
+        return false;
+    }
 }
 
 }  // namespace defocus
