@@ -10,6 +10,8 @@ namespace defocus {
 
 class FloatPixels {
 public:
+    FloatPixels() = default;
+
     /// All channels of `image` over `roi` (which must lie in its data
     /// window).
     FloatPixels(const OIIO::ImageBuf& image, const OIIO::ROI& roi)
@@ -47,7 +49,7 @@ public:
 
 private:
     OIIO::ROI m_roi;
-    int m_nchannels;
+    int m_nchannels = 0;
     const float* m_data = nullptr;
     std::unique_ptr<float[]> m_storage;
 };

@@ -15,12 +15,11 @@ namespace defocus {
 bool gather(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
             const Psf& psf, ROI roi, int nthreads)
 {
-    if (!check_spread_inputs(dst, src, radius, roi))
+    const SpreadInputs in = prepare_spread(dst, src, radius, roi, nthreads);
+    if (!in.valid)
         return false;
-    const int nc = src.nchannels();
-    const FloatPixels pixels(src, roi);
-    const FloatPixels radii(radius, ROI(roi.xbegin, roi.xend, roi.ybegin,
-                                        roi.yend, 0, 1, 0, 1));
+    const int nc = in.nchannels;
+    roi = in.roi;
     ROI window = roi;
     window.chend = nc;
     dst.reset(output_spec(src, window));
@@ -30,7 +29,7 @@ bool gather(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
         for (int x = roi.xbegin; x < roi.xend; ++x) {
             // The adjoint of spreading with this pixel's own footprint,
             // renormalised over the part that lies inside the image.
-            const Footprint fp = psf(*radii(x, y));
+            const Footprint fp = psf(*in.radii(x, y));
             std::fill(sum.begin(), sum.end(), 0.0);
             double wsum = 0.0;
             for (int j = 0; j < fp.height; ++j) {
@@ -42,7 +41,7 @@ bool gather(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
                     if (sx < roi.xbegin || sx >= roi.xend)
                         continue;
                     const double w = fp.at(i, j);
-                    const float* v = pixels(sx, sy);
+                    const float* v = in.pixels(sx, sy);
                     for (int c = 0; c < nc; ++c)
                         sum[c] += w * v[c];
                     wsum += w;

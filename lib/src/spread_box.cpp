@@ -43,17 +43,13 @@ EdgeDeltas edge_deltas(const BoxEdges& e, double scale)
 bool spread_box(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
                 ROI roi, int nthreads)
 {
-    if (!check_spread_inputs(dst, src, radius, roi))
+    const SpreadInputs in = prepare_spread(dst, src, radius, roi, nthreads);
+    if (!in.valid)
         return false;
-    const int nc = src.nchannels();
-    const FloatPixels pixels(src, roi);
-    const FloatPixels radii(radius, ROI(roi.xbegin, roi.xend, roi.ybegin,
-                                        roi.yend, 0, 1, 0, 1));
-    const double rmax = max_radius(dst, pixels, radii, nthreads);
-    if (rmax < 0.0)
-        return false;
-    const ROI ext = box_spread_extent(roi, rmax);
-    const int reach = box_edges(box_half_width(rmax)).last + 1;
+    const int nc = in.nchannels;
+    roi = in.roi;
+    const ROI ext = box_spread_extent(roi, in.max_radius);
+    const int reach = box_edges(box_half_width(in.max_radius)).last + 1;
 
     // Deltas live in double: the prefix sums then stay within 1e-4 relative
     // on HDR data (values 1e-3..1e4), where float drifts by whole units
@@ -72,10 +68,10 @@ bool spread_box(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
         for (int y = ylo; y < yhi; ++y) {
             const int by = y - ext.ybegin;
             for (int x = roi.xbegin; x < roi.xend; ++x) {
-                const float* v = pixels(x, y);
+                const float* v = in.pixels(x, y);
                 if (is_zero(v, nc))
                     continue;
-                const double h     = box_half_width(*radii(x, y));
+                const double h     = box_half_width(*in.radii(x, y));
                 const BoxEdges e   = box_edges(h);
                 const EdgeDeltas dy = edge_deltas(e, 1.0 / (4.0 * h * h));
                 const EdgeDeltas dx = edge_deltas(e, 1.0);

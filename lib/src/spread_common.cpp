@@ -11,32 +11,7 @@ namespace defocus {
 
 using OIIO::ROI;
 
-bool check_spread_inputs(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
-                         const OIIO::ImageBuf& radius, ROI& roi)
-{
-    if (!src.initialized() || !radius.initialized()) {
-        dst.errorfmt("spread: uninitialized input");
-        return false;
-    }
-    if (radius.nchannels() != 1) {
-        dst.errorfmt("spread: the radius image must have one channel, not {}",
-                     radius.nchannels());
-        return false;
-    }
-    if (!roi.defined())
-        roi = src.roi();
-    roi.chbegin = 0;
-    roi.chend   = src.nchannels();
-    roi.zbegin = 0;
-    roi.zend   = 1;
-    if (!src.roi().contains(roi) || !radius.roi().contains(roi.xbegin, roi.ybegin)
-        || !radius.roi().contains(roi.xend - 1, roi.yend - 1)) {
-        dst.errorfmt("spread: the region {} is not inside both the image {} and the radius {}",
-                     roi, src.roi(), radius.roi());
-        return false;
-    }
-    return true;
-}
+namespace {
 
 double max_radius(OIIO::ImageBuf& dst, const FloatPixels& pixels,
                   const FloatPixels& radii, int nthreads)
@@ -59,6 +34,43 @@ double max_radius(OIIO::ImageBuf& dst, const FloatPixels& pixels,
         return -1.0;
     }
     return m;
+}
+
+}  // namespace
+
+SpreadInputs prepare_spread(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
+                            const OIIO::ImageBuf& radius, ROI roi, int nthreads)
+{
+    SpreadInputs in;
+    if (!src.initialized() || !radius.initialized()) {
+        dst.errorfmt("spread: uninitialized input");
+        return in;
+    }
+    if (radius.nchannels() != 1) {
+        dst.errorfmt("spread: the radius image must have one channel, not {}",
+                     radius.nchannels());
+        return in;
+    }
+    if (!roi.defined())
+        roi = src.roi();
+    roi.chbegin = 0;
+    roi.chend   = src.nchannels();
+    roi.zbegin = 0;
+    roi.zend   = 1;
+    if (!src.roi().contains(roi) || !radius.roi().contains(roi.xbegin, roi.ybegin)
+        || !radius.roi().contains(roi.xend - 1, roi.yend - 1)) {
+        dst.errorfmt("spread: the region {} is not inside both the image {} and the radius {}",
+                     roi, src.roi(), radius.roi());
+        return in;
+    }
+    in.roi = roi;
+    in.nchannels = src.nchannels();
+    in.pixels = FloatPixels(src, roi);
+    in.radii = FloatPixels(radius, ROI(roi.xbegin, roi.xend, roi.ybegin,
+                                       roi.yend, 0, 1, 0, 1));
+    in.max_radius = max_radius(dst, in.pixels, in.radii, nthreads);
+    in.valid = in.max_radius >= 0.0;
+    return in;
 }
 
 ImageSpec output_spec(const OIIO::ImageBuf& src, const ROI& window)

@@ -17,16 +17,22 @@ inline bool is_zero(const float* v, int nc)
     return true;
 }
 
-/// Validates the common inputs of a spreading filter and fills in a
-/// default roi (src's data window). On failure sets dst's error.
-bool check_spread_inputs(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
-                         const OIIO::ImageBuf& radius, OIIO::ROI& roi);
+/// The validated inputs of a spreading filter as float views.
+struct SpreadInputs {
+    bool valid = false;
+    OIIO::ROI roi;  ///< the region of src to spread
+    int nchannels = 0;
+    FloatPixels pixels, radii;
+    double max_radius = 0;  ///< over the pixels that carry light
+};
 
-/// The largest CoC radius of a pixel that carries light (pixels that are
-/// all zero spread nothing, whatever their radius), or a negative value
-/// (with dst's error set) when one is infinite or absurdly large.
-double max_radius(OIIO::ImageBuf& dst, const FloatPixels& pixels,
-                  const FloatPixels& radii, int nthreads);
+/// Checks the inputs of a spreading filter (filling in a default roi: src's
+/// data window) and finds the largest radius of a pixel that carries light:
+/// all-zero pixels spread nothing, whatever their radius. On failure sets
+/// dst's error and returns an invalid SpreadInputs.
+SpreadInputs prepare_spread(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
+                            const OIIO::ImageBuf& radius, OIIO::ROI roi,
+                            int nthreads);
 
 /// A float spec over `window` with src's channel names and alpha channel.
 ImageSpec output_spec(const OIIO::ImageBuf& src, const OIIO::ROI& window);

@@ -16,17 +16,13 @@ namespace defocus {
 bool spread_direct(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
                    const Psf& psf, ROI roi, int nthreads)
 {
-    if (!check_spread_inputs(dst, src, radius, roi))
+    const SpreadInputs in = prepare_spread(dst, src, radius, roi, nthreads);
+    if (!in.valid)
         return false;
-    const int nc = src.nchannels();
-    const FloatPixels pixels(src, roi);
-    const FloatPixels radii(radius, ROI(roi.xbegin, roi.xend, roi.ybegin,
-                                        roi.yend, 0, 1, 0, 1));
-    const double rmax = max_radius(dst, pixels, radii, nthreads);
-    if (rmax < 0.0)
-        return false;
+    const int nc = in.nchannels;
+    roi = in.roi;
     // Footprints grow with the radius, so the largest bounds them all.
-    const Footprint widest = psf(rmax);
+    const Footprint widest = psf(in.max_radius);
     const ROI ext(roi.xbegin + widest.x0, roi.xend + widest.x0 + widest.width - 1,
                   roi.ybegin + widest.y0, roi.yend + widest.y0 + widest.height - 1,
                   0, 1, 0, nc);
@@ -39,10 +35,10 @@ bool spread_direct(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
         const int yhi = std::min(roi.yend, y1 + reach);
         for (int y = ylo; y < yhi; ++y)
             for (int x = roi.xbegin; x < roi.xend; ++x) {
-                const float* v = pixels(x, y);
+                const float* v = in.pixels(x, y);
                 if (is_zero(v, nc))
                     continue;
-                const Footprint fp = psf(*radii(x, y));
+                const Footprint fp = psf(*in.radii(x, y));
                 for (int j = 0; j < fp.height; ++j) {
                     const int oy = y + fp.y0 + j;
                     if (oy < y0 || oy >= y1)
