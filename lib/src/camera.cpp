@@ -33,6 +33,12 @@ double CircleOfConfusion::diameter(double z) const
     return std::clamp(c, -m_max_diameter, m_max_diameter);
 }
 
+double CircleOfConfusion::depth_at(double c) const
+{
+    const double inv_z = m_inv_focus - c / m_scale;
+    return inv_z > 0.0 ? 1.0 / inv_z : INFINITY;
+}
+
 bool parse_lens_model(const std::string& name, LensModel& lens)
 {
     if (name == "thin")

@@ -92,6 +92,11 @@ namespace {
 bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& settings,
                    std::vector<LayerReport>* report, int nthreads)
 {
+    if (!scene.flat.empty() || !scene.deep.empty()) {
+        dst.errorfmt("the scene has flat or deep content: cut it into layers first "
+                     "(decompose_layers)");
+        return false;
+    }
     const CircleOfConfusion coc(settings.camera, scene.spec.full_width);
     std::vector<LayerDepth> depths;
     for (const Layer& layer : scene.layers)

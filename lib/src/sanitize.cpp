@@ -8,38 +8,80 @@
 
 namespace defocus {
 
+namespace {
+
+const float infinity = std::numeric_limits<float>::infinity();
+
+/// Applies the rules of sanitize() to one pixel or sample; counts into n.
+/// Returns false when the pixel carries no light (and has been cleared).
+bool sanitize_one(float& r, float& g, float& b, float& a, float& z, PixelCounts& n)
+{
+    const bool finite = std::isfinite(r) && std::isfinite(g) && std::isfinite(b)
+                        && std::isfinite(a);
+    if (!finite || a <= 0.0f) {
+        if (!finite)
+            ++n.nonfinite_color;
+        else if (r != 0.0f || g != 0.0f || b != 0.0f)
+            ++n.transparent_light;
+        r = g = b = a = 0.0f;
+        return false;
+    }
+    if (!(z > 0.0f)) {
+        ++n.bad_depth;
+        z = infinity;
+    }
+    return true;
+}
+
+struct AtomicCounts {
+    std::atomic<int64_t> nonfinite { 0 }, depth { 0 }, transparent { 0 };
+    void add(const PixelCounts& n)
+    {
+        nonfinite += n.nonfinite_color;
+        depth += n.bad_depth;
+        transparent += n.transparent_light;
+    }
+};
+
+void sanitize_layer(Layer& layer, AtomicCounts& counts, int nthreads)
+{
+    const OIIO::ROI roi = layer.color.roi();
+    OIIO::parallel_for(roi.ybegin, roi.yend, [&](int y) {
+        PixelCounts n;
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            float* c = static_cast<float*>(layer.color.pixeladdr(x, y));
+            float* z = static_cast<float*>(layer.depth.pixeladdr(x, y));
+            sanitize_one(c[0], c[1], c[2], c[3], *z, n);
+        }
+        counts.add(n);
+    }, OIIO::paropt(nthreads));
+}
+
+void sanitize_deep(DeepImage& image, AtomicCounts& counts, int nthreads)
+{
+    const int64_t npixels = int64_t(image.offsets.size()) - 1;
+    OIIO::parallel_for(int64_t(0), npixels, [&](int64_t p) {
+        PixelCounts n;
+        for (uint64_t i = image.offsets[p]; i < image.offsets[p + 1]; ++i) {
+            DeepSample& s = image.samples[i];
+            if (sanitize_one(s.r, s.g, s.b, s.a, s.z, n) && !(s.zback >= s.z))
+                s.zback = s.z;
+        }
+        counts.add(n);
+    }, OIIO::paropt(nthreads));
+}
+
+}  // namespace
+
 PixelCounts sanitize(Scene& scene, int nthreads)
 {
-    std::atomic<int64_t> nonfinite { 0 }, bad_depth { 0 }, transparent { 0 };
-    const float infinity = std::numeric_limits<float>::infinity();
-    for (Layer& layer : scene.layers) {
-        const OIIO::ROI roi = layer.color.roi();
-        OIIO::parallel_for(roi.ybegin, roi.yend, [&](int y) {
-            int64_t n_nonfinite = 0, n_depth = 0, n_transparent = 0;
-            for (int x = roi.xbegin; x < roi.xend; ++x) {
-                float* c = static_cast<float*>(layer.color.pixeladdr(x, y));
-                float* z = static_cast<float*>(layer.depth.pixeladdr(x, y));
-                const bool finite = std::isfinite(c[0]) && std::isfinite(c[1])
-                                    && std::isfinite(c[2]) && std::isfinite(c[3]);
-                if (!finite || c[3] <= 0.0f) {
-                    if (!finite)
-                        ++n_nonfinite;
-                    else if (c[0] != 0.0f || c[1] != 0.0f || c[2] != 0.0f)
-                        ++n_transparent;
-                    c[0] = c[1] = c[2] = c[3] = 0.0f;
-                    continue;
-                }
-                if (!(*z > 0.0f)) {
-                    ++n_depth;
-                    *z = infinity;
-                }
-            }
-            nonfinite += n_nonfinite;
-            bad_depth += n_depth;
-            transparent += n_transparent;
-        }, OIIO::paropt(nthreads));
-    }
-    return { nonfinite, bad_depth, transparent };
+    AtomicCounts counts;
+    for (auto* list : { &scene.layers, &scene.flat })
+        for (Layer& layer : *list)
+            sanitize_layer(layer, counts, nthreads);
+    for (DeepImage& image : scene.deep)
+        sanitize_deep(image, counts, nthreads);
+    return { counts.nonfinite, counts.depth, counts.transparent };
 }
 
 }  // namespace defocus

@@ -1,8 +1,10 @@
 #include <defocus/scene_io.h>
 
 #include <cstdio>
+#include <set>
 
 #include <OpenEXR/ImfCheckFile.h>
+#include <OpenImageIO/deepdata.h>
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
@@ -11,65 +13,9 @@
 namespace defocus {
 
 using namespace OIIO;
+using Strutil::fmt::format;
 
 namespace {
-
-std::string part_label(const ImageSpec& spec, int subimage)
-{
-    const std::string name = spec.get_string_attribute("name");
-    return name.empty() ? Strutil::fmt::format("part {}", subimage)
-                        : Strutil::fmt::format("part {} '{}'", subimage, name);
-}
-
-bool read_layer(ImageInput& in, int subimage, const std::string& filename,
-                Layer& layer, std::string& error)
-{
-    const ImageSpec spec = in.spec(subimage);
-    const std::string label = part_label(spec, subimage);
-    if (spec.deep) {
-        error = Strutil::fmt::format("{}: {} is a deep image, which this version cannot read",
-                                     filename, label);
-        return false;
-    }
-    if (spec.depth > 1) {
-        error = Strutil::fmt::format("{}: {} is a volume image", filename, label);
-        return false;
-    }
-    int channel[5];
-    const char* names[5] = { "R", "G", "B", "A", "Z" };
-    for (int c = 0; c < 5; ++c) {
-        channel[c] = spec.channelindex(names[c]);
-        if (channel[c] < 0) {
-            error = Strutil::fmt::format("{}: {} has no {} channel (channels: {})",
-                                         filename, label, names[c],
-                                         Strutil::join(spec.channelnames, ","));
-            return false;
-        }
-    }
-    ImageSpec all(spec.roi(), TypeFloat);
-    all.nchannels    = spec.nchannels;
-    all.channelnames = spec.channelnames;
-    all.full_x      = spec.full_x;
-    all.full_y      = spec.full_y;
-    all.full_width  = spec.full_width;
-    all.full_height = spec.full_height;
-    ImageBuf pixels(all);
-    if (!in.read_image(subimage, 0, 0, spec.nchannels, TypeFloat,
-                       pixels.localpixels())) {
-        error = Strutil::fmt::format("{}: {}: {}", filename, label,
-                                     in.geterror());
-        return false;
-    }
-    layer.name = spec.get_string_attribute("name",
-                                           Strutil::fmt::format("layer{}", subimage));
-    const std::string color_names[] = { "R", "G", "B", "A" }, depth_name[] = { "Z" };
-    ImageBufAlgo::channels(layer.color, pixels, 4, cspan<int>(channel, 4), {},
-                           color_names);
-    ImageBufAlgo::channels(layer.depth, pixels, 1, cspan<int>(channel + 4, 1), {},
-                           depth_name);
-    layer.color.specmod().alpha_channel = 3;
-    return true;
-}
 
 bool is_openexr(const std::string& filename)
 {
@@ -83,9 +29,182 @@ bool is_openexr(const std::string& filename)
     return false;
 }
 
-}  // namespace
+std::string channel_name(const std::string& prefix, const std::string& channel)
+{
+    return prefix.empty() ? channel : prefix + "." + channel;
+}
 
-bool read_scene(const std::string& filename, Scene& scene, std::string& error)
+/// Where one part keeps a layer's colour and depth; -1 where it has none.
+struct Channels {
+    std::string prefix;  ///< of the colour channels
+    int color[4] = { -1, -1, -1, -1 };
+    int depth    = -1;
+
+    bool has_color() const { return color[3] >= 0; }
+    bool has_depth() const { return depth >= 0; }
+};
+
+/// The first channel of `names` the part has, or -1.
+int first_channel(const ImageSpec& spec, const std::vector<std::string>& names)
+{
+    for (const std::string& n : names) {
+        const int c = spec.channelindex(n);
+        if (c >= 0)
+            return c;
+    }
+    return -1;
+}
+
+/// Resolves the colour and depth channels of one part. Colour is R,G,B,A
+/// under the chosen prefix (--layer, also with Blender's ".Combined"), or
+/// plain, or the part's only prefixed set. Depth is Z next to the colour,
+/// Blender's <viewlayer>.Depth.Z, or a depth pass named Z or depth.Z.
+/// `error` is set when the choice is ambiguous.
+Channels find_channels(const ImageSpec& spec, const std::string& layer,
+                       std::string& error)
+{
+    std::vector<std::string> prefixes;
+    if (!layer.empty()) {
+        prefixes = { layer, layer + ".Combined" };
+    } else {
+        prefixes = { "" };
+        std::set<std::string> seen;
+        for (const std::string& n : spec.channelnames)
+            if (Strutil::ends_with(n, ".R") && seen.insert(n).second)
+                prefixes.push_back(n.substr(0, n.size() - 2));
+    }
+    Channels ch;
+    std::vector<std::string> complete;
+    for (const std::string& p : prefixes) {
+        int c[4];
+        const char* rgba[4] = { "R", "G", "B", "A" };
+        bool all = true;
+        for (int i = 0; i < 4; ++i)
+            all &= (c[i] = spec.channelindex(channel_name(p, rgba[i]))) >= 0;
+        if (!all)
+            continue;
+        complete.push_back(p);
+        if (complete.size() == 1) {
+            ch.prefix = p;
+            std::copy(c, c + 4, ch.color);
+        }
+    }
+    if (complete.size() > 1 && !complete.front().empty())
+        error = format("it holds several layers ({}): choose one with --layer NAME",
+                       Strutil::join(complete, ", "));
+
+    std::string view_layer = ch.prefix;
+    if (Strutil::ends_with(view_layer, ".Combined"))
+        view_layer.resize(view_layer.size() - 9);
+    std::vector<std::string> depth_names;
+    if (!layer.empty())
+        depth_names = { channel_name(layer, "Z"), channel_name(layer, "Depth.Z") };
+    if (!ch.prefix.empty())
+        depth_names.push_back(channel_name(ch.prefix, "Z"));
+    if (!view_layer.empty())
+        depth_names.push_back(channel_name(view_layer, "Depth.Z"));
+    for (const char* n : { "Z", "depth.Z", "Depth.Z" })
+        depth_names.emplace_back(n);
+    ch.depth = first_channel(spec, depth_names);
+    return ch;
+}
+
+/// The first of R,G,B,A,Z a part lacks, for messages.
+std::string missing_channel(const ImageSpec& spec, const std::string& layer)
+{
+    for (const char* c : { "R", "G", "B", "A" })
+        if (spec.channelindex(channel_name(layer, c)) < 0
+            && spec.channelindex(channel_name(layer, std::string("Combined.") + c)) < 0)
+            return channel_name(layer, c);
+    return channel_name(layer, "Z");
+}
+
+struct Part {
+    int subimage;
+    ImageSpec spec;
+    std::string label;
+    Channels channels;
+};
+
+/// Reads every channel of a flat part as float.
+bool read_pixels(ImageInput& in, const Part& part, ImageBuf& pixels,
+                 const std::string& filename, std::string& error)
+{
+    ImageSpec all(part.spec.roi(), TypeFloat);
+    all.nchannels    = part.spec.nchannels;
+    all.channelnames = part.spec.channelnames;
+    all.full_x      = part.spec.full_x;
+    all.full_y      = part.spec.full_y;
+    all.full_width  = part.spec.full_width;
+    all.full_height = part.spec.full_height;
+    pixels.reset(all);
+    if (!in.read_image(part.subimage, 0, 0, part.spec.nchannels, TypeFloat,
+                       pixels.localpixels())) {
+        error = format("{}: {}: {}", filename, part.label,
+                       Strutil::replace(in.geterror(), "\n", " ", true));
+        return false;
+    }
+    return true;
+}
+
+/// A layer from the colour channels of one part and the depth channel of
+/// another (or the same) part. Depth outside the depth part's data window
+/// is 0, which sanitize() treats as missing.
+Layer make_layer(const std::string& name, const ImageBuf& color_part,
+                 const int color[4], const ImageBuf& depth_part, int depth)
+{
+    static const std::string rgba[4] = { "R", "G", "B", "A" }, z[1] = { "Z" };
+    Layer layer;
+    layer.name = name;
+    ImageBufAlgo::channels(layer.color, color_part, 4, cspan<int>(color, 4), {}, rgba);
+    layer.color.specmod().alpha_channel = 3;
+    ImageBuf depth_only;
+    ImageBufAlgo::channels(depth_only, depth_part, 1, cspan<int>(&depth, 1), {}, z);
+    ROI window = layer.color.roi();
+    window.chend = 1;
+    ImageBufAlgo::crop(layer.depth, depth_only, window);
+    return layer;
+}
+
+bool read_deep(ImageInput& in, const Part& part, DeepImage& image,
+               const std::string& filename, std::string& error)
+{
+    DeepData data;
+    if (!in.read_native_deep_image(part.subimage, 0, data)) {
+        error = format("{}: {}: {}", filename, part.label,
+                       Strutil::replace(in.geterror(), "\n", " ", true));
+        return false;
+    }
+    const Channels& ch = part.channels;
+    const int zback = first_channel(part.spec, { channel_name(ch.prefix, "ZBack"), "ZBack" });
+    image.name = part.spec.get_string_attribute("name", format("deep{}", part.subimage));
+    image.roi  = part.spec.roi();
+    const int64_t npixels = image.roi.npixels();
+    if (data.pixels() != npixels) {
+        error = format("{}: {}: deep data has {} pixels, expected {}", filename,
+                       part.label, data.pixels(), npixels);
+        return false;
+    }
+    image.offsets.assign(npixels + 1, 0);
+    for (int64_t p = 0; p < npixels; ++p)
+        image.offsets[p + 1] = image.offsets[p] + data.samples(p);
+    image.samples.resize(image.offsets.back());
+    for (int64_t p = 0; p < npixels; ++p)
+        for (int s = 0, n = data.samples(p); s < n; ++s) {
+            DeepSample& d = image.samples[image.offsets[p] + s];
+            d.r = data.deep_value(p, ch.color[0], s);
+            d.g = data.deep_value(p, ch.color[1], s);
+            d.b = data.deep_value(p, ch.color[2], s);
+            d.a = data.deep_value(p, ch.color[3], s);
+            d.z = data.deep_value(p, ch.depth, s);
+            d.zback = zback >= 0 ? data.deep_value(p, zback, s) : d.z;
+        }
+    return true;
+}
+
+/// Reads one file into `scene`: its layers, flat renders and deep images.
+bool read_file(const std::string& filename, const ReadOptions& options,
+               Scene& scene, std::string& error)
 {
     if (!Filesystem::exists(filename)) {
         error = filename + ": no such file";
@@ -109,25 +228,146 @@ bool read_scene(const std::string& filename, Scene& scene, std::string& error)
         std::string why = OIIO::geterror();
         if (why.empty())
             why = "not an image file OpenImageIO can read";
-        error = Strutil::fmt::format("{}: {}", filename,
-                                     Strutil::replace(why, "\n", " "));
+        error = format("{}: {}", filename, Strutil::replace(why, "\n", " ", true));
         return false;
     }
-    scene.source = filename;
-    scene.spec   = in->spec(0, 0);
-    scene.layers.clear();
-    ROI data_window;
-    for (int subimage = 0; in->seek_subimage(subimage, 0); ++subimage) {
-        Layer layer;
-        if (!read_layer(*in, subimage, filename, layer, error))
+
+    // The parts of the chosen view, and those that belong to no view.
+    std::vector<Part> parts;
+    std::vector<std::string> views;
+    std::string view = options.view;
+    for (int s = 0; in->seek_subimage(s, 0); ++s) {
+        ImageSpec spec = in->spec(s, 0);
+        const std::string part_view = spec.get_string_attribute("view");
+        if (!part_view.empty() && std::find(views.begin(), views.end(), part_view) == views.end())
+            views.push_back(part_view);
+        if (view.empty() && s == 0)
+            view = part_view;
+        if (!part_view.empty() && part_view != view)
+            continue;
+        const std::string name = spec.get_string_attribute("name");
+        parts.push_back({ s, spec,
+                          name.empty() ? format("part {}", s) : format("part {} '{}'", s, name),
+                          {} });
+    }
+    if (!options.view.empty() && std::find(views.begin(), views.end(), options.view) == views.end()) {
+        error = views.empty()
+                    ? format("{}: has no views, so --view {} does not apply", filename, options.view)
+                    : format("{}: no view '{}' (views: {})", filename, options.view,
+                             Strutil::join(views, ", "));
+        return false;
+    }
+
+    std::vector<const Part*> complete, color_only, depth_only;
+    for (Part& part : parts) {
+        std::string ambiguity;
+        part.channels = find_channels(part.spec, options.layer, ambiguity);
+        if (!ambiguity.empty()) {
+            error = format("{}: {}: {}", filename, part.label, ambiguity);
             return false;
-        data_window = roi_union(data_window, layer.color.roi());
-        scene.layers.push_back(std::move(layer));
+        }
+        if (part.spec.depth > 1) {
+            error = format("{}: {} is a volume image", filename, part.label);
+            return false;
+        }
+        const Channels& c = part.channels;
+        if (c.has_color() && c.has_depth())
+            complete.push_back(&part);
+        else if (c.has_color())
+            color_only.push_back(&part);
+        else if (c.has_depth() && !part.spec.deep)
+            depth_only.push_back(&part);
     }
-    if (scene.layers.empty()) {
-        error = filename + ": has no image parts";
+
+    for (const Part* part : complete) {
+        if (part->spec.deep) {
+            DeepImage image;
+            if (!read_deep(*in, *part, image, filename, error))
+                return false;
+            scene.deep.push_back(std::move(image));
+            continue;
+        }
+        ImageBuf pixels;
+        if (!read_pixels(*in, *part, pixels, filename, error))
+            return false;
+        const Channels& c = part->channels;
+        const std::string name = part->spec.get_string_attribute(
+            "name", format("layer{}", part->subimage));
+        (complete.size() > 1 ? scene.layers : scene.flat)
+            .push_back(make_layer(name, pixels, c.color, pixels, c.depth));
+    }
+
+    if (complete.empty()) {
+        // A beauty part and a depth part of the same view: one flat render.
+        if (color_only.size() == 1 && depth_only.size() == 1 && !color_only[0]->spec.deep) {
+            ImageBuf color, depth;
+            if (!read_pixels(*in, *color_only[0], color, filename, error)
+                || !read_pixels(*in, *depth_only[0], depth, filename, error))
+                return false;
+            scene.flat.push_back(make_layer(
+                color_only[0]->spec.get_string_attribute("name", "beauty"), color,
+                color_only[0]->channels.color, depth, depth_only[0]->channels.depth));
+        } else if (color_only.size() > 1 && depth_only.size() == 1) {
+            error = format("{}: several colour parts share one depth part: choose a view "
+                           "with --view", filename);
+            return false;
+        } else {
+            const Part& first = color_only.empty() ? parts.front() : *color_only.front();
+            error = format("{}: {} has no {} channel (channels: {})", filename, first.label,
+                           missing_channel(first.spec, options.layer),
+                           Strutil::join(first.spec.channelnames, ","));
+            return false;
+        }
+    }
+
+    const ImageSpec& first = parts.front().spec;
+    if (scene.spec.nchannels == 0 || scene.spec.full_width == 0) {
+        scene.spec = first;
+    } else if (first.full_x != scene.spec.full_x || first.full_y != scene.spec.full_y
+               || first.full_width != scene.spec.full_width
+               || first.full_height != scene.spec.full_height) {
+        error = format("{}: display window {}x{}{:+d}{:+d} differs from the first input's {}x{}{:+d}{:+d}",
+                       filename, first.full_width, first.full_height, first.full_x,
+                       first.full_y, scene.spec.full_width, scene.spec.full_height,
+                       scene.spec.full_x, scene.spec.full_y);
         return false;
     }
+    return true;
+}
+
+}  // namespace
+
+bool read_scene(const std::vector<std::string>& filenames, const ReadOptions& options,
+                Scene& scene, std::string& error)
+{
+    scene = Scene();
+    if (filenames.empty()) {
+        error = "no input file";
+        return false;
+    }
+    for (const std::string& filename : filenames) {
+        Scene part;
+        part.spec = scene.spec;
+        if (!read_file(filename, options, part, error))
+            return false;
+        if (scene.source.empty())
+            scene.spec = part.spec;
+        // Several files are the layers of one scene: a flat file is a layer.
+        auto& as_layers = filenames.size() > 1 ? scene.layers : scene.flat;
+        for (Layer& layer : part.flat)
+            as_layers.push_back(std::move(layer));
+        for (Layer& layer : part.layers)
+            scene.layers.push_back(std::move(layer));
+        for (DeepImage& image : part.deep)
+            scene.deep.push_back(std::move(image));
+        scene.source += (scene.source.empty() ? "" : " ") + filename;
+    }
+    ROI data_window;
+    for (const auto* list : { &scene.layers, &scene.flat })
+        for (const Layer& layer : *list)
+            data_window = roi_union(data_window, layer.color.roi());
+    for (const DeepImage& image : scene.deep)
+        data_window = roi_union(data_window, image.roi);
     scene.spec.set_roi(data_window);
     return true;
 }

@@ -41,6 +41,10 @@ public:
     /// The unsigned radius |c|/2 that spreading uses.
     double radius(double z) const { return 0.5 * std::abs(diameter(z)); }
 
+    /// The depth whose unclamped signed CoC diameter is `c` (+inf when c
+    /// is the CoC of infinity, or beyond it).
+    double depth_at(double c) const;
+
 private:
     LensModel m_lens;
     double m_scale;  ///< pixels per unit of |1/z_f - 1/z| (thin lens)

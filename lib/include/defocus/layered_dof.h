@@ -37,7 +37,8 @@ struct LayerReport {
 };
 
 /// Renders the defocused, flattened premultiplied RGBA of a sanitized
-/// scene (see sanitize()). Layers are taken back to front by their
+/// scene (see sanitize()) whose content is all in layers (see
+/// decompose_layers()). Layers are taken back to front by their
 /// alpha-weighted mean inverse depth; `report`, when given, lists them in
 /// that order. The result keeps the scene's display window.
 bool render_layered_dof(OIIO::ImageBuf& dst, const Scene& scene,

@@ -1,4 +1,5 @@
-// A layered scene: what every input format is decoded into.
+// A scene as read from files: layers given as such, flat renders and deep
+// images. Flat and deep content is cut into depth layers by layering.h.
 #pragma once
 
 #include <cstdint>
@@ -17,27 +18,52 @@ struct Layer {
     OIIO::ImageBuf depth;  ///< float Z
 };
 
+/// One deep sample: premultiplied colour, alpha, and the depth interval it
+/// covers (zback == z for a point sample).
+struct DeepSample {
+    float r, g, b, a;
+    float z, zback;
+};
+
+/// A deep image: every pixel's samples, in file order.
+struct DeepImage {
+    std::string name;
+    OIIO::ROI roi;                  ///< data window
+    std::vector<uint64_t> offsets;  ///< pixel i's samples are [offsets[i], offsets[i+1])
+    std::vector<DeepSample> samples;
+
+    int64_t pixel_index(int x, int y) const
+    {
+        return int64_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin);
+    }
+};
+
 struct Scene {
-    std::string source;   ///< the file it came from, for messages
-    /// Display window, pixel type and metadata of the input, kept for the
-    /// output. Its data window is the union of the layers'.
+    std::string source;  ///< the file(s) it came from, for messages
+    /// Display window, pixel type and metadata of the (first) input, kept
+    /// for the output. Its data window is the union of the inputs'.
     OIIO::ImageSpec spec;
-    std::vector<Layer> layers;
+    std::vector<Layer> layers;   ///< layers as given: spread as they are
+    std::vector<Layer> flat;     ///< flat renders (RGBA+Z), to be sliced
+    std::vector<DeepImage> deep; ///< deep images, to be sliced
 };
 
 /// What sanitize() changed, so that -v can say it.
 struct PixelCounts {
-    int64_t nonfinite_color = 0;  ///< NaN or inf in R,G,B or A: dropped
-    int64_t bad_depth       = 0;  ///< Z NaN, zero or negative: moved to infinity
+    int64_t nonfinite_color = 0;    ///< NaN or inf in R,G,B or A: dropped
+    int64_t bad_depth       = 0;    ///< Z NaN, zero or negative: moved to infinity
     int64_t transparent_light = 0;  ///< alpha <= 0 with colour: dropped
 };
 
-/// Makes every layer safe to spread, and counts what it changed:
+/// Makes every pixel and deep sample safe to spread, and counts what it
+/// changed:
 ///  - a pixel with NaN or inf colour or alpha is dropped (made transparent);
 ///  - a pixel with alpha <= 0 carries no light: it is cleared whatever its
 ///    colour and depth (renders write Z = 0 or 1e10 there);
 ///  - a covered pixel with depth NaN, -inf, zero or negative is taken as
 ///    infinitely far (+inf is a valid depth: the sky).
+/// Deep samples follow the same rules; a ZBack that is not a valid depth
+/// at or behind Z is set to Z.
 PixelCounts sanitize(Scene& scene, int nthreads = 0);
 
 }  // namespace defocus

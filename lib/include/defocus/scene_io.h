@@ -2,17 +2,40 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include <defocus/scene.h>
 
 namespace defocus {
 
-/// Reads a layered scene:
-///  - a multi-part EXR (or any multi-subimage file) whose parts are layers,
-///    each with R,G,B,A (premultiplied) and Z, each with its own data window;
-///  - a single image with R,G,B,A and Z, taken as a one-layer scene.
-/// On failure returns false and sets `error` to a one-line message that
-/// names the file and the problem.
-bool read_scene(const std::string& filename, Scene& scene, std::string& error);
+struct ReadOptions {
+    /// The view of a multi-view file ("" = the first part's view).
+    std::string view;
+    /// The channel prefix to read colour and depth from, e.g. "beauty" for
+    /// beauty.R..beauty.Z or Blender's "ViewLayer" for
+    /// ViewLayer.Combined.R..ViewLayer.Depth.Z ("" = plain R,G,B,A,Z, or
+    /// the one prefixed set the file has).
+    std::string layer;
+};
+
+/// Reads a scene from one or several files.
+///
+/// One file may be:
+///  - a multi-part EXR whose parts each hold R,G,B,A (premultiplied) and Z:
+///    the parts are the layers;
+///  - a flat render: one part with R,G,B,A and Z, or an RGBA part and a
+///    part holding the depth (Z or depth.Z) of the same view, joined;
+///  - a deep image (deepscanline or deeptile), one or more parts.
+/// In a multi-view file only the parts of the chosen view (and parts with
+/// no view) are read. Several files are layers of one scene: a flat file
+/// among them is one layer. The first file gives the display window and
+/// metadata; the others must share its display window.
+///
+/// Every EXR is vetted with OpenEXR's file checker before it is read, so
+/// corrupt files end in an error rather than a crash. On failure returns
+/// false and sets `error` to a one-line message naming the file and the
+/// problem.
+bool read_scene(const std::vector<std::string>& filenames,
+                const ReadOptions& options, Scene& scene, std::string& error);
 
 }  // namespace defocus
