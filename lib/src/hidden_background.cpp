@@ -68,18 +68,37 @@ void fill_hidden_background(Layer& layer, const std::vector<bool>& holes,
             }
         pyramid.push_back(std::move(coarse));
     }
-    // Pull: an empty cell takes its parent's average.
+    // Pull: an empty cell takes the coarser level's averages, interpolated
+    // bilinearly between the four nearest coarse cells that have any.
     for (int l = int(pyramid.size()) - 2; l >= 0; --l) {
         Level& fine = pyramid[l];
         Level& coarse = pyramid[l + 1];
         for (int y = 0; y < fine.height; ++y)
             for (int x = 0; x < fine.width; ++x) {
                 Cell& f = fine.at(x, y);
-                const Cell& c = coarse.at(x / 2, y / 2);
-                if (f.w > 0.0f || c.w <= 0.0f)
+                if (f.w > 0.0f)
                     continue;
-                for (int i = 0; i < 5; ++i)
-                    f.v[i] = c.v[i] / c.w;
+                // Fine cell centre in coarse cell units.
+                const float cx = 0.5f * (x + 0.5f) - 0.5f, cy = 0.5f * (y + 0.5f) - 0.5f;
+                const int x0 = int(std::floor(cx)), y0 = int(std::floor(cy));
+                const float fx = cx - x0, fy = cy - y0;
+                float sum[5] = { 0, 0, 0, 0, 0 }, weight = 0.0f;
+                for (int j = 0; j < 2; ++j)
+                    for (int i = 0; i < 2; ++i) {
+                        const int u = std::clamp(x0 + i, 0, coarse.width - 1);
+                        const int v = std::clamp(y0 + j, 0, coarse.height - 1);
+                        const Cell& c = coarse.at(u, v);
+                        if (c.w <= 0.0f)
+                            continue;
+                        const float b = (i ? fx : 1 - fx) * (j ? fy : 1 - fy);
+                        for (int k = 0; k < 5; ++k)
+                            sum[k] += b * c.v[k] / c.w;
+                        weight += b;
+                    }
+                if (weight <= 0.0f)
+                    continue;
+                for (int k = 0; k < 5; ++k)
+                    f.v[k] = sum[k] / weight;
                 f.w = 1.0f;
             }
     }
