@@ -55,6 +55,16 @@ const char* lens_model_name(LensModel lens)
     return lens == LensModel::ThinLens ? "thin" : "optical";
 }
 
+void record_camera(OIIO::ImageSpec& spec, const Camera& c)
+{
+    spec.attribute("defocus:focalLength", float(c.focal_length_mm));
+    spec.attribute("defocus:fNumber", float(c.fstop));
+    spec.attribute("defocus:focusDistance", float(c.focus_distance));
+    spec.attribute("defocus:filmbackWidth", float(c.sensor_width_mm));
+    spec.attribute("defocus:maxBlur", float(c.max_blur_px));
+    spec.attribute("defocus:lens", lens_model_name(c.lens));
+}
+
 std::string validate(const Camera& c)
 {
     auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 
@@ -15,26 +16,47 @@ namespace {
 std::string temporary_name(const std::string& filename)
 {
     const std::string dir = Filesystem::parent_path(filename);
-    const std::string stem = Filesystem::filename(filename);
-    const std::string ext = Filesystem::extension(filename);
-    const std::string name = Strutil::fmt::format(".{}.{}.tmp{}", stem, getpid(), ext);
+    const std::string name = Strutil::fmt::format(
+        ".{}.{}.tmp{}", Filesystem::filename(filename), getpid(),
+        Filesystem::extension(filename));
     return dir.empty() ? name : dir + "/" + name;
 }
 
 }  // namespace
 
-bool write_image_atomic(const ImageBuf& image, const std::string& filename,
-                        TypeDesc type, const std::string& compression,
-                        std::string& error)
+bool write_atomic(const std::string& filename,
+                  const std::function<bool(ImageOutput&, const std::string&)>& write,
+                  std::string& error)
 {
     auto fail = [&](const std::string& why) {
-        error = Strutil::fmt::format("{}: {}", filename, Strutil::replace(why, "\n", " ", true));
+        error = Strutil::fmt::format("{}: {}", filename,
+                                     Strutil::replace(why, "\n", " ", true));
         return false;
     };
     auto out = ImageOutput::create(filename);
     if (!out)
         return fail(OIIO::geterror().empty() ? "no format writes this file type"
                                              : OIIO::geterror());
+    const std::string tmp = temporary_name(filename);
+    if (!write(*out, tmp) || !out->close()) {
+        const std::string why = out->geterror();
+        out.reset();
+        Filesystem::remove(tmp);
+        return fail(why.empty() ? "cannot write" : why);
+    }
+    out.reset();
+    std::string rename_error;
+    if (!Filesystem::rename(tmp, filename, rename_error)) {
+        Filesystem::remove(tmp);
+        return fail(rename_error);
+    }
+    return true;
+}
+
+bool write_image_atomic(const ImageBuf& image, const std::string& filename,
+                        TypeDesc type, const std::string& compression,
+                        std::string& error)
+{
     ImageSpec spec = image.spec();
     if (type != TypeUnknown) {
         spec.set_format(type);
@@ -42,24 +64,50 @@ bool write_image_atomic(const ImageBuf& image, const std::string& filename,
     }
     if (!compression.empty())
         spec.attribute("compression", compression);
-    const std::string tmp = temporary_name(filename);
-    bool ok = out->open(tmp, spec)
-              && image.write(out.get())
-              && out->close();
-    if (!ok) {
-        std::string why = out->geterror();
-        if (why.empty())
-            why = image.geterror();
-        out.reset();
-        Filesystem::remove(tmp);
-        return fail(why.empty() ? "cannot write" : why);
+    return write_atomic(filename, [&](ImageOutput& out, const std::string& tmp) {
+        return out.open(tmp, spec) && image.write(&out);
+    }, error);
+}
+
+bool write_layers_atomic(const std::vector<Layer>& layers, const ImageSpec& scene_spec,
+                         const std::string& filename, std::string& error)
+{
+    if (layers.empty()) {
+        error = filename + ": the scene has no layers to write";
+        return false;
     }
-    std::string rename_error;
-    if (!Filesystem::rename(tmp, filename, rename_error)) {
-        Filesystem::remove(tmp);
-        return fail(rename_error);
+    std::vector<ImageSpec> specs;
+    std::vector<ImageBuf> parts;
+    for (const Layer& layer : layers) {
+        ImageBuf part;
+        ImageBufAlgo::channel_append(part, layer.color, layer.depth);
+        ImageSpec spec = scene_spec;
+        spec.set_roi(part.roi());
+        spec.deep = false;
+        spec.nchannels = 5;
+        spec.set_format(TypeFloat);
+        spec.channelformats.clear();
+        spec.channelnames = { "R", "G", "B", "A", "Z" };
+        spec.alpha_channel = 3;
+        spec.z_channel = 4;
+        erase_part_attributes(spec);
+        spec.attribute("name", layer.name);
+        specs.push_back(spec);
+        parts.push_back(std::move(part));
     }
-    return true;
+    return write_atomic(filename, [&](ImageOutput& out, const std::string& tmp) {
+        if (!out.supports("multiimage")) {
+            out.errorfmt("cannot hold several layers: write an .exr");
+            return false;
+        }
+        if (!out.open(tmp, int(specs.size()), specs.data()))
+            return false;
+        for (size_t i = 0; i < parts.size(); ++i)
+            if ((i > 0 && !out.open(tmp, specs[i], ImageOutput::AppendSubimage))
+                || !out.write_image(TypeFloat, parts[i].localpixels()))
+                return false;
+        return true;
+    }, error);
 }
 
 }  // namespace defocus

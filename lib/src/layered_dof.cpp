@@ -34,20 +34,16 @@ bool coc_radius(ImageBuf& dst, const ImageBuf& depth,
 
 namespace {
 
-/// Depth statistics of the covered pixels of a layer.
-struct LayerDepth {
-    double mean_inverse_depth = 0;  ///< alpha-weighted; orders the layers
-    LayerReport report;
-};
-
-/// Per-row partial sums of measure(), reduced after the parallel pass.
+/// Per-row partial sums of describe_layer(), reduced after the parallel pass.
 struct RowDepth {
     int64_t pixels = 0;
     double zmin = INFINITY, zmax = -INFINITY;
     double weight = 0, weighted_inverse = 0;
 };
 
-LayerDepth measure(const Layer& layer, const CircleOfConfusion& coc, int nthreads)
+}  // namespace
+
+LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc, int nthreads)
 {
     const ROI roi = layer.color.roi();
     std::vector<RowDepth> rows(roi.height());
@@ -73,19 +69,16 @@ LayerDepth measure(const Layer& layer, const CircleOfConfusion& coc, int nthread
         total.weight += r.weight;
         total.weighted_inverse += r.weighted_inverse;
     }
-    LayerDepth d;
-    d.mean_inverse_depth = total.weight > 0 ? total.weighted_inverse / total.weight : 0.0;
-    LayerReport& rep = d.report;
+    LayerReport rep;
+    rep.mean_inverse_depth = total.weight > 0 ? total.weighted_inverse / total.weight : 0.0;
     rep.name = layer.name;
     rep.pixels = total.pixels;
     rep.depth_min = total.pixels ? total.zmin : 0.0;
     rep.depth_max = total.pixels ? total.zmax : 0.0;
     rep.coc_min = total.pixels ? coc.diameter(rep.depth_min) : 0.0;
     rep.coc_max = total.pixels ? coc.diameter(rep.depth_max) : 0.0;
-    return d;
+    return rep;
 }
-
-}  // namespace
 
 namespace {
 
@@ -98,9 +91,9 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
         return false;
     }
     const CircleOfConfusion coc(settings.camera, scene.spec.full_width);
-    std::vector<LayerDepth> depths;
+    std::vector<LayerReport> depths;
     for (const Layer& layer : scene.layers)
-        depths.push_back(measure(layer, coc, nthreads));
+        depths.push_back(describe_layer(layer, coc, nthreads));
     std::vector<size_t> order(scene.layers.size());
     std::iota(order.begin(), order.end(), 0);
     std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
@@ -111,8 +104,8 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
     for (size_t i : order) {
         const Layer& layer = scene.layers[i];
         if (report)
-            report->push_back(depths[i].report);
-        if (depths[i].report.pixels == 0)
+            report->push_back(depths[i]);
+        if (depths[i].pixels == 0)
             continue;
         ImageBuf radius, spread;
         if (!coc_radius(radius, layer.depth, coc, {}, nthreads)
@@ -121,6 +114,7 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
                          radius.has_error() ? radius.geterror() : spread.geterror());
             return false;
         }
+        normalize_coverage(spread, nthreads);
         if (!result.initialized()) {
             result = std::move(spread);
             continue;
@@ -154,15 +148,29 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
     spec.full_width   = display.width();
     spec.full_height  = display.height();
     spec.extra_attribs = scene.spec.extra_attribs;
-    // These describe one part of the input, not the flattened result.
-    for (const char* part_only : { "name", "view", "oiio:subimages",
-                                   "openexr:chunkCount", "oiio:subimagename" })
-        spec.erase_attribute(part_only);
+    erase_part_attributes(spec);
     dst = std::move(result);
     return true;
 }
 
 }  // namespace
+
+void normalize_coverage(ImageBuf& layer, int nthreads)
+{
+    const ROI roi = layer.roi();
+    parallel_for(roi.ybegin, roi.yend, [&](int y) {
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            float* p = static_cast<float*>(layer.pixeladdr(x, y));
+            if (p[3] > 1.0f) {
+                const float scale = 1.0f / p[3];
+                for (int c = 0; c < 4; ++c)
+                    p[c] *= scale;
+            } else if (p[3] < 0.0f) {
+                p[3] = 0.0f;
+            }
+        }
+    }, paropt(nthreads));
+}
 
 bool render_layered_dof(ImageBuf& dst, const Scene& scene,
                         const RenderSettings& settings,

@@ -337,6 +337,13 @@ bool read_file(const std::string& filename, const ReadOptions& options,
 
 }  // namespace
 
+void erase_part_attributes(ImageSpec& spec)
+{
+    for (const char* part_only : { "name", "view", "oiio:subimages", "oiio:subimagename",
+                                   "openexr:chunkCount" })
+        spec.erase_attribute(part_only);
+}
+
 bool read_scene(const std::vector<std::string>& filenames, const ReadOptions& options,
                 Scene& scene, std::string& error)
 {

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <string>
 
+#include <OpenImageIO/imageio.h>
+
 namespace defocus {
 
 /// How depth maps to blur.
@@ -56,6 +58,11 @@ private:
 /// "thin" or "optical"; false when the name is neither.
 bool parse_lens_model(const std::string& name, LensModel& lens);
 const char* lens_model_name(LensModel lens);
+
+/// Records the camera as attributes defocus:focalLength, defocus:fNumber,
+/// defocus:focusDistance, defocus:filmbackWidth, defocus:maxBlur and
+/// defocus:lens.
+void record_camera(OIIO::ImageSpec& spec, const Camera& camera);
 
 /// The first problem with the camera's settings, or "" when they are valid.
 std::string validate(const Camera& camera);

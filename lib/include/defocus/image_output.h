@@ -1,20 +1,36 @@
 // Writing results without ever leaving a half-written file behind.
 #pragma once
 
+#include <functional>
 #include <string>
+#include <vector>
 
 #include <OpenImageIO/imagebuf.h>
 
+#include <defocus/scene.h>
+
 namespace defocus {
+
+/// Writes a file atomically: `write` puts the complete file under the
+/// temporary name it is given, beside `filename`, which is then renamed
+/// over `filename`. Readers never see a partial file. On failure the
+/// temporary is removed and `error` names the file and the problem.
+bool write_atomic(const std::string& filename,
+                  const std::function<bool(OIIO::ImageOutput& out,
+                                           const std::string& temporary)>& write,
+                  std::string& error);
 
 /// Writes `image` to `filename` in the format its extension names, as
 /// `type` (TypeUnknown: the image's own pixel type) with `compression`
-/// ("" for the format's default). The pixels go to a temporary file beside
-/// the target, which is renamed over it only once complete, so readers
-/// never see a partial file. On failure returns false, sets `error` to a
-/// one-line message naming the file, and removes the temporary.
+/// ("" for the image's own or the format's default), atomically.
 bool write_image_atomic(const OIIO::ImageBuf& image, const std::string& filename,
                         OIIO::TypeDesc type, const std::string& compression,
                         std::string& error);
+
+/// Writes layers as a multi-part EXR, one part per layer named after it,
+/// with float R,G,B,A,Z over its own data window, the display window and
+/// metadata of `spec`: a file read_scene() takes back as the same layers.
+bool write_layers_atomic(const std::vector<Layer>& layers, const OIIO::ImageSpec& spec,
+                         const std::string& filename, std::string& error);
 
 }  // namespace defocus

@@ -20,6 +20,13 @@ bool coc_radius(OIIO::ImageBuf& dst, const OIIO::ImageBuf& depth,
                 const CircleOfConfusion& coc, OIIO::ROI roi = {},
                 int nthreads = 0);
 
+/// Keeps the alpha of a spread RGBA layer within [0, 1]. Within a layer,
+/// pixels of different blur overlap additively, so where their coverage
+/// adds up past 1 the layer is scaled back to full coverage there (the
+/// overlapping parts average instead of adding). Rounding residue of the
+/// prefix sums below 0 is cleared.
+void normalize_coverage(OIIO::ImageBuf& layer, int nthreads = 0);
+
 struct RenderSettings {
     Camera camera;
     Aperture aperture = Aperture::Box;
@@ -28,13 +35,18 @@ struct RenderSettings {
     bool crop = false;
 };
 
-/// What one layer looked like to the renderer, for -v.
+/// What one layer holds, for -v and layerize --info.
 struct LayerReport {
     std::string name;
     int64_t pixels = 0;  ///< pixels with alpha > 0
     double depth_min = 0, depth_max = 0;
     double coc_min = 0, coc_max = 0;  ///< signed CoC diameters, pixels
+    double mean_inverse_depth = 0;    ///< alpha-weighted; orders the layers
 };
+
+/// Pixel count and depth and CoC ranges of a layer's covered pixels.
+LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc,
+                           int nthreads = 0);
 
 /// Renders the defocused, flattened premultiplied RGBA of a sanitized
 /// scene (see sanitize()) whose content is all in layers (see

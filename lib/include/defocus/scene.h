@@ -48,6 +48,10 @@ struct Scene {
     std::vector<DeepImage> deep; ///< deep images, to be sliced
 };
 
+/// Removes the attributes that describe one part of an input file (its
+/// name, view, part count), not a result made from all of them.
+void erase_part_attributes(OIIO::ImageSpec& spec);
+
 /// What sanitize() changed, so that -v can say it.
 struct PixelCounts {
     int64_t nonfinite_color = 0;    ///< NaN or inf in R,G,B or A: dropped
