@@ -335,6 +335,38 @@ bool read_file(const std::string& filename, const ReadOptions& options,
     return true;
 }
 
+/// Deep images of one scene merged into one: every pixel's samples from all
+/// of them, over the union of their data windows. Slicing then sorts each
+/// pixel's samples by depth, so objects from different files interleave
+/// correctly pixel by pixel.
+DeepImage merge_deep(std::vector<DeepImage>& images)
+{
+    DeepImage merged;
+    merged.name = images.front().name;
+    for (const DeepImage& image : images)
+        merged.roi = roi_union(merged.roi, image.roi);
+    const int64_t n = merged.roi.npixels();
+    merged.offsets.assign(n + 1, 0);
+    auto for_each_source_pixel = [&](auto&& fn) {
+        for (const DeepImage& image : images)
+            for (int y = image.roi.ybegin; y < image.roi.yend; ++y)
+                for (int x = image.roi.xbegin; x < image.roi.xend; ++x)
+                    fn(image, image.pixel_index(x, y), merged.pixel_index(x, y));
+    };
+    for_each_source_pixel([&](const DeepImage& image, int64_t p, int64_t q) {
+        merged.offsets[q + 1] += image.offsets[p + 1] - image.offsets[p];
+    });
+    for (int64_t q = 0; q < n; ++q)
+        merged.offsets[q + 1] += merged.offsets[q];
+    merged.samples.resize(merged.offsets.back());
+    std::vector<uint64_t> fill(merged.offsets.begin(), merged.offsets.end() - 1);
+    for_each_source_pixel([&](const DeepImage& image, int64_t p, int64_t q) {
+        for (uint64_t i = image.offsets[p]; i < image.offsets[p + 1]; ++i)
+            merged.samples[fill[q]++] = image.samples[i];
+    });
+    return merged;
+}
+
 }  // namespace
 
 void erase_part_attributes(ImageSpec& spec)
@@ -368,6 +400,11 @@ bool read_scene(const std::vector<std::string>& filenames, const ReadOptions& op
         for (DeepImage& image : part.deep)
             scene.deep.push_back(std::move(image));
         scene.source += (scene.source.empty() ? "" : " ") + filename;
+    }
+    if (scene.deep.size() > 1) {
+        DeepImage merged = merge_deep(scene.deep);
+        scene.deep.clear();
+        scene.deep.push_back(std::move(merged));
     }
     ROI data_window;
     for (const auto* list : { &scene.layers, &scene.flat })

@@ -28,8 +28,10 @@ struct ReadOptions {
 ///  - a deep image (deepscanline or deeptile), one or more parts.
 /// In a multi-view file only the parts of the chosen view (and parts with
 /// no view) are read. Several files are layers of one scene: a flat file
-/// among them is one layer. The first file gives the display window and
-/// metadata; the others must share its display window.
+/// among them is one layer, and all deep images are merged into one (each
+/// pixel keeps the samples of all), so that they interleave by depth. The
+/// first file gives the display window and metadata; the others must share
+/// its display window.
 ///
 /// Every EXR is vetted with OpenEXR's file checker before it is read, so
 /// corrupt files end in an error rather than a crash. On failure returns
