@@ -2,6 +2,7 @@
 // input ending in a one-line error, a non-zero exit and no output file.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 #include <OpenImageIO/filesystem.h>
@@ -201,4 +202,77 @@ TEST_CASE("--help teaches the options")
                                 "--max-blur", "--aperture", "-o", "-d", "--compression",
                                 "--crop", "-v", "--threads", "Examples" })
         CHECK(Strutil::contains(log, option));
+}
+
+TEST_CASE("layerize writes the layers defocus uses, and defocus reads them back")
+{
+    const std::string dir = scratch_dir("cli_layerize");
+    const std::string layerize = LAYERIZE_BIN;
+    // A flat render: the example scene's layers flattened, with the depth
+    // of the front-most surface.
+    const std::string flat = dir + "/flat.exr";
+    std::string log;
+    REQUIRE(run(layerize + " " + example_scene() + camera + " -o " + dir + "/given.exr", log) == 0);
+    ImageBuf scene(example_scene());
+    {
+        // Flatten by compositing the parts back to front (the example's
+        // parts are sky, hills, post, leaves).
+        ImageBuf flat_color, flat_depth;
+        for (int part = 0; part < 4; ++part) {
+            ImageBuf p(example_scene(), part, 0);
+            REQUIRE(p.read(part, 0, true, TypeFloat));
+            ImageBuf rgba = ImageBufAlgo::channels(p, 4, { 0, 1, 2, 3 });
+            ImageBuf z = ImageBufAlgo::channels(p, 1, { 4 });
+            rgba.specmod().alpha_channel = 3;
+            if (part == 0) {
+                flat_color = rgba;
+                flat_depth = z;
+                continue;
+            }
+            for (ImageBuf::Iterator<float> c(flat_color), d(flat_depth); !c.done(); ++c, ++d) {
+                float s[4], sz;
+                rgba.getpixel(c.x(), c.y(), s);
+                z.getpixel(c.x(), c.y(), &sz, 1);
+                for (int i = 0; i < 4; ++i)
+                    c[i] = s[i] + (1 - s[3]) * c[i];
+                if (s[3] > 0.5f)
+                    d[0] = sz;
+            }
+        }
+        ImageBuf both = ImageBufAlgo::channel_append(flat_color, flat_depth);
+        both.specmod().channelnames = { "R", "G", "B", "A", "Z" };
+        REQUIRE(both.write(flat));
+    }
+    const std::string layers = dir + "/layers.exr";
+    REQUIRE(run(layerize + " " + flat + camera + " -o " + layers, log) == 0);
+    REQUIRE(defocus(flat + " -o " + dir + "/direct.exr -d float" + camera, log) == 0);
+    REQUIRE(defocus(layers + " -o " + dir + "/via_layers.exr -d float" + camera, log) == 0);
+    ImageBuf direct(dir + "/direct.exr"), via(dir + "/via_layers.exr");
+    REQUIRE(direct.read());
+    REQUIRE(via.read());
+    CHECK(direct.roi() == via.roi());
+    CHECK(worst_relative_error(via, direct, 0.0, 1e-6) <= 1.0);
+
+    // --info: one line per layer, the same layers the file holds.
+    REQUIRE(run(layerize + " --info " + flat + camera, log) == 0);
+    ImageBuf parts(layers);
+    REQUIRE(parts.init_spec(layers, 0, 0));
+    const int nparts = parts.nsubimages();
+    CHECK(std::count(log.begin(), log.end(), '\n') == nparts);
+    CHECK(Strutil::contains(log, "depth"));
+    CHECK(Strutil::contains(log, "CoC"));
+}
+
+TEST_CASE("layerize reports bad input like defocus")
+{
+    const std::string dir = scratch_dir("cli_layerize_errors");
+    const std::string layerize = LAYERIZE_BIN;
+    std::string log;
+    CHECK(run(layerize + " " + dir + "/missing.exr --focus 3 -o " + dir + "/o.exr", log) != 0);
+    CHECK(one_line_naming(log, "missing.exr: no such file"));
+    CHECK(run(layerize + " " + example_scene() + " --focus 3", log) != 0);
+    CHECK(one_line_naming(log, "-o OUTPUT.exr or --info"));
+    CHECK(run(layerize + " " + example_scene() + camera + " -o " + dir + "/o.png", log) != 0);
+    CHECK(one_line_naming(log, "o.png"));
+    CHECK_FALSE(Filesystem::exists(dir + "/o.png"));
 }

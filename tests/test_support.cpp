@@ -66,14 +66,14 @@ double srgb_encode_clamped(double v)
 }
 }  // namespace
 
-double garden_psnr(const ImageBuf& result, const ImageBuf& truth)
+double garden_psnr(const ImageBuf& result, const ImageBuf& truth, int dx, int dy)
 {
     const ImageSpec& t = truth.spec();
     double sq = 0.0;
     float a[4], b[4];
     for (int y = t.full_y; y < t.full_y + t.full_height; ++y)
         for (int x = t.full_x; x < t.full_x + t.full_width; ++x) {
-            result.getpixel(x, y, a, 3);
+            result.getpixel(x + dx, y + dy, a, 3);
             truth.getpixel(x, y, b, 3);
             for (int c = 0; c < 3; ++c) {
                 const double d = srgb_encode_clamped(a[c]) - srgb_encode_clamped(b[c]);

@@ -32,8 +32,9 @@ double worst_relative_error(const ImageBuf& a, const ImageBuf& b, double rel,
                             double abs);
 
 /// The garden README's metric: PSNR in dB of R, G, B over the display
-/// window of `truth`, after sRGB encoding and clamping to [0, 1].
-double garden_psnr(const ImageBuf& result, const ImageBuf& truth);
+/// window of `truth`, after sRGB encoding and clamping to [0, 1]. Pixel
+/// (x, y) of the truth is compared with (x + dx, y + dy) of the result.
+double garden_psnr(const ImageBuf& result, const ImageBuf& truth, int dx = 0, int dy = 0);
 
 /// Runs a shell command, returns its exit status; stdout+stderr into `output`.
 int run(const std::string& command, std::string& output);

@@ -1,0 +1,213 @@
+// Reading every kind of layered scene a pipeline produces, from small files
+// written here.
+#include <catch2/catch.hpp>
+
+#include <array>
+
+#include <OpenImageIO/deepdata.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/imageio.h>
+#include <OpenImageIO/strutil.h>
+
+#include <defocus/scene_io.h>
+
+#include "test_support.h"
+
+using namespace defocus;
+using namespace defocus_test;
+using namespace OIIO;
+
+namespace {
+
+/// One part of a test file: channel names, a constant value per channel,
+/// and optionally a view and a name.
+struct PartDesc {
+    std::vector<std::string> channels;
+    std::vector<float> values;
+    std::string view, name;
+};
+
+std::string write_parts(const std::string& file, const std::vector<PartDesc>& parts)
+{
+    const std::string path = scratch_dir("scene_io_" + file) + "/" + file;
+    std::vector<ImageSpec> specs;
+    for (const PartDesc& p : parts) {
+        ImageSpec spec(8, 6, int(p.channels.size()), TypeFloat);
+        spec.channelnames = p.channels;
+        if (!p.view.empty())
+            spec.attribute("view", p.view);
+        spec.attribute("name", p.name.empty() ? Strutil::fmt::format("part{}", specs.size())
+                                              : p.name);
+        specs.push_back(spec);
+    }
+    auto out = ImageOutput::create(path);
+    REQUIRE(out->open(path, int(specs.size()), specs.data()));
+    for (size_t i = 0; i < parts.size(); ++i) {
+        if (i > 0)
+            REQUIRE(out->open(path, specs[i], ImageOutput::AppendSubimage));
+        ImageBuf buf(specs[i]);
+        ImageBufAlgo::fill(buf, parts[i].values);
+        REQUIRE(out->write_image(TypeFloat, buf.localpixels()));
+    }
+    REQUIRE(out->close());
+    return path;
+}
+
+/// A deep file: pixel (x, y) holds `samples` R,G,B,A,Z samples.
+std::string write_deep(const std::string& file, const std::vector<std::array<float, 5>>& samples)
+{
+    const std::string path = scratch_dir("scene_io_" + file) + "/" + file;
+    ImageSpec spec(4, 3, 5, TypeFloat);
+    spec.channelnames = { "R", "G", "B", "A", "Z" };
+    spec.deep = true;
+    DeepData data(spec);
+    for (int64_t p = 0; p < data.pixels(); ++p) {
+        data.set_samples(p, int(samples.size()));
+        for (int s = 0; s < int(samples.size()); ++s)
+            for (int c = 0; c < 5; ++c)
+                data.set_deep_value(p, c, s, samples[s][c]);
+    }
+    auto out = ImageOutput::create(path);
+    REQUIRE(out->open(path, spec));
+    REQUIRE(out->write_deep_image(data));
+    REQUIRE(out->close());
+    return path;
+}
+
+Scene read(const std::vector<std::string>& files, const ReadOptions& options = {})
+{
+    Scene scene;
+    std::string error;
+    INFO(error);
+    REQUIRE(read_scene(files, options, scene, error));
+    return scene;
+}
+
+std::string read_error(const std::vector<std::string>& files, const ReadOptions& options = {})
+{
+    Scene scene;
+    std::string error;
+    CHECK_FALSE(read_scene(files, options, scene, error));
+    return error;
+}
+
+float value(const ImageBuf& image, int channel)
+{
+    float p[4];
+    image.getpixel(2, 2, p);
+    return p[channel];
+}
+
+}  // namespace
+
+TEST_CASE("a single RGBA+Z image is a flat render")
+{
+    const std::string f = write_parts("flat.exr", { { { "R", "G", "B", "A", "Z" }, { 1, 2, 3, 1, 5 } } });
+    const Scene s = read({ f });
+    REQUIRE(s.flat.size() == 1);
+    CHECK(s.layers.empty());
+    CHECK(value(s.flat[0].depth, 0) == 5.0f);
+}
+
+TEST_CASE("parts that each hold RGBA+Z are the layers")
+{
+    const std::string f = write_parts("layers.exr", { { { "R", "G", "B", "A", "Z" }, { 1, 0, 0, 1, 9 }, "", "back" },
+                                                      { { "R", "G", "B", "A", "Z" }, { 0, 1, 0, 1, 2 }, "", "front" } });
+    const Scene s = read({ f });
+    REQUIRE(s.layers.size() == 2);
+    CHECK(s.layers[1].name == "front");
+    CHECK(value(s.layers[1].depth, 0) == 2.0f);
+}
+
+TEST_CASE("Blender multilayer channel names are understood")
+{
+    const std::string f = write_parts("blender.exr", { { { "ViewLayer.Combined.R", "ViewLayer.Combined.G",
+                                                           "ViewLayer.Combined.B", "ViewLayer.Combined.A",
+                                                           "ViewLayer.Depth.Z" },
+                                                         { 0.5f, 0.25f, 0.125f, 1, 7 } } });
+    const Scene s = read({ f });
+    REQUIRE(s.flat.size() == 1);
+    CHECK(value(s.flat[0].color, 1) == 0.25f);
+    CHECK(value(s.flat[0].depth, 0) == 7.0f);
+    ReadOptions by_name;
+    by_name.layer = "ViewLayer";
+    CHECK(value(read({ f }, by_name).flat[0].depth, 0) == 7.0f);
+}
+
+TEST_CASE("--layer chooses among prefixed channel sets")
+{
+    const std::string f = write_parts("prefixed.exr", { { { "beauty.R", "beauty.G", "beauty.B", "beauty.A", "beauty.Z",
+                                                            "spec.R", "spec.G", "spec.B", "spec.A" },
+                                                          { 1, 1, 1, 1, 3, 2, 2, 2, 1 } } });
+    CHECK_THAT(read_error({ f }), Catch::Contains("--layer"));
+    ReadOptions beauty;
+    beauty.layer = "beauty";
+    const Scene s = read({ f }, beauty);
+    REQUIRE(s.flat.size() == 1);
+    CHECK(value(s.flat[0].depth, 0) == 3.0f);
+}
+
+TEST_CASE("a beauty part and a depth part of the same view are joined")
+{
+    const std::string f = write_parts("joined.exr", { { { "R", "G", "B", "A" }, { 1, 1, 1, 1 } },
+                                                      { { "depth.Z" }, { 4 } } });
+    const Scene s = read({ f });
+    REQUIRE(s.flat.size() == 1);
+    CHECK(value(s.flat[0].depth, 0) == 4.0f);
+}
+
+TEST_CASE("--view picks one view's parts of a stereo file")
+{
+    const std::string f = write_parts("stereo.exr", { { { "R", "G", "B", "A" }, { 1, 0, 0, 1 }, "right" },
+                                                      { { "Z" }, { 2 }, "left" },
+                                                      { { "R", "G", "B", "A" }, { 0, 1, 0, 1 }, "left" },
+                                                      { { "Z" }, { 3 }, "right" } });
+    const Scene first = read({ f });  // the first part's view: right
+    REQUIRE(first.flat.size() == 1);
+    CHECK(value(first.flat[0].color, 0) == 1.0f);
+    CHECK(value(first.flat[0].depth, 0) == 3.0f);
+    ReadOptions left;
+    left.view = "left";
+    const Scene l = read({ f }, left);
+    CHECK(value(l.flat[0].color, 1) == 1.0f);
+    CHECK(value(l.flat[0].depth, 0) == 2.0f);
+    ReadOptions centre;
+    centre.view = "centre";
+    CHECK_THAT(read_error({ f }, centre), Catch::Contains("views: right, left"));
+}
+
+TEST_CASE("several files are the layers of one scene")
+{
+    const std::string a = write_parts("bg.exr", { { { "R", "G", "B", "A", "Z" }, { 1, 0, 0, 1, 9 } } });
+    const std::string b = write_parts("fg.exr", { { { "R", "G", "B", "A", "Z" }, { 0, 1, 0, 1, 2 } } });
+    const Scene s = read({ a, b });
+    CHECK(s.flat.empty());
+    CHECK(s.layers.size() == 2);
+}
+
+TEST_CASE("deep files are read, and several are merged pixel by pixel")
+{
+    const std::string a = write_deep("a.exr", { { 0.1f, 0.2f, 0.3f, 0.5f, 4.0f } });
+    const std::string b = write_deep("b.exr", { { 0.5f, 0.5f, 0.5f, 1.0f, 9.0f },
+                                                { 0.2f, 0.0f, 0.0f, 0.2f, 1.0f } });
+    const Scene one = read({ a });
+    REQUIRE(one.deep.size() == 1);
+    CHECK(one.deep[0].samples.size() == 12);
+    CHECK(one.deep[0].samples[5].z == 4.0f);
+    const Scene both = read({ a, b });
+    REQUIRE(both.deep.size() == 1);
+    CHECK(both.deep[0].offsets[1] == 3);  // 1 + 2 samples in the first pixel
+    CHECK(both.deep[0].samples.size() == 36);
+}
+
+TEST_CASE("inputs with different display windows are refused")
+{
+    const std::string a = write_parts("a.exr", { { { "R", "G", "B", "A", "Z" }, { 1, 0, 0, 1, 9 } } });
+    const std::string path = scratch_dir("scene_io_wide") + "/wide.exr";
+    ImageSpec spec(16, 6, 5, TypeFloat);
+    spec.channelnames = { "R", "G", "B", "A", "Z" };
+    ImageBuf wide(spec);
+    ImageBufAlgo::fill(wide, { 1, 1, 1, 1, 1 });
+    REQUIRE(wide.write(path));
+    CHECK_THAT(read_error({ a, path }), Catch::Contains("display window"));
+}
