@@ -194,7 +194,7 @@ TEST_CASE("every bad input ends in a one-line error and no output")
     CHECK(files.size() == 3);  // only the inputs written above
 }
 
-TEST_CASE("--help teaches the options")
+TEST_CASE("the help teaches the options")
 {
     std::string log;
     REQUIRE(defocus("--help", log) == 0);

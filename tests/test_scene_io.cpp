@@ -134,7 +134,7 @@ TEST_CASE("Blender multilayer channel names are understood")
     CHECK(value(read({ f }, by_name).flat[0].depth, 0) == 7.0f);
 }
 
-TEST_CASE("--layer chooses among prefixed channel sets")
+TEST_CASE("a chosen layer name picks among prefixed channel sets")
 {
     const std::string f = write_parts("prefixed.exr", { { { "beauty.R", "beauty.G", "beauty.B", "beauty.A", "beauty.Z",
                                                             "spec.R", "spec.G", "spec.B", "spec.A" },
@@ -156,7 +156,7 @@ TEST_CASE("a beauty part and a depth part of the same view are joined")
     CHECK(value(s.flat[0].depth, 0) == 4.0f);
 }
 
-TEST_CASE("--view picks one view's parts of a stereo file")
+TEST_CASE("a chosen view picks that view's parts of a stereo file")
 {
     const std::string f = write_parts("stereo.exr", { { { "R", "G", "B", "A" }, { 1, 0, 0, 1 }, "right" },
                                                       { { "Z" }, { 2 }, "left" },

@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <filesystem>
 
+#include <unistd.h>
+
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 
@@ -107,7 +109,14 @@ std::string shared_data()
 
 std::string scratch_dir(const std::string& name)
 {
-    const std::string dir = std::string(DEFOCUS_TEST_SCRATCH) + "/" + name;
+    // CTest runs test cases as parallel processes: each gets its own root,
+    // removed when it exits.
+    struct ProcessRoot {
+        std::string path = std::string(DEFOCUS_TEST_SCRATCH) + "/" + std::to_string(getpid());
+        ~ProcessRoot() { Filesystem::remove_all(path); }
+    };
+    static const ProcessRoot root;
+    const std::string dir = root.path + "/" + name;
     Filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     return dir;
