@@ -17,17 +17,6 @@ using OIIO::ROI;
 
 namespace {
 
-Camera test_camera(double focus)
-{
-    // k = f^2/(N s) W = 0.1 * (100/36) * 120 = 33.3 px.
-    Camera cam;
-    cam.focal_length_mm = 100;
-    cam.fstop = 1;
-    cam.sensor_width_mm = 36;
-    cam.focus_distance = focus;
-    return cam;
-}
-
 /// A flat render of size 120x80 from a colour and a depth per pixel.
 template<typename Shade>
 Scene flat_scene(Shade&& shade)
@@ -51,7 +40,7 @@ Scene flat_scene(Shade&& shade)
 ImageBuf render(Scene scene, double focus, const LayeringOptions& options = {})
 {
     RenderSettings settings;
-    settings.camera = test_camera(focus);
+    settings.camera = synthetic_camera(focus);
     decompose_layers(scene, CircleOfConfusion(settings.camera, 120), options);
     ImageBuf out;
     REQUIRE(render_layered_dof(out, scene, settings));
@@ -114,7 +103,7 @@ TEST_CASE("automatic boundaries fall in the gaps between objects")
         rgba[3] = 1.0f;
         z = x < 60 ? 1.0f / (1.0f + 30.0f / 33.333f) : 1.0f / (1.0f - 20.0f / 33.333f);
     });
-    const CircleOfConfusion coc(test_camera(1.0), 120);
+    const CircleOfConfusion coc(synthetic_camera(1.0), 120);
     LayeringOptions options;
     const LayerBounds bounds = choose_layer_bounds(scene, coc, options);
     REQUIRE(bounds.count() >= 2);
@@ -145,7 +134,7 @@ TEST_CASE("a deep volume sample split across layers composites back to itself")
     scene.deep.push_back(deep);
     LayeringOptions options;
     options.layers = 6;
-    const CircleOfConfusion coc(test_camera(1.0), 120);
+    const CircleOfConfusion coc(synthetic_camera(1.0), 120);
     decompose_layers(scene, coc, options);
     REQUIRE(scene.layers.size() >= 3);
     float out[4];
@@ -170,7 +159,7 @@ TEST_CASE("deep samples are ordered by Z, then ZBack")
     deep.samples = { { 0.0f, 0.5f, 0.0f, 0.5f, 2.0f, 4.0f },    // green, long
                      { 0.5f, 0.0f, 0.0f, 0.5f, 2.0f, 2.0f } };  // red, point
     scene.deep.push_back(deep);
-    decompose_layers(scene, CircleOfConfusion(test_camera(1.0), 120), {});
+    decompose_layers(scene, CircleOfConfusion(synthetic_camera(1.0), 120), {});
     float out[4];
     composite_pixel(scene.layers, 0, 0, out);
     CHECK(out[0] == Approx(0.5f));   // red in front

@@ -46,22 +46,10 @@ Scene two_layer_scene()
     return scene;
 }
 
-Camera camera_focused_at(double z)
-{
-    // k = f^2/(N s) W = 0.1 * (100/36) * 120 = 33.3 px: a 30 px CoC for the
-    // out-of-focus layer whichever is in focus.
-    Camera cam;
-    cam.focal_length_mm = 100;
-    cam.fstop = 1;
-    cam.sensor_width_mm = 36;
-    cam.focus_distance = z;
-    return cam;
-}
-
 ImageBuf layered(double focus)
 {
     RenderSettings settings;
-    settings.camera = camera_focused_at(focus);
+    settings.camera = synthetic_camera(focus);
     ImageBuf out;
     REQUIRE(render_layered_dof(out, two_layer_scene(), settings));
     return out;
@@ -80,7 +68,7 @@ ImageBuf gathered(double focus)
             depth.setpixel(x, y, card ? &near_z : &far_z);
         }
     ImageBuf radius, out;
-    REQUIRE(coc_radius(radius, depth, CircleOfConfusion(camera_focused_at(focus), 120)));
+    REQUIRE(coc_radius(radius, depth, CircleOfConfusion(synthetic_camera(focus), 120)));
     REQUIRE(gather(out, color, radius, box_footprint));
     return out;
 }
@@ -145,7 +133,7 @@ TEST_CASE("gathering gives a blurred foreground a sharp silhouette")
 TEST_CASE("layers are composited back to front whatever their file order")
 {
     RenderSettings settings;
-    settings.camera = camera_focused_at(near_z);
+    settings.camera = synthetic_camera(near_z);
     std::vector<LayerReport> report;
     ImageBuf out;
     REQUIRE(render_layered_dof(out, two_layer_scene(), settings, &report));

@@ -26,6 +26,16 @@ ImageBuf zero_image(const ROI& roi, int nchannels)
     return image;
 }
 
+defocus::Camera synthetic_camera(double focus)
+{
+    defocus::Camera cam;
+    cam.focal_length_mm = 100;
+    cam.fstop = 1;
+    cam.sensor_width_mm = 36;
+    cam.focus_distance = focus;
+    return cam;
+}
+
 double Random::uniform()
 {
     m_state = m_state * 6364136223846793005ull + 1442695040888963407ull;

@@ -6,6 +6,8 @@
 
 #include <OpenImageIO/imagebuf.h>
 
+#include <defocus/camera.h>
+
 namespace defocus_test {
 
 using OIIO::ImageBuf;
@@ -13,6 +15,10 @@ using OIIO::ROI;
 
 /// A float image of `nchannels` over `roi`, all zero.
 ImageBuf zero_image(const ROI& roi, int nchannels);
+
+/// The synthetic scenes' camera: over a 120-pixel-wide frame its CoC is
+/// k·(1/focus - 1/z) with k = f²/(N s)·W = 0.1·(100/36)·120 = 33.3 px.
+defocus::Camera synthetic_camera(double focus);
 
 /// Deterministic uniform random values in [0, 1).
 class Random {
