@@ -34,7 +34,7 @@ std::string example_scene()
 }
 
 /// Runs defocus; the output and exit status.
-int defocus(const std::string& args, std::string& output)
+int run_defocus(const std::string& args, std::string& output)
 {
     return run(defocus_bin + " " + args, output);
 }
@@ -72,7 +72,7 @@ TEST_CASE("defocus renders a generated multi-part scene")
     const std::string dir = scratch_dir("cli_scene");
     const std::string out = dir + "/out.exr";
     std::string log;
-    REQUIRE(defocus(example_scene() + " -o " + out + camera + " -v", log) == 0);
+    REQUIRE(run_defocus(example_scene() + " -o " + out + camera + " -v", log) == 0);
     CHECK(Strutil::contains(log, "leaves"));
     CHECK(Strutil::contains(log, "layers, back to front"));
 
@@ -96,7 +96,7 @@ TEST_CASE("defocus renders a generated multi-part scene")
 
     // --crop clips to the display window; -d and --compression are obeyed.
     const std::string cropped = dir + "/cropped.exr";
-    REQUIRE(defocus(example_scene() + " -o " + cropped + camera
+    REQUIRE(run_defocus(example_scene() + " -o " + cropped + camera
                         + " --crop -d float --compression piz", log) == 0);
     ImageBuf c(cropped);
     REQUIRE(c.init_spec(cropped, 0, 0));
@@ -133,7 +133,7 @@ TEST_CASE("bad pixels are handled, counted and never reach the output")
     const std::string in = dir + "/bad.exr", out = dir + "/out.exr";
     REQUIRE(image.write(in));
     std::string log;
-    REQUIRE(defocus(in + " -o " + out + camera + " -v", log) == 0);
+    REQUIRE(run_defocus(in + " -o " + out + camera + " -v", log) == 0);
     CHECK(Strutil::contains(log, "2 with NaN/inf colour dropped"));
     CHECK(Strutil::contains(log, "3 with bad depth taken as infinitely far"));
     CHECK(Strutil::contains(log, "1 transparent with colour cleared"));
@@ -182,7 +182,7 @@ TEST_CASE("every bad input ends in a one-line error and no output")
     for (const Case& c : cases) {
         INFO("defocus " << c.args);
         std::string log;
-        const int status = defocus(c.args, log);
+        const int status = run_defocus(c.args, log);
         INFO(log);
         CHECK(status != 0);
         CHECK(status < 128);  // exited, not killed by a signal
@@ -197,7 +197,7 @@ TEST_CASE("every bad input ends in a one-line error and no output")
 TEST_CASE("the help teaches the options")
 {
     std::string log;
-    REQUIRE(defocus("--help", log) == 0);
+    REQUIRE(run_defocus("--help", log) == 0);
     for (const char* option : { "--focal", "--fstop", "--focus", "--sensor", "--lens",
                                 "--max-blur", "--aperture", "-o", "-d", "--compression",
                                 "--crop", "-v", "--threads", "Examples" })
@@ -245,8 +245,8 @@ TEST_CASE("layerize writes the layers defocus uses, and defocus reads them back"
     }
     const std::string layers = dir + "/layers.exr";
     REQUIRE(run(layerize + " " + flat + camera + " -o " + layers, log) == 0);
-    REQUIRE(defocus(flat + " -o " + dir + "/direct.exr -d float" + camera, log) == 0);
-    REQUIRE(defocus(layers + " -o " + dir + "/via_layers.exr -d float" + camera, log) == 0);
+    REQUIRE(run_defocus(flat + " -o " + dir + "/direct.exr -d float" + camera, log) == 0);
+    REQUIRE(run_defocus(layers + " -o " + dir + "/via_layers.exr -d float" + camera, log) == 0);
     ImageBuf direct(dir + "/direct.exr"), via(dir + "/via_layers.exr");
     REQUIRE(direct.read());
     REQUIRE(via.read());
