@@ -53,13 +53,17 @@ std::string write_parts(const std::string& file, const std::vector<PartDesc>& pa
     return path;
 }
 
-/// A deep file: pixel (x, y) holds `samples` R,G,B,A,Z samples.
-std::string write_deep(const std::string& file, const std::vector<std::array<float, 5>>& samples)
+/// A deep file (deepscanline, or deeptile with `tiled`): every pixel
+/// holds `samples` R,G,B,A,Z samples.
+std::string write_deep(const std::string& file, const std::vector<std::array<float, 5>>& samples,
+                       bool tiled = false)
 {
     const std::string path = scratch_dir("scene_io_" + file) + "/" + file;
     ImageSpec spec(4, 3, 5, TypeFloat);
     spec.channelnames = { "R", "G", "B", "A", "Z" };
     spec.deep = true;
+    if (tiled)
+        spec.tile_width = spec.tile_height = 16;
     DeepData data(spec);
     for (int64_t p = 0; p < data.pixels(); ++p) {
         data.set_samples(p, int(samples.size()));
@@ -185,7 +189,7 @@ TEST_CASE("several files are the layers of one scene")
     CHECK(s.layers.size() == 2);
 }
 
-TEST_CASE("deep files are read, and several are merged pixel by pixel")
+TEST_CASE("deep scanline and tiled files are read, and several are merged pixel by pixel")
 {
     const std::string a = write_deep("a.exr", { { 0.1f, 0.2f, 0.3f, 0.5f, 4.0f } });
     const std::string b = write_deep("b.exr", { { 0.5f, 0.5f, 0.5f, 1.0f, 9.0f },
@@ -194,6 +198,11 @@ TEST_CASE("deep files are read, and several are merged pixel by pixel")
     REQUIRE(one.deep.size() == 1);
     CHECK(one.deep[0].samples.size() == 12);
     CHECK(one.deep[0].samples[5].z == 4.0f);
+    const std::string t = write_deep("tiled.exr", { { 0.1f, 0.2f, 0.3f, 0.5f, 4.0f } }, true);
+    ImageBuf probe(t);
+    REQUIRE(probe.init_spec(t, 0, 0));
+    CHECK(probe.spec().tile_width == 16);
+    CHECK(read({ t }).deep[0].samples[5].z == 4.0f);
     const Scene both = read({ a, b });
     REQUIRE(both.deep.size() == 1);
     CHECK(both.deep[0].offsets[1] == 3);  // 1 + 2 samples in the first pixel
