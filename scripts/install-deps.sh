@@ -6,6 +6,7 @@ packages=(
     cmake g++ make pkg-config
     libopenimageio-dev openimageio-tools   # image I/O, ImageBuf, ArgParse, threads
     libopenexr-dev openexr                 # multi-part and deep EXR, file checks
+    libopencolorio-dev opencolorio-tools   # colour management, ociocheck
     catch2                                 # tests
     libbenchmark-dev                       # benchmark programs
 )

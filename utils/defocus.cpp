@@ -8,10 +8,12 @@
 
 #include <OpenImageIO/argparse.h>
 #include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/timer.h>
 
+#include <defocus/color.h>
 #include <defocus/image_output.h>
 #include <defocus/layered_dof.h>
 #include <defocus/layering.h>
@@ -32,6 +34,8 @@ struct Options {
     TypeDesc type = TypeUnknown;
     std::string compression;
     bool verbose = false;
+    std::string colorconfig, input_space, output_space;
+    std::string preview, display, display_view;
 };
 
 template<typename... Args>
@@ -85,6 +89,28 @@ std::string parse_command_line(int argc, const char* argv[], Options& opt,
         .help("Bokeh shape: box, a square of the CoC disc's area (default: box)")
         .action(store(aperture));
     scene_args.add_scene(ap);
+    ap.separator("Colour (OpenColorIO; spreading happens in scene-linear light):");
+    ap.arg("--colorconfig FILE")
+        .help("OCIO config (default: $OCIO, else the config shipped with defocus)")
+        .action(store(opt.colorconfig));
+    ap.arg("--iscolorspace NAME")
+        .help("Colour space of the input (default: the file's oiio:ColorSpace if the "
+              "config has it, else linear)")
+        .action(store(opt.input_space));
+    ap.arg("--tocolorspace NAME")
+        .help("Colour space of the output (default: the input's)")
+        .action(store(opt.output_space));
+    ap.arg("--preview FILE")
+        .help("Also write an 8-bit display-referred preview (e.g. a .png) of the "
+              "display window")
+        .action(store(opt.preview));
+    ap.arg("--display NAME")
+        .help("Display for --preview (default: the config's default display)")
+        .action(store(opt.display));
+    ap.arg("--display-view NAME")
+        .help("View of that display for --preview (default: the display's default "
+              "view; --view is the EXR view of the input)")
+        .action(store(opt.display_view));
     ap.separator("Output:");
     ap.arg("-o FILE").help("Output file (required); its extension picks the format")
         .action(store(opt.output));
@@ -129,6 +155,90 @@ std::string parse_command_line(int argc, const char* argv[], Options& opt,
     return "";
 }
 
+/// Which colour spaces the pipeline works in.
+struct ColourPlan {
+    defocus::ColorManagement config;
+    bool loaded = false;
+    std::string input, working, output;
+    std::string to_working;  ///< non-empty when the input must be converted
+    std::string summary;     ///< for -v
+};
+
+bool plan_colour(const Options& opt, const Scene& scene, ColourPlan& plan,
+                 std::string& error)
+{
+    const bool asked = !opt.colorconfig.empty() || !opt.input_space.empty()
+                       || !opt.output_space.empty() || !opt.preview.empty();
+    std::string load_error;
+    plan.loaded = plan.config.load(opt.colorconfig, load_error);
+    if (!plan.loaded) {
+        if (asked) {
+            error = load_error;
+            return false;
+        }
+        // Without a config, and asked for nothing: the input is linear.
+        plan.summary = "colour: no config (" + load_error + "); the input is taken as linear";
+        return true;
+    }
+    const ColorManagement& c = plan.config;
+    if (!opt.input_space.empty()) {
+        plan.input = c.require_space(opt.input_space, error);
+        if (plan.input.empty()) {
+            error = "--iscolorspace: " + error;
+            return false;
+        }
+    } else {
+        plan.input = c.find_space(scene.spec.get_string_attribute("oiio:ColorSpace"));
+    }
+    if (!plan.input.empty() && c.is_data(plan.input)) {
+        error = Strutil::fmt::format("--iscolorspace: '{}' is data, not colour: the input "
+                                     "must be in a colour space",
+                                     plan.input);
+        return false;
+    }
+    if (plan.input.empty())
+        plan.input = c.scene_linear();  // linear, as far as anyone can tell
+    plan.output = plan.input;
+    if (!opt.output_space.empty()) {
+        plan.output = c.require_space(opt.output_space, error);
+        if (plan.output.empty()) {
+            error = "--tocolorspace: " + error;
+            return false;
+        }
+    }
+    // Spreading commutes with the 3x3 matrix between two linear spaces, so
+    // a linear input is spread as it is.
+    if (c.is_linear(plan.input)) {
+        plan.working = plan.input;
+    } else {
+        plan.working = c.scene_linear();
+        plan.to_working = plan.working;
+    }
+    plan.summary = Strutil::fmt::format(
+        "colour: config {} ({}); input '{}', spread in '{}', output '{}'", c.path(),
+        c.origin(), plan.input, plan.working, plan.output);
+    return true;
+}
+
+bool write_preview(const ImageBuf& result, const ColourPlan& colour, const Options& opt,
+                   std::string& error)
+{
+    const ColorManagement& c = colour.config;
+    const std::string display = opt.display.empty() ? c.default_display() : opt.display;
+    const std::string view = opt.display_view.empty() ? c.default_view(display)
+                                                      : opt.display_view;
+    const ImageSpec& spec = result.spec();
+    ImageBuf framed, shown;
+    ImageBufAlgo::crop(framed, result,
+                       ROI(spec.full_x, spec.full_x + spec.full_width, spec.full_y,
+                           spec.full_y + spec.full_height, 0, 1, 0, spec.nchannels));
+    if (!c.display(shown, framed, colour.working, display, view, error)) {
+        error = "--preview: " + error;
+        return false;
+    }
+    return write_image_atomic(shown, opt.preview, TypeUInt8, "", error);
+}
+
 TypeDesc input_color_type(const ImageSpec& spec)
 {
     const int r = spec.channelindex("R");
@@ -147,11 +257,12 @@ int main(int argc, const char* argv[])
         return EXIT_SUCCESS;
     if (!usage_error.empty())
         return fail("{}", usage_error);
-    for (const std::string& input : opt.inputs) {
-        std::error_code ec;
-        if (std::filesystem::equivalent(input, opt.output, ec))
-            return fail("{}: the output would overwrite the input", opt.output);
-    }
+    for (const std::string& input : opt.inputs)
+        for (const std::string& written : { opt.output, opt.preview }) {
+            std::error_code ec;
+            if (std::filesystem::equivalent(input, written, ec))
+                return fail("{}: the output would overwrite the input", written);
+        }
     const int threads = opt.scene.threads;
     OIIO::attribute("threads", threads);
 
@@ -183,6 +294,16 @@ int main(int argc, const char* argv[])
     const PixelCounts fixed = sanitize(scene, threads);
     lap("sanitize");
 
+    ColourPlan colour;
+    if (!plan_colour(opt, scene, colour, error))
+        return fail("{}", error);
+    if (opt.verbose)
+        Strutil::print("  {}\n", colour.summary);
+    if (!colour.to_working.empty()
+        && !convert_scene(scene, colour.config, colour.input, colour.working, error, threads))
+        return fail("{}: {}", scene.source, error);
+    lap("colour");
+
     const CircleOfConfusion coc(opt.render.camera, scene.spec.full_width);
     const bool to_slice = !scene.flat.empty() || !scene.deep.empty();
     const LayerBounds bounds = decompose_layers(scene, coc, opt.scene.layering, threads);
@@ -201,6 +322,16 @@ int main(int argc, const char* argv[])
         return fail("{}: {}", scene.source, result.geterror());
     lap("render");
 
+    if (!opt.preview.empty()) {
+        if (!write_preview(result, colour, opt, error))
+            return fail("{}", error);
+        lap("preview");
+    }
+    if (colour.loaded) {
+        if (!colour.config.convert(result, colour.working, colour.output, error, threads))
+            return fail("{}: {}", opt.output, error);
+        result.specmod().attribute("oiio:ColorSpace", colour.output);
+    }
     record_camera(result.specmod(), opt.render.camera);
     result.specmod().attribute("defocus:aperture", aperture_name(opt.render.aperture));
     result.specmod().attribute("Software", "defocus " DEFOCUS_VERSION);

@@ -65,7 +65,20 @@ bool write_image_atomic(const ImageBuf& image, const std::string& filename,
     if (!compression.empty())
         spec.attribute("compression", compression);
     return write_atomic(filename, [&](ImageOutput& out, const std::string& tmp) {
-        return out.open(tmp, spec) && image.write(&out);
+        if (out.supports("displaywindow"))
+            return out.open(tmp, spec) && image.write(&out);
+        // Formats without a display window (PNG, JPEG, ...) get the picture
+        // a viewer shows: the display window.
+        ImageBuf framed;
+        ImageBufAlgo::crop(framed, image,
+                           ROI(spec.full_x, spec.full_x + spec.full_width, spec.full_y,
+                               spec.full_y + spec.full_height, 0, 1, 0, spec.nchannels));
+        ImageSpec framed_spec = spec;
+        framed_spec.set_roi(ROI(0, spec.full_width, 0, spec.full_height));
+        framed_spec.full_x = framed_spec.full_y = 0;
+        framed.specmod().x = framed.specmod().y = 0;
+        framed.specmod().full_x = framed.specmod().full_y = 0;
+        return out.open(tmp, framed_spec) && framed.write(&out);
     }, error);
 }
 

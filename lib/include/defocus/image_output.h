@@ -22,7 +22,8 @@ bool write_atomic(const std::string& filename,
 
 /// Writes `image` to `filename` in the format its extension names, as
 /// `type` (TypeUnknown: the image's own pixel type) with `compression`
-/// ("" for the image's own or the format's default), atomically.
+/// ("" for the image's own or the format's default), atomically. A format
+/// without a display window (PNG, JPEG) gets the display window's pixels.
 bool write_image_atomic(const OIIO::ImageBuf& image, const std::string& filename,
                         OIIO::TypeDesc type, const std::string& compression,
                         std::string& error);

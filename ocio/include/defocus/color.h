@@ -1,0 +1,83 @@
+// Colour management with OpenColorIO: spreading adds light, so it is only
+// right in linear light. Inputs are converted to the config's scene_linear
+// space before slicing and spreading; the result is converted to the space
+// the user asks for.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <OpenImageIO/imagebuf.h>
+
+#include <defocus/scene.h>
+
+namespace defocus {
+
+/// A loaded OpenColorIO config.
+class ColorManagement {
+public:
+    ColorManagement();
+    ~ColorManagement();
+    ColorManagement(ColorManagement&&) noexcept;
+    ColorManagement& operator=(ColorManagement&&) noexcept;
+
+    /// Loads the first of: `explicit_file` (when not empty), $OCIO, the
+    /// config shipped with defocus, found relative to the running program
+    /// (<bin>/../share/defocus/config.ocio, in the build tree and installed).
+    /// False with `error` saying which file failed and why.
+    bool load(const std::string& explicit_file, std::string& error);
+
+    /// The file loaded, and how it was chosen ("--colorconfig", "$OCIO",
+    /// "shipped").
+    const std::string& path() const { return m_path; }
+    const std::string& origin() const { return m_origin; }
+
+    /// The canonical name of a colour space, role or alias, or "" when the
+    /// config has none of that name.
+    std::string find_space(const std::string& name) const;
+    /// find_space(), or "" with `error` listing the config's spaces.
+    std::string require_space(const std::string& name, std::string& error) const;
+    std::vector<std::string> space_names() const;
+
+    bool is_data(const std::string& space) const;
+    /// True for spaces whose encoding is linear light: converting between
+    /// two of them is a 3x3 matrix, which commutes with spreading.
+    bool is_linear(const std::string& space) const;
+    std::string scene_linear() const;
+
+    std::string default_display() const;
+    std::string default_view(const std::string& display) const;
+    /// "" when the display has the view, else a message listing the
+    /// displays or the display's views.
+    std::string check_display_view(const std::string& display,
+                                   const std::string& view) const;
+
+    /// Converts the colour channels (R,G,B) of premultiplied RGBA `image`
+    /// from one space to another in place. Conversions involving a space
+    /// that is not linear work on un-premultiplied colour. Alpha and any
+    /// other channel are never touched.
+    bool convert(OIIO::ImageBuf& image, const std::string& from, const std::string& to,
+                 std::string& error, int nthreads = 0) const;
+    /// The same for every sample of a deep image.
+    bool convert(DeepImage& image, const std::string& from, const std::string& to,
+                 std::string& error, int nthreads = 0) const;
+
+    /// A display-referred image of premultiplied RGBA `src` (in `from`)
+    /// through `display` and `view`, for a preview.
+    bool display(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const std::string& from,
+                 const std::string& display, const std::string& view,
+                 std::string& error, int nthreads = 0) const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> m_impl;
+    std::string m_path, m_origin;
+};
+
+/// Converts every layer, flat render and deep image of a scene from
+/// `from` to `to` (see ColorManagement::convert).
+bool convert_scene(Scene& scene, const ColorManagement& config, const std::string& from,
+                   const std::string& to, std::string& error, int nthreads = 0);
+
+}  // namespace defocus
