@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include <OpenColorIO/OpenColorIO.h>
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
@@ -15,6 +16,7 @@
 
 using namespace defocus_test;
 using namespace OIIO;
+namespace OCIO = OCIO_NAMESPACE;
 
 namespace {
 
@@ -275,4 +277,106 @@ TEST_CASE("layerize reports bad input like defocus")
     CHECK(run(layerize + " " + example_scene() + camera + " -o " + dir + "/o.png", log) != 0);
     CHECK(one_line_naming(log, "o.png"));
     CHECK_FALSE(Filesystem::exists(dir + "/o.png"));
+}
+
+TEST_CASE("colour: the config used is reported, and $OCIO is obeyed")
+{
+    const std::string dir = scratch_dir("cli_colour_config");
+    std::string log;
+    REQUIRE(run_defocus(example_scene() + " -o " + dir + "/a.exr" + camera + " -v", log) == 0);
+    CHECK(Strutil::contains(log, "share/defocus/config.ocio (shipped)"));
+    REQUIRE(run("OCIO=" + std::string(SHIPPED_OCIO_CONFIG) + " " + DEFOCUS_BIN + " "
+                    + example_scene() + " -o " + dir + "/b.exr" + camera + " -v",
+                log) == 0);
+    CHECK(Strutil::contains(log, "($OCIO)"));
+}
+
+TEST_CASE("colour: bad spaces, displays, views and configs are one-line errors")
+{
+    const std::string dir = scratch_dir("cli_colour_errors");
+    const std::string out = dir + "/out.exr";
+    const std::string broken = dir + "/broken.ocio";
+    Filesystem::write_text_file(broken, "not: [a config\n");
+    struct Case {
+        std::string args, mentions;
+    };
+    const std::vector<Case> cases = {
+        { " --iscolorspace Rec.2020", "spaces: CIE-XYZ-D65, sRGB - Display, ACES2065-1" },
+        { " --tocolorspace P3", "unknown colour space 'P3'" },
+        { " --iscolorspace raw", "'Raw' is data" },
+        { " --colorconfig " + broken, "broken.ocio: colour config (--colorconfig) fails to load" },
+        { " --preview " + dir + "/p.png --display Projector", "displays: sRGB" },
+        { " --preview " + dir + "/p.png --display-view Film", "views: ACES 1.0 - SDR Video, Raw" },
+    };
+    for (const Case& c : cases) {
+        INFO(c.args);
+        std::string log;
+        CHECK(run_defocus(example_scene() + " -o " + out + camera + c.args, log) == 1);
+        CHECK(one_line_naming(log, c.mentions));
+        CHECK_FALSE(Filesystem::exists(out));
+        CHECK_FALSE(Filesystem::exists(dir + "/p.png"));
+    }
+}
+
+TEST_CASE("colour: the preview is an 8-bit image in the display's encoding")
+{
+    const std::string dir = scratch_dir("cli_preview");
+    std::string log;
+    REQUIRE(run_defocus(example_scene() + " -o " + dir + "/out.exr -d float" + camera
+                            + " --preview " + dir + "/preview.png",
+                        log) == 0);
+    ImageBuf preview(dir + "/preview.png"), result(dir + "/out.exr");
+    REQUIRE(preview.read());
+    REQUIRE(result.read());
+    CHECK(preview.spec().format == TypeUInt8);
+    CHECK(preview.spec().width == 320);
+    CHECK(preview.spec().height == 180);
+    // The EXR holds the working space (the input was taken as scene_linear):
+    // the preview is OCIO's sRGB display, ACES 1.0 SDR video view, of it.
+    OCIO::ConstConfigRcPtr config = OCIO::Config::CreateFromFile(SHIPPED_OCIO_CONFIG);
+    OCIO::ConstCPUProcessorRcPtr to_display
+        = config->getProcessor("ACEScg", "sRGB", "ACES 1.0 - SDR Video", OCIO::TRANSFORM_DIR_FORWARD)
+              ->getDefaultCPUProcessor();
+    int compared = 0;
+    for (int y = 5; y < 180; y += 17)
+        for (int x = 5; x < 320; x += 23) {
+            float linear[4], shown[4];
+            result.getpixel(x, y, linear);
+            preview.getpixel(x, y, shown);
+            if (linear[3] < 0.999f)
+                continue;
+            to_display->applyRGB(linear);
+            for (int c = 0; c < 3; ++c)
+                CHECK(shown[c] == Approx(std::clamp(linear[c], 0.0f, 1.0f)).margin(1.5 / 255));
+            ++compared;
+        }
+    CHECK(compared > 50);
+}
+
+TEST_CASE("colour: any format OIIO writes, e.g. an sRGB JPEG proxy")
+{
+    const std::string dir = scratch_dir("cli_proxy");
+    std::string log;
+    REQUIRE(run_defocus(example_scene() + " -o " + dir + "/proxy.jpg" + camera
+                            + " --iscolorspace lin_rec709 --tocolorspace srgb_tx",
+                        log) == 0);
+    ImageBuf proxy(dir + "/proxy.jpg");
+    REQUIRE(proxy.read());
+    CHECK(proxy.spec().format == TypeUInt8);
+    CHECK(proxy.spec().width == 320);  // the display window
+    CHECK(proxy.spec().nchannels == 3);
+    // The same render as linear EXR, encoded by hand, matches the JPEG.
+    REQUIRE(run_defocus(example_scene() + " -o " + dir + "/linear.exr -d float" + camera
+                            + " --iscolorspace lin_rec709",
+                        log) == 0);
+    ImageBuf linear(dir + "/linear.exr");
+    REQUIRE(linear.read());
+    float a[4], b[3];
+    linear.getpixel(100, 150, a);
+    proxy.getpixel(100, 150, b);
+    for (int c = 0; c < 3; ++c) {
+        const float v = a[c] / a[3];
+        const float encoded = v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1 / 2.4f) - 0.055f;
+        CHECK(b[c] == Approx(std::clamp(encoded * a[3], 0.0f, 1.0f)).margin(4.0 / 255));
+    }
 }

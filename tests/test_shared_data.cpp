@@ -15,6 +15,7 @@
 #include <OpenImageIO/strutil.h>
 
 #include <defocus/camera.h>
+#include <defocus/color.h>
 #include <defocus/scene_io.h>
 
 #include "test_support.h"
@@ -127,6 +128,41 @@ TEST_CASE("deep.exr scores close to the layers, directly and through layerize")
     CHECK(deep3 >= 33.0);
     CHECK(deep125 >= 33.3);
     CHECK(score_via_layerize(garden("deep.exr"), 3.0) == Approx(deep3).margin(0.01));
+}
+
+TEST_CASE("an sRGB-encoded render is spread in linear light")
+{
+    // An sRGB-encoded copy of flat.exr, made with the shipped config:
+    // un-premultiplied, encoded, premultiplied again; Z untouched.
+    defocus::ColorManagement colour;
+    std::string error;
+    REQUIRE(colour.load(SHIPPED_OCIO_CONFIG, error));
+    ImageBuf flat = read_float(garden("flat.exr"));
+    ImageBuf rgba = OIIO::ImageBufAlgo::channels(flat, 4, { 0, 1, 2, 3 });
+    rgba.specmod().alpha_channel = 3;
+    REQUIRE(colour.convert(rgba, "lin_rec709", "srgb_tx", error));
+    ImageBuf encoded = OIIO::ImageBufAlgo::channel_append(
+        rgba, OIIO::ImageBufAlgo::channels(flat, 1, { 4 }));
+    encoded.specmod().channelnames = { "R", "G", "B", "A", "Z" };
+    const std::string dir = scratch_dir("encoded");
+    REQUIRE(encoded.write(dir + "/flat_srgb.exr"));
+
+    for (double focus : { 3.0, 1.25 }) {
+        const double linear = score(garden("flat.exr") + " --iscolorspace lin_rec709", focus);
+        const double managed = score(dir + "/flat_srgb.exr --iscolorspace srgb_tx --tocolorspace lin_rec709", focus);
+        // Blurring the encoded values as if they were light, then decoding.
+        const std::string naive_out = dir + "/naive.exr";
+        run_ok(DEFOCUS_BIN, format("{}/flat_srgb.exr -o {}{} --focus {} --iscolorspace lin_rec709",
+                                   dir, naive_out, garden_camera, focus));
+        ImageBuf naive = read_float(naive_out);
+        REQUIRE(colour.convert(naive, "srgb_tx", "lin_rec709", error));
+        const std::string truth = focus == 3.0 ? "truth_focus3.exr" : "truth_focus1.25.exr";
+        const double blurred_encoded = garden_psnr(naive, read_float(garden(truth)));
+        WARN("focus " << focus << ": linear input " << linear << " dB, sRGB input managed "
+                      << managed << " dB, encoded values blurred " << blurred_encoded << " dB");
+        CHECK(std::abs(managed - linear) <= 0.3);
+        CHECK(blurred_encoded <= linear - 1.0);
+    }
 }
 
 TEST_CASE("Weta's deep passes, alone and together, give sane images in depth order")

@@ -1,0 +1,142 @@
+// Colour management: the shipped config, round trips, premultiplication.
+#include <catch2/catch.hpp>
+
+#include <array>
+#include <cmath>
+#include <cstdlib>
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebufalgo.h>
+
+#include <defocus/color.h>
+
+#include "test_support.h"
+
+using namespace defocus;
+using namespace defocus_test;
+using OIIO::ImageBuf;
+using OIIO::ROI;
+
+namespace {
+
+ColorManagement shipped()
+{
+    ColorManagement config;
+    std::string error;
+    INFO(error);
+    REQUIRE(config.load(SHIPPED_OCIO_CONFIG, error));
+    return config;
+}
+
+ImageBuf rgba_pixels(const std::vector<std::array<float, 4>>& pixels)
+{
+    ImageBuf image = zero_image(ROI(0, int(pixels.size()), 0, 1), 4);
+    image.specmod().alpha_channel = 3;
+    for (size_t i = 0; i < pixels.size(); ++i)
+        image.setpixel(int(i), 0, pixels[i].data());
+    return image;
+}
+
+}  // namespace
+
+TEST_CASE("the shipped config has the spaces, roles and display the pipeline needs")
+{
+    const ColorManagement c = shipped();
+    CHECK(c.scene_linear() == "ACEScg");
+    for (const char* space : { "ACES2065-1", "ACEScg", "ACEScct", "Linear Rec.709 (sRGB)",
+                               "sRGB - Texture", "Raw" })
+        CHECK(c.find_space(space) == space);
+    CHECK(c.find_space("lin_rec709") == "Linear Rec.709 (sRGB)");
+    CHECK(c.find_space("srgb_tx") == "sRGB - Texture");
+    for (const char* role : { "aces_interchange", "cie_xyz_d65_interchange", "scene_linear",
+                              "data", "color_picking" })
+        CHECK_FALSE(c.find_space(role).empty());
+    CHECK(c.is_data("Raw"));
+    CHECK(c.is_linear("ACEScg"));
+    CHECK(c.is_linear("Linear Rec.709 (sRGB)"));
+    CHECK_FALSE(c.is_linear("sRGB - Texture"));
+    CHECK_FALSE(c.is_linear("ACEScct"));
+    CHECK(c.default_display() == "sRGB");
+    CHECK(c.check_display_view("sRGB", "ACES 1.0 - SDR Video").empty());
+    CHECK(c.check_display_view("sRGB", "Raw").empty());
+    CHECK_THAT(c.check_display_view("sRGB", "Film"), Catch::Contains("ACES 1.0 - SDR Video"));
+    std::string error;
+    CHECK(c.require_space("Rec.2020", error).empty());
+    CHECK_THAT(error, Catch::Contains("ACEScct"));
+}
+
+TEST_CASE("every space goes to scene_linear and back")
+{
+    const ColorManagement c = shipped();
+    for (const char* space : { "ACES2065-1", "ACEScg", "ACEScct", "Linear Rec.709 (sRGB)",
+                               "sRGB - Texture" }) {
+        INFO(space);
+        // Values in [0, 1]: within 1e-5.
+        ImageBuf unit = rgba_pixels({ { 0.0f, 0.0f, 0.0f, 1.0f }, { 0.18f, 0.5f, 0.9f, 1.0f },
+                                      { 1.0f, 0.02f, 0.3f, 1.0f }, { 0.7f, 0.7f, 0.7f, 1.0f } });
+        const ImageBuf original(unit);
+        std::string error;
+        REQUIRE(c.convert(unit, space, c.scene_linear(), error));
+        REQUIRE(c.convert(unit, c.scene_linear(), space, error));
+        CHECK(worst_relative_error(unit, original, 0.0, 1e-5) <= 1.0);
+        // HDR values through the linear spaces: within 1e-4 relative, from
+        // 1e-3 to 1e4. (A float 3x3 matrix cannot keep 1e-3 beside 1e4 in
+        // one pixel to that bar; real HDR pixels are bright in all channels.)
+        if (c.is_linear(space)) {
+            ImageBuf hdr = rgba_pixels({ { 1e-3f, 2e-3f, 5e-3f, 1.0f }, { 12.0f, 30.0f, 7.0f, 1.0f },
+                                         { 1e4f, 8e3f, 9e3f, 1.0f }, { 400.0f, 250.0f, 600.0f, 1.0f } });
+            const ImageBuf hdr_original(hdr);
+            REQUIRE(c.convert(hdr, space, c.scene_linear(), error));
+            REQUIRE(c.convert(hdr, c.scene_linear(), space, error));
+            CHECK(worst_relative_error(hdr, hdr_original, 1e-4, 0.0) <= 1.0);
+        }
+    }
+}
+
+TEST_CASE("conversions work on un-premultiplied colour and never touch alpha")
+{
+    const ColorManagement c = shipped();
+    // A half-transparent pixel whose colour is sRGB-encoded 0.6, 0.3, 0.1.
+    ImageBuf pixel = rgba_pixels({ { 0.3f, 0.15f, 0.05f, 0.5f } });
+    std::string error;
+    REQUIRE(c.convert(pixel, "srgb_tx", c.scene_linear(), error));
+    float linear[4];
+    pixel.getpixel(0, 0, linear);
+    CHECK(linear[3] == 0.5f);
+    // Premultiplied scene-linear: the decoded colour times alpha, where
+    // decoding the premultiplied values would give a darker colour.
+    ImageBuf decoded = rgba_pixels({ { 0.6f, 0.3f, 0.1f, 1.0f } });
+    REQUIRE(c.convert(decoded, "srgb_tx", c.scene_linear(), error));
+    float full[4];
+    decoded.getpixel(0, 0, full);
+    for (int i = 0; i < 3; ++i)
+        CHECK(linear[i] == Approx(0.5f * full[i]).epsilon(1e-5));
+    REQUIRE(c.convert(pixel, c.scene_linear(), "srgb_tx", error));
+    float back[4];
+    pixel.getpixel(0, 0, back);
+    CHECK(back[0] / back[3] == Approx(0.6f).epsilon(1e-5));
+    CHECK(back[1] / back[3] == Approx(0.3f).epsilon(1e-5));
+    CHECK(back[2] / back[3] == Approx(0.1f).epsilon(1e-5));
+    CHECK(back[3] == 0.5f);
+}
+
+TEST_CASE("the config comes from the argument, then $OCIO, then the shipped one")
+{
+    std::string error;
+    ColorManagement from_file;
+    REQUIRE(from_file.load(SHIPPED_OCIO_CONFIG, error));
+    CHECK(from_file.origin() == "--colorconfig");
+
+    const std::string broken = scratch_dir("color_config") + "/broken.ocio";
+    OIIO::Filesystem::write_text_file(broken, "ocio_profile_version: 2.1\nroles: [\n");
+    setenv("OCIO", broken.c_str(), 1);
+    ColorManagement from_env;
+    CHECK_FALSE(from_env.load("", error));
+    CHECK_THAT(error, Catch::Contains("broken.ocio") && Catch::Contains("$OCIO"));
+    unsetenv("OCIO");
+
+    ColorManagement default_config;
+    REQUIRE(default_config.load("", error));
+    CHECK(default_config.origin() == "shipped");
+    CHECK_THAT(default_config.path(), Catch::Contains("share/defocus/config.ocio"));
+}
