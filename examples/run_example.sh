@@ -8,14 +8,14 @@ out=examples/out
 mkdir -p "$out"
 
 "$bin/make_example_scene" "$out/scene.exr"
-# The scene is 1280 px across a 36 mm filmback; focus on the post at 4 m.
+# The scene is 1280 px across a 36 mm filmback, in linear Rec.709; focus
+# on the post at 4 m. The preview goes through the shipped config's sRGB
+# display, ACES 1.0 SDR video view.
 "$bin/defocus" "$out/scene.exr" -o "$out/scene_defocused.exr" \
-    --focal 50 --fstop 1.8 --focus 4 --sensor 36 -v
-# A display-referred preview of the display window.
-oiiotool "$out/scene_defocused.exr" --ch R,G,B --cut 0,0,1279,719 \
-    --colorconvert linear sRGB -d uint8 -o "$out/scene_defocused.png"
+    --focal 50 --fstop 1.8 --focus 4 --sensor 36 --iscolorspace lin_rec709 \
+    --preview "$out/scene_defocused.png" -v
 
 echo
 echo "Layered scene:     $out/scene.exr"
 echo "Defocused EXR:     $out/scene_defocused.exr"
-echo "Preview (sRGB):    $out/scene_defocused.png"
+echo "Preview (sRGB display): $out/scene_defocused.png"
