@@ -32,12 +32,12 @@ bool parse_number(const char* option, const std::string& text, double lo,
     return true;
 }
 
-namespace {
-
-auto store(std::string& into)
+std::function<void(cspan<const char*>)> store_into(std::string& into)
 {
     return [&into](cspan<const char*> argv) { into = argv[1]; };
 }
+
+namespace {
 
 bool parse_count(const char* option, const std::string& text, int hi, int& value,
                  std::string& error)
@@ -58,21 +58,21 @@ bool parse_count(const char* option, const std::string& text, int hi, int& value
 void SceneArguments::add_camera(ArgParse& ap)
 {
     ap.separator("Camera:");
-    ap.arg("--focal MM").help("Focal length in mm (default: 50)").action(store(m_focal));
-    ap.arg("--fstop N").help("Aperture f-number (default: 2.8)").action(store(m_fstop));
-    ap.arg("--focus DIST").help("Focus distance in metres (required)").action(store(m_focus));
+    ap.arg("--focal MM").help("Focal length in mm (default: 50)").action(store_into(m_focal));
+    ap.arg("--fstop N").help("Aperture f-number (default: 2.8)").action(store_into(m_fstop));
+    ap.arg("--focus DIST").help("Focus distance in metres (required)").action(store_into(m_focus));
     ap.arg("--sensor MM")
         .help("Horizontal filmback width in mm, spanning the display window "
               "(default: 36)")
-        .action(store(m_sensor));
+        .action(store_into(m_sensor));
     ap.arg("--lens MODEL")
         .help("thin: render cameras, no breathing (default); optical: "
               "Potmesil & Chakravarty")
-        .action(store(m_lens));
+        .action(store_into(m_lens));
     ap.arg("--max-blur PX")
         .help("Largest CoC diameter in pixels; larger blur is clamped "
               "(default: 512)")
-        .action(store(m_max_blur));
+        .action(store_into(m_max_blur));
 }
 
 void SceneArguments::add_scene(ArgParse& ap)
@@ -80,23 +80,23 @@ void SceneArguments::add_scene(ArgParse& ap)
     ap.separator("Scene:");
     ap.arg("--view NAME")
         .help("View of a multi-view EXR (default: the first part's view)")
-        .action(store(m_view));
+        .action(store_into(m_view));
     ap.arg("--layer NAME")
         .help("Channel prefix of colour and depth, e.g. 'beauty' for beauty.R.."
               "beauty.Z, or Blender's view layer name (default: plain R,G,B,A,Z or "
               "the file's only prefixed set)")
-        .action(store(m_layer));
+        .action(store_into(m_layer));
     ap.arg("--layers N")
         .help("Depth layers to cut deep and flat inputs into, spaced evenly in "
               "CoC (default: 0 = automatic: boundaries in the gaps between "
               "objects, at most 24 px of CoC per layer)")
-        .action(store(m_layers));
+        .action(store_into(m_layers));
 }
 
 void SceneArguments::add_threads(ArgParse& ap)
 {
     ap.arg("--threads N").help("Worker threads (default: 0 = all cores)")
-        .action(store(m_threads));
+        .action(store_into(m_threads));
 }
 
 bool SceneArguments::resolve(SceneSettings& s, std::string& error) const

@@ -2,6 +2,7 @@
 // scene and its layering, threads; and strict parsing of their values.
 #pragma once
 
+#include <functional>
 #include <string>
 
 #include <OpenImageIO/argparse.h>
@@ -16,6 +17,9 @@ namespace defocus {
 /// failure sets `error` to a message naming `option` and returns false.
 bool parse_number(const char* option, const std::string& text, double lo,
                   double hi, double& value, std::string& error);
+
+/// An ArgParse action that stores an option's value into `into`.
+std::function<void(OIIO::cspan<const char*>)> store_into(std::string& into);
 
 /// The settings the shared options give.
 struct SceneSettings {

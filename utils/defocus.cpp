@@ -81,45 +81,42 @@ std::string parse_command_line(int argc, const char* argv[], Options& opt,
 
     SceneArguments scene_args;
     std::string aperture = "box", type;
-    auto store = [](std::string& into) {
-        return [&into](cspan<const char*> argv) { into = argv[1]; };
-    };
     scene_args.add_camera(ap);
     ap.arg("--aperture SHAPE")
         .help("Bokeh shape: box, a square of the CoC disc's area (default: box)")
-        .action(store(aperture));
+        .action(store_into(aperture));
     scene_args.add_scene(ap);
     ap.separator("Colour (OpenColorIO; spreading happens in scene-linear light):");
     ap.arg("--colorconfig FILE")
         .help("OCIO config (default: $OCIO, else the config shipped with defocus)")
-        .action(store(opt.colorconfig));
+        .action(store_into(opt.colorconfig));
     ap.arg("--iscolorspace NAME")
         .help("Colour space of the input (default: the file's oiio:ColorSpace if the "
               "config has it, else linear)")
-        .action(store(opt.input_space));
+        .action(store_into(opt.input_space));
     ap.arg("--tocolorspace NAME")
         .help("Colour space of the output (default: the input's)")
-        .action(store(opt.output_space));
+        .action(store_into(opt.output_space));
     ap.arg("--preview FILE")
         .help("Also write an 8-bit display-referred preview (e.g. a .png) of the "
               "display window")
-        .action(store(opt.preview));
+        .action(store_into(opt.preview));
     ap.arg("--display NAME")
         .help("Display for --preview (default: the config's default display)")
-        .action(store(opt.display));
+        .action(store_into(opt.display));
     ap.arg("--display-view NAME")
         .help("View of that display for --preview (default: the display's default "
               "view; --view is the EXR view of the input)")
-        .action(store(opt.display_view));
+        .action(store_into(opt.display_view));
     ap.separator("Output:");
     ap.arg("-o FILE").help("Output file (required); its extension picks the format")
-        .action(store(opt.output));
+        .action(store_into(opt.output));
     ap.arg("-d TYPE")
         .help("Output pixel type: half or float (default: the input's)")
-        .action(store(type));
+        .action(store_into(type));
     ap.arg("--compression NAME")
         .help("Output compression, e.g. zip, piz, dwaa (default: the input's)")
-        .action(store(opt.compression));
+        .action(store_into(opt.compression));
     ap.arg("--crop")
         .help("Clip the result to the display window (default: keep the "
               "data window grown by the blur)")

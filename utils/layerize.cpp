@@ -63,7 +63,7 @@ int main(int argc, const char* argv[])
     scene_args.add_scene(ap);
     ap.separator("Output:");
     ap.arg("-o FILE").help("Multi-part EXR to write the layers to")
-        .action([&](cspan<const char*> a) { output = a[1]; });
+        .action(store_into(output));
     ap.arg("--info").help("Print the layers instead of writing them")
         .action([&](cspan<const char*>) { info = true; });
     ap.separator("General:");
