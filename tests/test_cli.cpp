@@ -89,7 +89,7 @@ TEST_CASE("defocus renders a generated multi-part scene")
     CHECK(spec.get_float_attribute("defocus:focalLength") == 50.0f);
     CHECK(spec.get_float_attribute("defocus:fNumber") == 1.8f);
     CHECK(spec.get_float_attribute("defocus:focusDistance") == 4.0f);
-    CHECK(spec.get_string_attribute("defocus:aperture") == "box");
+    CHECK(spec.get_string_attribute("defocus:aperture") == "disc");  // the default
     CHECK(spec.get_string_attribute("defocus:exampleCamera") != "");
     CHECK(spec.get_string_attribute("compression") == "zip");
     // The blur grows the data window beyond the input's overscan.
@@ -201,7 +201,8 @@ TEST_CASE("the help teaches the options")
     std::string log;
     REQUIRE(run_defocus("--help", log) == 0);
     for (const char* option : { "--focal", "--fstop", "--focus", "--sensor", "--lens",
-                                "--max-blur", "--aperture", "-o", "-d", "--compression",
+                                "--max-blur", "--aperture", "--blades", "--rotation", "--roundness",
+                                "--aspect", "-o", "-d", "--compression",
                                 "--crop", "-v", "--threads", "Examples" })
         CHECK(Strutil::contains(log, option));
 }

@@ -80,11 +80,24 @@ std::string parse_command_line(int argc, const char* argv[], Options& opt,
     });
 
     SceneArguments scene_args;
-    std::string aperture = "box", type;
+    std::string aperture = "disc", type, blades = "6", rotation = "0", roundness = "0",
+                aspect = "1";
     scene_args.add_camera(ap);
     ap.arg("--aperture SHAPE")
-        .help("Bokeh shape: box, a square of the CoC disc's area (default: box)")
+        .help("Bokeh shape, each with the CoC disc's area: disc (default); polygon "
+              "(an iris of --blades blades); box (a square: the fastest)")
         .action(store_into(aperture));
+    ap.arg("--blades N").help("Polygon: number of blades, 3-16 (default: 6)")
+        .action(store_into(blades));
+    ap.arg("--rotation DEG")
+        .help("Polygon: counterclockwise rotation; 0 = a vertex pointing right (default: 0)")
+        .action(store_into(rotation));
+    ap.arg("--roundness R")
+        .help("Polygon: 0 = straight blades, 1 = a disc (default: 0)")
+        .action(store_into(roundness));
+    ap.arg("--aspect A")
+        .help("Anamorphic squeeze: < 1 narrows the bokeh horizontally (default: 1)")
+        .action(store_into(aspect));
     scene_args.add_scene(ap);
     ap.separator("Colour (OpenColorIO; spreading happens in scene-linear light):");
     ap.arg("--colorconfig FILE")
@@ -137,8 +150,18 @@ std::string parse_command_line(int argc, const char* argv[], Options& opt,
     if (!scene_args.resolve(opt.scene, error))
         return error;
     opt.render.camera = opt.scene.camera;
-    if (!parse_aperture(aperture, opt.render.aperture))
-        return "--aperture: unknown shape '" + aperture + "' (choose box)";
+    Aperture& a = opt.render.aperture;
+    if (!parse_aperture_shape(aperture, a.shape))
+        return "--aperture: unknown shape '" + aperture + "' (choose disc, polygon or box)";
+    double blade_count = 0;
+    if (!parse_number("--blades", blades, 3, 16, blade_count, error)
+        || !parse_number("--rotation", rotation, -3600, 3600, a.rotation_deg, error)
+        || !parse_number("--roundness", roundness, 0, 1, a.roundness, error)
+        || !parse_number("--aspect", aspect, 0.05, 20, a.aspect, error))
+        return error;
+    a.blades = int(blade_count);
+    if (a.blades != blade_count)
+        return "--blades: " + blades + " is not a whole number";
     if (type == "half")
         opt.type = TypeHalf;
     else if (type == "float")
@@ -280,7 +303,7 @@ int main(int argc, const char* argv[])
                        "{} aperture, max blur {} px\n",
                        c.focal_length_mm, c.fstop, c.focus_distance,
                        c.sensor_width_mm, lens_model_name(c.lens),
-                       aperture_name(opt.render.aperture), c.max_blur_px);
+                       aperture_shape_name(opt.render.aperture.shape), c.max_blur_px);
         Strutil::print("  display window {}x{}: {} layer(s), {} flat render(s), "
                        "{} deep image(s)\n",
                        scene.spec.full_width, scene.spec.full_height,
@@ -330,7 +353,14 @@ int main(int argc, const char* argv[])
         result.specmod().attribute("oiio:ColorSpace", colour.output);
     }
     record_camera(result.specmod(), opt.render.camera);
-    result.specmod().attribute("defocus:aperture", aperture_name(opt.render.aperture));
+    const Aperture& aperture = opt.render.aperture;
+    result.specmod().attribute("defocus:aperture", aperture_shape_name(aperture.shape));
+    result.specmod().attribute("defocus:aspect", float(aperture.aspect));
+    if (aperture.shape == ApertureShape::Polygon) {
+        result.specmod().attribute("defocus:blades", aperture.blades);
+        result.specmod().attribute("defocus:rotation", float(aperture.rotation_deg));
+        result.specmod().attribute("defocus:roundness", float(aperture.roundness));
+    }
     result.specmod().attribute("Software", "defocus " DEFOCUS_VERSION);
     const TypeDesc type = opt.type != TypeUnknown ? opt.type
                                                   : input_color_type(scene.spec);

@@ -2,14 +2,27 @@
 
 namespace defocus {
 
-bool parse_aperture(const std::string& name, Aperture& aperture)
+bool parse_aperture_shape(const std::string& name, ApertureShape& shape)
 {
-    if (name != "box")
+    if (name == "box")
+        shape = ApertureShape::Box;
+    else if (name == "disc")
+        shape = ApertureShape::Disc;
+    else if (name == "polygon")
+        shape = ApertureShape::Polygon;
+    else
         return false;
-    aperture = Aperture::Box;
     return true;
 }
 
-const char* aperture_name(Aperture) { return "box"; }
+const char* aperture_shape_name(ApertureShape shape)
+{
+    switch (shape) {
+    case ApertureShape::Box: return "box";
+    case ApertureShape::Disc: return "disc";
+    case ApertureShape::Polygon: return "polygon";
+    }
+    return "?";
+}
 
 }  // namespace defocus

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <new>
 #include <numeric>
 
@@ -100,6 +101,15 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
         return depths[a].mean_inverse_depth < depths[b].mean_inverse_depth;
     });
 
+    // Scanline apertures share one profile, sized to the largest blur.
+    std::unique_ptr<ApertureProfile> profile;
+    if (settings.aperture.shape != ApertureShape::Box) {
+        double max_radius = 0.0;
+        for (const LayerReport& d : depths)
+            max_radius = std::max({ max_radius, 0.5 * std::abs(d.coc_min),
+                                    0.5 * std::abs(d.coc_max) });
+        profile = std::make_unique<ApertureProfile>(settings.aperture, max_radius);
+    }
     ImageBuf result;
     for (size_t i : order) {
         const Layer& layer = scene.layers[i];
@@ -109,7 +119,8 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
             continue;
         ImageBuf radius, spread;
         if (!coc_radius(radius, layer.depth, coc, {}, nthreads)
-            || !spread_box(spread, layer.color, radius, {}, nthreads)) {
+            || !(profile ? spread_scanline(spread, layer.color, radius, *profile, {}, nthreads)
+                         : spread_box(spread, layer.color, radius, {}, nthreads))) {
             dst.errorfmt("layer '{}': {}", layer.name,
                          radius.has_error() ? radius.geterror() : spread.geterror());
             return false;

@@ -5,12 +5,22 @@
 
 namespace defocus {
 
-enum class Aperture {
-    Box,  ///< a square of the CoC disc's area: constant-time rectangle spreading
+enum class ApertureShape {
+    Box,      ///< a square of the CoC disc's area: constant-time rectangle spreading
+    Disc,     ///< the CoC disc, spread scanline by scanline
+    Polygon,  ///< an iris of `blades` straight (or rounded) blades
 };
 
-/// "box"; false when the name is not an aperture.
-bool parse_aperture(const std::string& name, Aperture& aperture);
-const char* aperture_name(Aperture aperture);
+struct Aperture {
+    ApertureShape shape = ApertureShape::Disc;
+    int blades = 6;             ///< polygon: 3..16
+    double rotation_deg = 0.0;  ///< polygon: counterclockwise in the image; 0 = a vertex pointing right
+    double roundness = 0.0;     ///< polygon: 0 = straight edges, 1 = a disc
+    double aspect = 1.0;        ///< anamorphic squeeze: < 1 narrows the bokeh horizontally
+};
+
+/// "box", "disc" or "polygon"; false when the name is none of them.
+bool parse_aperture_shape(const std::string& name, ApertureShape& shape);
+const char* aperture_shape_name(ApertureShape shape);
 
 }  // namespace defocus

@@ -29,7 +29,7 @@ void normalize_coverage(OIIO::ImageBuf& layer, int nthreads = 0);
 
 struct RenderSettings {
     Camera camera;
-    Aperture aperture = Aperture::Box;
+    Aperture aperture;
     /// Clip the result to the display window; otherwise it covers the
     /// input data window grown by the blur.
     bool crop = false;

@@ -11,6 +11,7 @@
 
 #include <OpenImageIO/imagebuf.h>
 
+#include <defocus/aperture_profile.h>
 #include <defocus/footprint.h>
 
 namespace defocus {
@@ -29,6 +30,14 @@ ROI box_spread_extent(const ROI& roi, double max_coc_radius);
 /// equals the sum of src.
 bool spread_box(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
                 ROI roi = {}, int nthreads = 0);
+
+/// Scanline spreading of an arbitrary constant-intensity shape (Kosloff,
+/// Tao & Barsky 2009, sec. 4.1): each row of each pixel's footprint is an
+/// interval written as edge deltas with fractional coverage, integrated
+/// horizontally once. The cost per pixel is the footprint's height. dst
+/// covers `roi` grown by the profile's reach; its sum equals src's.
+bool spread_scanline(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
+                     const ApertureProfile& profile, ROI roi = {}, int nthreads = 0);
 
 /// Direct spreading: every pixel adds psf(radius) times its value to its
 /// neighbours. O(r²) per pixel; the reference the fast filters must equal.

@@ -1,0 +1,155 @@
+// Scanline spreading of disc and polygon apertures.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include <OpenImageIO/imagebufalgo.h>
+
+#include <defocus/spread.h>
+
+#include "test_support.h"
+
+using namespace defocus;
+using namespace defocus_test;
+using OIIO::ImageBuf;
+using OIIO::ROI;
+
+namespace {
+
+ImageBuf impulse_at_origin()
+{
+    ImageBuf image = zero_image(ROI(0, 1, 0, 1), 4);
+    const float one[4] = { 1, 1, 1, 1 };
+    image.setpixel(0, 0, one);
+    return image;
+}
+
+ImageBuf uniform(const ROI& roi, float r)
+{
+    ImageBuf radius = zero_image(roi, 1);
+    OIIO::ImageBufAlgo::fill(radius, { r });
+    return radius;
+}
+
+Aperture polygon(int blades, double rotation = 0.0, double roundness = 0.0, double aspect = 1.0)
+{
+    Aperture a;
+    a.shape = ApertureShape::Polygon;
+    a.blades = blades;
+    a.rotation_deg = rotation;
+    a.roundness = roundness;
+    a.aspect = aspect;
+    return a;
+}
+
+/// Number of pixels an impulse lights, weighted by coverage: the area.
+double lit_area(const ImageBuf& image)
+{
+    double peak = 0.0, sum = 0.0;
+    for (OIIO::ImageBuf::ConstIterator<float> it(image); !it.done(); ++it) {
+        peak = std::max(peak, double(it[0]));
+        sum += it[0];
+    }
+    return sum / peak;  // interior pixels carry the peak, 1/area each
+}
+
+}  // namespace
+
+TEST_CASE("scanline spreading equals the direct reference for discs and polygons")
+{
+    const ROI roi(-5, 45, 2, 40);
+    for (const Aperture& shape : { Aperture(), polygon(6), polygon(5, 17.0, 0.3, 0.6) }) {
+        auto profile = std::make_shared<ApertureProfile>(shape, 12.0);
+        for (auto [rmin, rmax] : { std::pair { 0.0, 0.0 }, { 3.0, 3.0 }, { 4.6, 4.6 },
+                                   { 0.0, 11.5 } }) {
+            INFO(aperture_shape_name(shape.shape) << " radii " << rmin << ".." << rmax);
+            ImageBuf color = zero_image(roi, 4), radius = zero_image(roi, 1);
+            Random rng(unsigned(rmax * 10 + shape.blades));
+            for (int y = roi.ybegin; y < roi.yend; ++y)
+                for (int x = roi.xbegin; x < roi.xend; ++x) {
+                    float v[4];
+                    for (float& c : v)
+                        c = float(0.01 + 10.0 * rng.uniform());
+                    color.setpixel(x, y, v);
+                    const float r = float(rmin + (rmax - rmin) * rng.uniform());
+                    radius.setpixel(x, y, &r);
+                }
+            ImageBuf fast, direct;
+            REQUIRE(spread_scanline(fast, color, radius, *profile));
+            REQUIRE(spread_direct(direct, color, radius, aperture_psf(profile)));
+            CHECK(worst_relative_error(fast, direct, 1e-5, 1e-7) <= 1.0);
+            for (int c = 0; c < 4; ++c)
+                CHECK(channel_sum(fast, c) == Approx(channel_sum(color, c)).epsilon(1e-6));
+        }
+    }
+}
+
+TEST_CASE("an impulse lights the analytic shape: disc pi r^2, hexagon 3 sqrt(3)/2 R^2")
+{
+    const double r = 20.0;
+    const ImageBuf impulse = impulse_at_origin();
+    ImageBuf disc, hexagon;
+    const ApertureProfile disc_profile(Aperture(), r);
+    REQUIRE(spread_scanline(disc, impulse, uniform(impulse.roi(), float(r)), disc_profile));
+    CHECK(lit_area(disc) == Approx(M_PI * r * r).epsilon(0.01));
+    CHECK(channel_sum(disc, 0) == Approx(1.0).epsilon(1e-6));
+    // A hexagon of the disc's area has circumradius R with (3√3/2)R² = πr².
+    const ApertureProfile hex_profile(polygon(6), r);
+    REQUIRE(spread_scanline(hexagon, impulse, uniform(impulse.roi(), float(r)), hex_profile));
+    const double R = std::sqrt(2.0 * M_PI * r * r / (3.0 * std::sqrt(3.0)));
+    CHECK(lit_area(hexagon) == Approx(3.0 * std::sqrt(3.0) / 2.0 * R * R).epsilon(0.01));
+    // With a vertex pointing right, the hexagon reaches R along x and
+    // R·√3/2 along y.
+    float p[4];
+    hexagon.getpixel(int(R) - 1, 0, p);
+    CHECK(p[0] > 0.0f);
+    hexagon.getpixel(0, int(R * std::sqrt(3.0) / 2.0) + 2, p);
+    CHECK(p[0] == 0.0f);
+    hexagon.getpixel(0, int(R * std::sqrt(3.0) / 2.0) - 2, p);
+    CHECK(p[0] > 0.0f);
+}
+
+TEST_CASE("anamorphic squeeze narrows the bokeh horizontally")
+{
+    const ImageBuf impulse = impulse_at_origin();
+    ImageBuf squeezed;
+    Aperture a;
+    a.aspect = 0.5;
+    REQUIRE(spread_scanline(squeezed, impulse, uniform(impulse.roi(), 16.0f), ApertureProfile(a, 16.0)));
+    float p[4];
+    squeezed.getpixel(14, 0, p);  // beyond 16·√0.5 = 11.3 horizontally
+    CHECK(p[0] == 0.0f);
+    squeezed.getpixel(0, 20, p);  // within 16/√0.5 = 22.6 vertically
+    CHECK(p[0] > 0.0f);
+}
+
+TEST_CASE("a disc footprint changes continuously with the radius")
+{
+    const ImageBuf impulse = impulse_at_origin();
+    const ApertureProfile profile(Aperture(), 5.0);
+    ImageBuf previous;
+    double largest_step = 0.0;
+    for (int i = 0; i <= 100; ++i) {
+        ImageBuf out;
+        REQUIRE(spread_scanline(out, impulse, uniform(impulse.roi(), 3.0f + 0.01f * i), profile));
+        if (previous.initialized()) {
+            double moved = 0.0;
+            for (OIIO::ImageBuf::ConstIterator<float> a(out), b(previous); !a.done(); ++a, ++b)
+                moved += std::abs(a[0] - b[0]);
+            largest_step = std::max(largest_step, moved);
+        }
+        previous = out;
+    }
+    // Smoothly, a 0.01 px step moves about 2·0.01/r of the energy.
+    CHECK(largest_step < 0.02);
+}
+
+TEST_CASE("an in-focus pixel stays itself under a disc")
+{
+    const ImageBuf impulse = impulse_at_origin();
+    ImageBuf out;
+    REQUIRE(spread_scanline(out, impulse, uniform(impulse.roi(), 0.0f), ApertureProfile(Aperture(), 1.0)));
+    float p[4];
+    out.getpixel(0, 0, p);
+    CHECK(p[0] == Approx(1.0f).epsilon(1e-6));
+}
