@@ -1,7 +1,8 @@
 // Speed of the spreading filters, in ms per megapixel per layer.
 //
 // The box filter runs on a 4096x2160 layer at radius 1, 8, 64 and 256; its
-// time should not depend on the radius. The direct reference is O(r²) per
+// time should not depend on the radius. Scanline spreading (disc at radius
+// 8, 32 and 128, hexagon at 32) costs the footprint's height per pixel. The direct reference is O(r²) per
 // pixel, so it runs on a 512x270 crop: per-megapixel figures compare.
 #include <benchmark/benchmark.h>
 
@@ -45,6 +46,31 @@ void BM_box(benchmark::State& state)
     report(state, layer);
 }
 
+/// Scanline spreading of an aperture on the same 4096x2160 layer.
+void scanline(benchmark::State& state, const defocus::Aperture& aperture)
+{
+    const Layer layer = make_layer(4096, 2160, float(state.range(0)));
+    const defocus::ApertureProfile profile(aperture, double(state.range(0)));
+    for (auto _ : state) {
+        ImageBuf out;
+        defocus::spread_scanline(out, layer.color, layer.radius, profile);
+        benchmark::DoNotOptimize(out.localpixels());
+    }
+    report(state, layer);
+}
+
+void BM_disc(benchmark::State& state)
+{
+    scanline(state, defocus::Aperture());
+}
+
+void BM_polygon(benchmark::State& state)
+{
+    defocus::Aperture hexagon;
+    hexagon.shape = defocus::ApertureShape::Polygon;
+    scanline(state, hexagon);
+}
+
 void BM_direct(benchmark::State& state)
 {
     const Layer layer = make_layer(512, 270, float(state.range(0)));
@@ -59,5 +85,7 @@ void BM_direct(benchmark::State& state)
 }  // namespace
 
 BENCHMARK(BM_box)->Arg(1)->Arg(8)->Arg(64)->Arg(256)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_disc)->Arg(8)->Arg(32)->Arg(128)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_polygon)->Arg(32)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_direct)->Arg(8)->Arg(32)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_MAIN();

@@ -34,7 +34,10 @@ bool spread_scanline(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
 
     for_each_row_band(0, ext.height(), nthreads, [&](int r0, int r1) {
         std::fill(&acc[r0 * row_len], &acc[r1 * row_len], 0.0);
+        // Neighbouring pixels mostly share a radius: their spans are reused.
         std::vector<RowSpan> spans;
+        float spans_radius = -1.0f;
+        double area = 0.0;
         const int ylo = std::max(roi.ybegin, ext.ybegin + r0 - reach);
         const int yhi = std::min(roi.yend, ext.ybegin + r1 + reach);
         for (int y = ylo; y < yhi; ++y)
@@ -42,7 +45,11 @@ bool spread_scanline(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
                 const float* v = in.pixels(x, y);
                 if (is_zero(v, nc))
                     continue;
-                const double area = profile.rows(*in.radii(x, y), spans);
+                const float r = *in.radii(x, y);
+                if (r != spans_radius) {
+                    area = profile.rows(r, spans);
+                    spans_radius = r;
+                }
                 const double centre = x - ext.xbegin + 0.5;
                 for (const RowSpan& s : spans) {
                     const int row = y - ext.ybegin + s.row;
