@@ -174,6 +174,10 @@ TEST_CASE("every bad input ends in a one-line error and no output")
         { example_scene() + " -o " + out + camera + " --max-blur 1e9", "--max-blur" },
         { example_scene() + " -o " + out + camera + " --threads x", "--threads" },
         { example_scene() + " -o " + out + camera + " --aperture heart", "heart" },
+        { example_scene() + " -o " + out + camera + " --blades 2", "--blades" },
+        { example_scene() + " -o " + out + camera + " --psf-image " + dir + "/no_psf.exr",
+          "no_psf.exr: cannot read the PSF image" },
+        { example_scene() + " -o " + out + camera + " --hybrid-threshold 0.5", "--hybrid-threshold" },
         { example_scene() + " -o " + out + camera + " -d int7", "int7" },
         { example_scene() + " -o " + out + " --focal 50", "--focus" },
         { example_scene() + camera, "-o" },
@@ -202,7 +206,8 @@ TEST_CASE("the help teaches the options")
     REQUIRE(run_defocus("--help", log) == 0);
     for (const char* option : { "--focal", "--fstop", "--focus", "--sensor", "--lens",
                                 "--max-blur", "--aperture", "--blades", "--rotation", "--roundness",
-                                "--aspect", "-o", "-d", "--compression",
+                                "--aspect", "--psf-image", "--hybrid-threshold", "-o", "-d",
+                                "--compression",
                                 "--crop", "-v", "--threads", "Examples" })
         CHECK(Strutil::contains(log, option));
 }

@@ -111,6 +111,29 @@ TEST_CASE("the disc aperture on layers.exr scores close to exact disc spreading"
     CHECK(focus125 >= 37.5);
 }
 
+TEST_CASE("the hybrid method beats the box alone, taking few pixels the slow way")
+{
+    const std::string disc_psf = std::string(EXAMPLES_DIR) + "/psf/disc_rim.exr";
+    for (double focus : { 3.0, 1.25 }) {
+        const double box = score(garden("layers.exr"), focus);
+        const std::string out = scratch_dir("hybrid") + "/out.exr";
+        std::string log;
+        REQUIRE(run(format("{} {} -o {}{} --focus {} --aperture box --psf-image {} -v", DEFOCUS_BIN,
+                           garden("layers.exr"), out, garden_camera, focus, disc_psf),
+                    log) == 0);
+        const std::string truth = focus == 3.0 ? "truth_focus3.exr" : "truth_focus1.25.exr";
+        const double hybrid = garden_psnr(read_float(out), read_float(garden(truth)));
+        // "hybrid: N of M pixels (P%) spread with the PSF image"
+        const size_t at = log.find("hybrid: ");
+        REQUIRE(at != std::string::npos);
+        const double percent = std::stod(log.substr(log.find('(', at) + 1));
+        WARN("focus " << focus << ": box " << box << " dB, hybrid " << hybrid << " dB, "
+                      << percent << "% of pixels the slow way");
+        CHECK(hybrid > box + 0.5);
+        CHECK(percent <= 5.0);
+    }
+}
+
 TEST_CASE("flat renders score above plain hard slicing, directly and through layerize")
 {
     // Hard slicing into 8 layers uniform in 1/z reaches 29.3 and 27.5 dB.

@@ -81,7 +81,7 @@ std::string parse_command_line(int argc, const char* argv[], Options& opt,
 
     SceneArguments scene_args;
     std::string aperture = "disc", type, blades = "6", rotation = "0", roundness = "0",
-                aspect = "1";
+                aspect = "1", psf_image, hybrid_threshold = "4";
     scene_args.add_camera(ap);
     ap.arg("--aperture SHAPE")
         .help("Bokeh shape, each with the CoC disc's area: disc (default); polygon "
@@ -98,6 +98,15 @@ std::string parse_command_line(int argc, const char* argv[], Options& opt,
     ap.arg("--aspect A")
         .help("Anamorphic squeeze: < 1 narrows the bokeh horizontally (default: 1)")
         .action(store_into(aspect));
+    ap.arg("--psf-image FILE")
+        .help("The hybrid method: pixels whose bokeh is visible (bright highlights) "
+              "are spread with this PSF image, scaled to their CoC; all others with "
+              "the fast --aperture filter")
+        .action(store_into(psf_image));
+    ap.arg("--hybrid-threshold T")
+        .help("Hybrid: a pixel's bokeh is visible when it is T times brighter than "
+              "the mean over its CoC (default: 4)")
+        .action(store_into(hybrid_threshold));
     scene_args.add_scene(ap);
     ap.separator("Colour (OpenColorIO; spreading happens in scene-linear light):");
     ap.arg("--colorconfig FILE")
@@ -160,6 +169,15 @@ std::string parse_command_line(int argc, const char* argv[], Options& opt,
         || !parse_number("--aspect", aspect, 0.05, 20, a.aspect, error))
         return error;
     a.blades = int(blade_count);
+    if (!parse_number("--hybrid-threshold", hybrid_threshold, 1.0, 1e6,
+                      opt.render.hybrid_threshold, error))
+        return error;
+    if (!psf_image.empty()) {
+        auto psf = std::make_shared<PsfImage>();
+        if (!psf->load(psf_image, error))
+            return error;
+        opt.render.psf_image = psf;
+    }
     if (a.blades != blade_count)
         return "--blades: " + blades + " is not a whole number";
     if (type == "half")
@@ -374,6 +392,15 @@ int main(int argc, const char* argv[])
             Strutil::print("    {:<12} {:>9} px  depth {:.4g}..{:.4g}  CoC {:.3g}..{:.3g} px\n",
                            l.name, l.pixels, l.depth_min, l.depth_max,
                            l.coc_min, l.coc_max);
+        if (opt.render.psf_image) {
+            int64_t slow = 0, covered = 0;
+            for (const LayerReport& l : layers) {
+                slow += l.psf_pixels;
+                covered += l.pixels;
+            }
+            Strutil::print("  hybrid: {} of {} pixels ({:.2f}%) spread with the PSF image\n",
+                           slow, covered, covered ? 100.0 * slow / covered : 0.0);
+        }
         Strutil::print("  pixels fixed: {} with NaN/inf colour dropped, {} with "
                        "bad depth taken as infinitely far, {} transparent with "
                        "colour cleared\n",

@@ -83,6 +83,48 @@ LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc, int
 
 namespace {
 
+/// One layer through the aperture's fast filter, or through the hybrid
+/// method when a PSF image is set.
+bool spread_layer(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
+                  const RenderSettings& settings, const ApertureProfile* profile,
+                  int64_t& psf_pixels, int nthreads)
+{
+    auto fast = [&](ImageBuf& out, const ImageBuf& in) {
+        return profile ? spread_scanline(out, in, radius, *profile, {}, nthreads)
+                       : spread_box(out, in, radius, {}, nthreads);
+    };
+    if (!settings.psf_image)
+        return fast(dst, color);
+
+    const std::vector<uint8_t> slow = visible_bokeh(color, radius, settings.hybrid_threshold,
+                                                    nthreads);
+    psf_pixels = std::count(slow.begin(), slow.end(), uint8_t(1));
+    // Split the layer: the selected pixels go one way, the rest the other.
+    ImageBuf fast_part(color.spec()), slow_part(color.spec());
+    const ROI roi = color.roi();
+    parallel_for(roi.ybegin, roi.yend, [&](int y) {
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const bool is_slow = slow[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)];
+            const float* c = static_cast<const float*>(color.pixeladdr(x, y));
+            float* f = static_cast<float*>(fast_part.pixeladdr(x, y));
+            float* s = static_cast<float*>(slow_part.pixeladdr(x, y));
+            for (int k = 0; k < 4; ++k) {
+                f[k] = is_slow ? 0.0f : c[k];
+                s[k] = is_slow ? c[k] : 0.0f;
+            }
+        }
+    }, paropt(nthreads));
+    const std::shared_ptr<const PsfImage> psf = settings.psf_image;
+    ImageBuf fast_spread, slow_spread;
+    if (!fast(fast_spread, fast_part)
+        || !spread_direct(slow_spread, slow_part, radius,
+                          [psf](double r) { return psf->footprint(r); }, {}, nthreads)) {
+        dst.errorfmt("{}{}", fast_spread.geterror(), slow_spread.geterror());
+        return false;
+    }
+    return ImageBufAlgo::add(dst, fast_spread, slow_spread, {}, nthreads);
+}
+
 bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& settings,
                    std::vector<LayerReport>* report, int nthreads)
 {
@@ -113,18 +155,21 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
     ImageBuf result;
     for (size_t i : order) {
         const Layer& layer = scene.layers[i];
-        if (report)
-            report->push_back(depths[i]);
-        if (depths[i].pixels == 0)
+        if (depths[i].pixels == 0) {
+            if (report)
+                report->push_back(depths[i]);
             continue;
+        }
         ImageBuf radius, spread;
         if (!coc_radius(radius, layer.depth, coc, {}, nthreads)
-            || !(profile ? spread_scanline(spread, layer.color, radius, *profile, {}, nthreads)
-                         : spread_box(spread, layer.color, radius, {}, nthreads))) {
+            || !spread_layer(spread, layer.color, radius, settings, profile.get(),
+                             depths[i].psf_pixels, nthreads)) {
             dst.errorfmt("layer '{}': {}", layer.name,
                          radius.has_error() ? radius.geterror() : spread.geterror());
             return false;
         }
+        if (report)
+            report->push_back(depths[i]);
         normalize_coverage(spread, nthreads);
         if (!result.initialized()) {
             result = std::move(spread);

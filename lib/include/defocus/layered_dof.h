@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -10,6 +11,7 @@
 
 #include <defocus/aperture.h>
 #include <defocus/camera.h>
+#include <defocus/hybrid.h>
 #include <defocus/scene.h>
 
 namespace defocus {
@@ -30,6 +32,11 @@ void normalize_coverage(OIIO::ImageBuf& layer, int nthreads = 0);
 struct RenderSettings {
     Camera camera;
     Aperture aperture;
+    /// The hybrid method: when set, the pixels whose bokeh is visible (see
+    /// visible_bokeh, with hybrid_threshold) are spread directly with this
+    /// PSF image, the others with the aperture's fast filter.
+    std::shared_ptr<const PsfImage> psf_image;
+    double hybrid_threshold = 4.0;
     /// Clip the result to the display window; otherwise it covers the
     /// input data window grown by the blur.
     bool crop = false;
@@ -42,6 +49,7 @@ struct LayerReport {
     double depth_min = 0, depth_max = 0;
     double coc_min = 0, coc_max = 0;  ///< signed CoC diameters, pixels
     double mean_inverse_depth = 0;    ///< alpha-weighted; orders the layers
+    int64_t psf_pixels = 0;           ///< spread with the PSF image (hybrid)
 };
 
 /// Pixel count and depth and CoC ranges of a layer's covered pixels.

@@ -1,0 +1,138 @@
+#include <defocus/hybrid.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/parallel.h>
+#include <OpenImageIO/strutil.h>
+
+namespace defocus {
+
+using namespace OIIO;
+
+namespace {
+
+double luminance(const float* c)
+{
+    return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+}
+
+}  // namespace
+
+bool PsfImage::load(const std::string& filename, std::string& error)
+{
+    ImageBuf image(filename);
+    if (!image.read(0, 0, true, TypeFloat)) {
+        error = Strutil::fmt::format("{}: cannot read the PSF image: {}", filename,
+                                     Strutil::replace(image.geterror(), "\n", " ", true));
+        return false;
+    }
+    const ROI roi = image.roi();
+    const int nc = image.nchannels();
+    m_width = roi.width();
+    m_height = roi.height();
+    m_luma.assign(size_t(m_width) * m_height, 0.0f);
+    double total = 0.0;
+    for (int y = 0; y < m_height; ++y)
+        for (int x = 0; x < m_width; ++x) {
+            float c[4] = { 0, 0, 0, 0 };
+            image.getpixel(roi.xbegin + x, roi.ybegin + y, c, std::min(nc, 4));
+            const double l = nc >= 3 ? luminance(c) : c[0];
+            if (!(l >= 0.0) || !std::isfinite(l)) {
+                error = filename + ": the PSF image has negative or non-finite values";
+                return false;
+            }
+            m_luma[size_t(y) * m_width + x] = float(l);
+            total += l;
+        }
+    if (!(total > 0.0)) {
+        error = filename + ": the PSF image is black";
+        return false;
+    }
+    return true;
+}
+
+float PsfImage::sample(double u, double v) const
+{
+    // Pixel centres at (i + 0.5) / width; zero outside the image.
+    const double x = u * m_width - 0.5, y = v * m_height - 0.5;
+    const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
+    const double fx = x - x0, fy = y - y0;
+    auto at = [&](int i, int j) {
+        return i >= 0 && j >= 0 && i < m_width && j < m_height
+                   ? double(m_luma[size_t(j) * m_width + i]) : 0.0;
+    };
+    return float((1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x0 + 1, y0))
+                 + fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1)));
+}
+
+Footprint PsfImage::footprint(double r) const
+{
+    Footprint fp;
+    if (r < 1.0) {
+        fp.width = fp.height = 1;
+        fp.weights = { 1.0 };
+        return fp;
+    }
+    const int reach = int(std::ceil(r));
+    fp.x0 = fp.y0 = -reach;
+    fp.width = fp.height = 2 * reach + 1;
+    fp.weights.resize(size_t(fp.width) * fp.height);
+    double total = 0.0;
+    for (int j = 0; j < fp.height; ++j)
+        for (int i = 0; i < fp.width; ++i) {
+            const double u = 0.5 + (fp.x0 + i) / (2.0 * r);
+            const double v = 0.5 + (fp.y0 + j) / (2.0 * r);
+            const double w = sample(u, v);
+            fp.weights[size_t(j) * fp.width + i] = w;
+            total += w;
+        }
+    if (total <= 0.0) {  // a PSF too fine to sample at this size
+        std::fill(fp.weights.begin(), fp.weights.end(), 0.0);
+        fp.weights[size_t(reach) * fp.width + reach] = 1.0;
+        return fp;
+    }
+    for (double& w : fp.weights)
+        w /= total;
+    return fp;
+}
+
+std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius,
+                                double threshold, int nthreads)
+{
+    const ROI roi = color.roi();
+    const int w = roi.width(), h = roi.height();
+    // Summed-area table of luminance, one row and column of zeros in front.
+    std::vector<double> sat(size_t(w + 1) * (h + 1), 0.0);
+    for (int y = 0; y < h; ++y) {
+        double row = 0.0;
+        for (int x = 0; x < w; ++x) {
+            row += luminance(static_cast<const float*>(
+                color.pixeladdr(roi.xbegin + x, roi.ybegin + y)));
+            sat[size_t(y + 1) * (w + 1) + x + 1] = sat[size_t(y) * (w + 1) + x + 1] + row;
+        }
+    }
+    std::vector<uint8_t> selected(size_t(w) * h, 0);
+    parallel_for(0, h, [&](int y) {
+        for (int x = 0; x < w; ++x) {
+            const float* c = static_cast<const float*>(
+                color.pixeladdr(roi.xbegin + x, roi.ybegin + y));
+            const double r = *static_cast<const float*>(
+                radius.pixeladdr(roi.xbegin + x, roi.ybegin + y));
+            const double l = luminance(c);
+            if (r < 1.0 || l <= 0.0)
+                continue;
+            const int k = int(std::ceil(r));
+            const int x0 = std::max(0, x - k), x1 = std::min(w, x + k + 1);
+            const int y0 = std::max(0, y - k), y1 = std::min(h, y + k + 1);
+            const double sum = sat[size_t(y1) * (w + 1) + x1] - sat[size_t(y0) * (w + 1) + x1]
+                               - sat[size_t(y1) * (w + 1) + x0] + sat[size_t(y0) * (w + 1) + x0];
+            const double mean = sum / (double(x1 - x0) * (y1 - y0));
+            selected[size_t(y) * w + x] = l > threshold * mean;
+        }
+    }, paropt(nthreads));
+    return selected;
+}
+
+}  // namespace defocus

@@ -1,0 +1,127 @@
+// The hybrid method: highlights spread with a PSF image, the rest fast.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebufalgo.h>
+
+#include <defocus/hybrid.h>
+#include <defocus/layered_dof.h>
+
+#include "test_support.h"
+
+using namespace defocus;
+using namespace defocus_test;
+using OIIO::ImageBuf;
+using OIIO::ROI;
+
+namespace {
+
+const std::string shipped_psf = std::string(EXAMPLES_DIR) + "/psf/";
+
+/// A wall at depth 10 (grey, or transparent) with one bright highlight in
+/// its middle, seen by the synthetic camera focused at 1 (CoC 30 px).
+Scene highlight_scene(float wall_alpha = 1.0f)
+{
+    Scene scene;
+    scene.spec = OIIO::ImageSpec(120, 80, 4, OIIO::TypeFloat);
+    const ROI frame(0, 120, 0, 80);
+    Layer wall { "wall", zero_image(frame, 4), zero_image(frame, 1) };
+    OIIO::ImageBufAlgo::fill(wall.color, { 0.1f * wall_alpha, 0.1f * wall_alpha,
+                                           0.1f * wall_alpha, wall_alpha });
+    OIIO::ImageBufAlgo::fill(wall.depth, { 10.0f });
+    const float light[4] = { 50.0f, 50.0f, 50.0f, 1.0f };
+    wall.color.setpixel(60, 40, light);
+    wall.color.specmod().alpha_channel = 3;
+    scene.layers.push_back(std::move(wall));
+    return scene;
+}
+
+}  // namespace
+
+TEST_CASE("visible bokeh: a highlight against its surroundings, not an even area")
+{
+    Scene scene = highlight_scene();
+    ImageBuf radius;
+    REQUIRE(coc_radius(radius, scene.layers[0].depth,
+                       CircleOfConfusion(synthetic_camera(1.0), 120)));
+    const std::vector<uint8_t> slow = visible_bokeh(scene.layers[0].color, radius, 4.0);
+    CHECK(std::count(slow.begin(), slow.end(), uint8_t(1)) == 1);
+    CHECK(slow[40 * 120 + 60] == 1);
+    // In focus, nothing's bokeh is visible.
+    REQUIRE(coc_radius(radius, scene.layers[0].depth,
+                       CircleOfConfusion(synthetic_camera(10.0), 120)));
+    const std::vector<uint8_t> sharp = visible_bokeh(scene.layers[0].color, radius, 4.0);
+    CHECK(std::count(sharp.begin(), sharp.end(), uint8_t(1)) == 0);
+}
+
+TEST_CASE("a PSF image is scaled to the CoC and normalised")
+{
+    PsfImage psf;
+    std::string error;
+    REQUIRE(psf.load(shipped_psf + "disc_rim.exr", error));
+    for (double r : { 0.5, 3.0, 7.5, 20.0 }) {
+        const Footprint fp = psf.footprint(r);
+        double sum = 0.0;
+        for (double w : fp.weights)
+            sum += w;
+        CHECK(sum == Approx(1.0).epsilon(1e-9));
+        CHECK(fp.width == (r < 1.0 ? 1 : 2 * int(std::ceil(r)) + 1));
+    }
+    // The rim is brighter than the centre; outside the disc, nothing.
+    const Footprint fp = psf.footprint(20.0);
+    const int c = -fp.x0;
+    CHECK(fp.at(c + 19, c) > 1.5 * fp.at(c, c));
+    CHECK(fp.at(c + 15, c + 15) == 0.0);
+    PsfImage missing;
+    CHECK_FALSE(missing.load(shipped_psf + "nope.exr", error));
+    CHECK_THAT(error, Catch::Contains("nope.exr"));
+}
+
+TEST_CASE("the hybrid method spreads highlights with the PSF image and keeps energy")
+{
+    RenderSettings settings;
+    settings.camera = synthetic_camera(1.0);
+    settings.aperture.shape = ApertureShape::Box;
+    auto psf = std::make_shared<PsfImage>();
+    std::string error;
+    REQUIRE(psf->load(shipped_psf + "disc_rim.exr", error));
+    settings.psf_image = psf;
+    // A lone highlight (on a transparent wall, so no coverage overlaps).
+    ImageBuf out;
+    std::vector<LayerReport> report;
+    REQUIRE(render_layered_dof(out, highlight_scene(0.0f), settings, &report));
+    CHECK(report[0].psf_pixels == 1);
+    CHECK(channel_sum(out, 0) == Approx(50.0).epsilon(1e-5));
+    CHECK(channel_sum(out, 3) == Approx(1.0).epsilon(1e-5));
+    // Its bokeh is the PSF's: a bright rim at r = 15 px around (60, 40), a
+    // dimmer inside, and round (a box would reach the corner).
+    float rim[4], inside[4], corner[4];
+    out.getpixel(60 + 14, 40, rim);
+    out.getpixel(60 + 5, 40, inside);
+    out.getpixel(60 + 12, 40 + 12, corner);
+    CHECK(rim[0] > 1.5f * inside[0]);
+    CHECK(inside[0] > 0.0f);
+    CHECK(corner[0] == 0.0f);
+    // On the grey wall, the wall is spread the fast way around it (less
+    // the highlight pixel's own 1/730 share of grey).
+    REQUIRE(render_layered_dof(out, highlight_scene(), settings, &report));
+    out.getpixel(60 + 12, 40 + 12, corner);
+    CHECK(corner[0] == Approx(0.1f).margin(2e-4));
+}
+
+TEST_CASE("the shipped PSF images are the ones our generator makes")
+{
+    const std::string dir = scratch_dir("psf_images");
+    std::string log;
+    REQUIRE(run(std::string(MAKE_PSF_IMAGES_BIN) + " " + dir, log) == 0);
+    for (const char* name : { "disc_rim.exr", "blades7.exr" }) {
+        INFO(name);
+        ImageBuf made(dir + "/" + name), shipped(shipped_psf + name);
+        REQUIRE(made.read());
+        REQUIRE(shipped.read());
+        CHECK(worst_relative_error(made, shipped, 0.0, 1e-7) <= 1.0);
+    }
+}
