@@ -8,6 +8,7 @@
 
 #include <OpenImageIO/imagebufalgo.h>
 
+#include <defocus/layered_dof.h>
 #include <defocus/spread.h>
 
 using namespace OIIO;
@@ -71,6 +72,42 @@ void BM_polygon(benchmark::State& state)
     scanline(state, hexagon);
 }
 
+/// The hybrid method on the same layer: box for most pixels, a disc PSF
+/// image for one highlight in 1000.
+void BM_hybrid_box(benchmark::State& state)
+{
+    Layer layer = make_layer(4096, 2160, float(state.range(0)));
+    for (int i = 0; i < 4096 * 2160 / 1000; ++i) {
+        const float highlight[4] = { 500.0f, 500.0f, 500.0f, 1.0f };
+        layer.color.setpixel((i * 7919) % 4096, (i * 104729) % 2160, highlight);
+    }
+    const std::string dir = EXAMPLES_DIR;
+    auto psf = std::make_shared<defocus::PsfImage>();
+    std::string error;
+    if (!psf->load(dir + "/psf/disc_rim.exr", error)) {
+        state.SkipWithError(error.c_str());
+        return;
+    }
+    defocus::Scene scene;
+    scene.spec = layer.color.spec();
+    defocus::Layer l { "layer", layer.color, ImageBuf(ImageSpec(4096, 2160, 1, TypeFloat)) };
+    l.color.specmod().alpha_channel = 3;
+    scene.layers.push_back(l);
+    // Depth that gives the benchmark's radius with focus at 1 m.
+    defocus::RenderSettings settings;
+    settings.camera.focus_distance = 1.0;
+    settings.aperture.shape = defocus::ApertureShape::Box;
+    settings.psf_image = psf;
+    const defocus::CircleOfConfusion coc(settings.camera, 4096);
+    ImageBufAlgo::fill(scene.layers[0].depth, { float(coc.depth_at(2.0 * state.range(0))) });
+    for (auto _ : state) {
+        ImageBuf out;
+        defocus::render_layered_dof(out, scene, settings);
+        benchmark::DoNotOptimize(out.localpixels());
+    }
+    report(state, layer);
+}
+
 void BM_direct(benchmark::State& state)
 {
     const Layer layer = make_layer(512, 270, float(state.range(0)));
@@ -87,5 +124,6 @@ void BM_direct(benchmark::State& state)
 BENCHMARK(BM_box)->Arg(1)->Arg(8)->Arg(64)->Arg(256)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_disc)->Arg(8)->Arg(32)->Arg(128)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_polygon)->Arg(32)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_hybrid_box)->Arg(32)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_direct)->Arg(8)->Arg(32)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_MAIN();
