@@ -85,7 +85,8 @@ std::string parse_command_line(int argc, const char* argv[], Options& opt,
     scene_args.add_camera(ap);
     ap.arg("--aperture SHAPE")
         .help("Bokeh shape, each with the CoC disc's area: disc (default); polygon "
-              "(an iris of --blades blades); box (a square: the fastest)")
+              "(an iris of --blades blades); box (a square: the fastest); tent and "
+              "smooth (soft PSFs of the disc's spread, in constant time)")
         .action(store_into(aperture));
     ap.arg("--blades N").help("Polygon: number of blades, 3-16 (default: 6)")
         .action(store_into(blades));
@@ -161,7 +162,8 @@ std::string parse_command_line(int argc, const char* argv[], Options& opt,
     opt.render.camera = opt.scene.camera;
     Aperture& a = opt.render.aperture;
     if (!parse_aperture_shape(aperture, a.shape))
-        return "--aperture: unknown shape '" + aperture + "' (choose disc, polygon or box)";
+        return "--aperture: unknown shape '" + aperture
+               + "' (choose disc, polygon, box, tent or smooth)";
     double blade_count = 0;
     if (!parse_number("--blades", blades, 3, 16, blade_count, error)
         || !parse_number("--rotation", rotation, -3600, 3600, a.rotation_deg, error)

@@ -10,6 +10,10 @@ bool parse_aperture_shape(const std::string& name, ApertureShape& shape)
         shape = ApertureShape::Disc;
     else if (name == "polygon")
         shape = ApertureShape::Polygon;
+    else if (name == "tent")
+        shape = ApertureShape::Tent;
+    else if (name == "smooth")
+        shape = ApertureShape::Smooth;
     else
         return false;
     return true;
@@ -21,6 +25,8 @@ const char* aperture_shape_name(ApertureShape shape)
     case ApertureShape::Box: return "box";
     case ApertureShape::Disc: return "disc";
     case ApertureShape::Polygon: return "polygon";
+    case ApertureShape::Tent: return "tent";
+    case ApertureShape::Smooth: return "smooth";
     }
     return "?";
 }

@@ -90,8 +90,12 @@ bool spread_layer(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
                   int64_t& psf_pixels, int nthreads)
 {
     auto fast = [&](ImageBuf& out, const ImageBuf& in) {
-        return profile ? spread_scanline(out, in, radius, *profile, {}, nthreads)
-                       : spread_box(out, in, radius, {}, nthreads);
+        switch (settings.aperture.shape) {
+        case ApertureShape::Box: return spread_box(out, in, radius, {}, nthreads);
+        case ApertureShape::Tent: return spread_smooth(out, in, radius, 2, {}, nthreads);
+        case ApertureShape::Smooth: return spread_smooth(out, in, radius, 3, {}, nthreads);
+        default: return spread_scanline(out, in, radius, *profile, {}, nthreads);
+        }
     };
     if (!settings.psf_image)
         return fast(dst, color);
@@ -145,7 +149,8 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
 
     // Scanline apertures share one profile, sized to the largest blur.
     std::unique_ptr<ApertureProfile> profile;
-    if (settings.aperture.shape != ApertureShape::Box) {
+    if (settings.aperture.shape == ApertureShape::Disc
+        || settings.aperture.shape == ApertureShape::Polygon) {
         double max_radius = 0.0;
         for (const LayerReport& d : depths)
             max_radius = std::max({ max_radius, 0.5 * std::abs(d.coc_min),

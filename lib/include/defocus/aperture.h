@@ -9,6 +9,8 @@ enum class ApertureShape {
     Box,      ///< a square of the CoC disc's area: constant-time rectangle spreading
     Disc,     ///< the CoC disc, spread scanline by scanline
     Polygon,  ///< an iris of `blades` straight (or rounded) blades
+    Tent,     ///< a smooth second-order PSF (two boxes convolved), constant time
+    Smooth,   ///< a third-order B-spline PSF, close to a Gaussian, constant time
 };
 
 struct Aperture {
@@ -19,7 +21,7 @@ struct Aperture {
     double aspect = 1.0;        ///< anamorphic squeeze: < 1 narrows the bokeh horizontally
 };
 
-/// "box", "disc" or "polygon"; false when the name is none of them.
+/// "box", "disc", "polygon", "tent" or "smooth"; false for any other name.
 bool parse_aperture_shape(const std::string& name, ApertureShape& shape);
 const char* aperture_shape_name(ApertureShape shape);
 

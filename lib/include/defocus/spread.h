@@ -39,6 +39,18 @@ bool spread_box(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
 bool spread_scanline(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
                      const ApertureProfile& profile, ROI roi = {}, int nthreads = 0);
 
+/// Smooth PSFs in constant time by repeated integration: order 2 is the
+/// tent (two boxes convolved), order 3 a quadratic B-spline (three boxes),
+/// close to a Gaussian. The box width matches the CoC disc's variance,
+/// blended between two integer widths so that the PSF grows continuously.
+/// Integration is exact (128-bit fixed point), whatever the radius. At most
+/// 8 channels.
+bool spread_smooth(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, int order,
+                   ROI roi = {}, int nthreads = 0);
+
+/// The same PSF as spread_smooth's, as a table, for the direct reference.
+Footprint smooth_footprint(int order, double coc_radius);
+
 /// Direct spreading: every pixel adds psf(radius) times its value to its
 /// neighbours. O(r²) per pixel; the reference the fast filters must equal.
 /// dst covers `roi` grown by the largest footprint.
