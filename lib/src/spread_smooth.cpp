@@ -122,8 +122,9 @@ bool spread_smooth(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, i
     // beyond the right or bottom edge only reach further out: dropped.
     for_each_row_band(0, ext.height(), nthreads, [&](int r0, int r1) {
         std::fill(&acc[r0 * row_len], &acc[r1 * row_len], Fixed(0));
-        const int ylo = std::max(roi.ybegin, ext.ybegin + r0 - 2 * reach - order);
-        const int yhi = std::min(roi.yend, ext.ybegin + r1 + reach + 1);
+        // A source row writes rows from y - half to y + half + order.
+        const int ylo = std::max(roi.ybegin, ext.ybegin + r0 - reach - order);
+        const int yhi = std::min(roi.yend, ext.ybegin + r1 + reach);
         for (int y = ylo; y < yhi; ++y)
             for (int x = roi.xbegin; x < roi.xend; ++x) {
                 const float* v = in.pixels(x, y);
