@@ -175,6 +175,8 @@ TEST_CASE("every bad input ends in a one-line error and no output")
         { example_scene() + " -o " + out + camera + " --threads x", "--threads" },
         { example_scene() + " -o " + out + camera + " --aperture heart", "heart" },
         { example_scene() + " -o " + out + camera + " --blades 2", "--blades" },
+        { example_scene() + " -o " + out + camera + " --aperture mask:" + dir + "/no_mask.png",
+          "no_mask.png: cannot read the aperture mask" },
         { example_scene() + " -o " + out + camera + " --psf-image " + dir + "/no_psf.exr",
           "no_psf.exr: cannot read the PSF image" },
         { example_scene() + " -o " + out + camera + " --hybrid-threshold 0.5", "--hybrid-threshold" },

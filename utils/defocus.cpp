@@ -13,6 +13,7 @@
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/timer.h>
 
+#include <defocus/aperture_profile.h>
 #include <defocus/color.h>
 #include <defocus/image_output.h>
 #include <defocus/layered_dof.h>
@@ -85,7 +86,8 @@ std::string parse_command_line(int argc, const char* argv[], Options& opt,
     scene_args.add_camera(ap);
     ap.arg("--aperture SHAPE")
         .help("Bokeh shape, each with the CoC disc's area: disc (default); polygon "
-              "(an iris of --blades blades); box (a square: the fastest); tent and "
+              "(an iris of --blades blades); mask:FILE (the shape in an image, "
+              "thresholded at half its peak); box (a square: the fastest); tent and "
               "smooth (soft PSFs of the disc's spread, in constant time)")
         .action(store_into(aperture));
     ap.arg("--blades N").help("Polygon: number of blades, 3-16 (default: 6)")
@@ -161,9 +163,16 @@ std::string parse_command_line(int argc, const char* argv[], Options& opt,
         return error;
     opt.render.camera = opt.scene.camera;
     Aperture& a = opt.render.aperture;
-    if (!parse_aperture_shape(aperture, a.shape))
+    if (Strutil::starts_with(aperture, "mask:")) {
+        a.shape = ApertureShape::Mask;
+        a.mask_file = aperture.substr(5);
+        MaskProfile probe;  // a bad mask fails here, before any reading
+        if (!probe.load(a.mask_file, 1.0, 1.0, error))
+            return "--aperture: " + error;
+    } else if (!parse_aperture_shape(aperture, a.shape) || a.shape == ApertureShape::Mask) {
         return "--aperture: unknown shape '" + aperture
-               + "' (choose disc, polygon, box, tent or smooth)";
+               + "' (choose disc, polygon, mask:FILE, box, tent or smooth)";
+    }
     double blade_count = 0;
     if (!parse_number("--blades", blades, 3, 16, blade_count, error)
         || !parse_number("--rotation", rotation, -3600, 3600, a.rotation_deg, error)
@@ -376,6 +385,8 @@ int main(int argc, const char* argv[])
     const Aperture& aperture = opt.render.aperture;
     result.specmod().attribute("defocus:aperture", aperture_shape_name(aperture.shape));
     result.specmod().attribute("defocus:aspect", float(aperture.aspect));
+    if (aperture.shape == ApertureShape::Mask)
+        result.specmod().attribute("defocus:apertureMask", aperture.mask_file);
     if (aperture.shape == ApertureShape::Polygon) {
         result.specmod().attribute("defocus:blades", aperture.blades);
         result.specmod().attribute("defocus:rotation", float(aperture.rotation_deg));

@@ -14,6 +14,8 @@ bool parse_aperture_shape(const std::string& name, ApertureShape& shape)
         shape = ApertureShape::Tent;
     else if (name == "smooth")
         shape = ApertureShape::Smooth;
+    else if (name == "mask")
+        shape = ApertureShape::Mask;
     else
         return false;
     return true;
@@ -27,6 +29,7 @@ const char* aperture_shape_name(ApertureShape shape)
     case ApertureShape::Polygon: return "polygon";
     case ApertureShape::Tent: return "tent";
     case ApertureShape::Smooth: return "smooth";
+    case ApertureShape::Mask: return "mask";
     }
     return "?";
 }

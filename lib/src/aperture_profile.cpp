@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/strutil.h>
+
 namespace defocus {
 
 namespace {
@@ -171,21 +174,113 @@ double ApertureProfile::rows(double r, std::vector<RowSpan>& spans) const
     return area;
 }
 
-Psf aperture_psf(std::shared_ptr<const ApertureProfile> profile)
+bool MaskProfile::load(const std::string& filename, double aspect, double max_radius,
+                       std::string& error)
+{
+    OIIO::ImageBuf image(filename);
+    if (!image.read(0, 0, true, OIIO::TypeFloat)) {
+        error = OIIO::Strutil::fmt::format("{}: cannot read the aperture mask: {}", filename,
+                                           OIIO::Strutil::replace(image.geterror(), "\n", " ", true));
+        return false;
+    }
+    const OIIO::ROI roi = image.roi();
+    const int nc = image.nchannels();
+    std::vector<float> luma(roi.npixels());
+    float peak = 0.0f;
+    for (int y = 0; y < roi.height(); ++y)
+        for (int x = 0; x < roi.width(); ++x) {
+            float c[4] = { 0, 0, 0, 0 };
+            image.getpixel(roi.xbegin + x, roi.ybegin + y, c, std::min(nc, 4));
+            const float l = nc >= 3 ? 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2] : c[0];
+            luma[size_t(y) * roi.width() + x] = l;
+            if (std::isfinite(l))
+                peak = std::max(peak, l);
+        }
+    if (!(peak > 0.0f)) {
+        error = filename + ": the aperture mask is empty (all black)";
+        return false;
+    }
+    double count = 0.0, sx = 0.0, sy = 0.0;
+    m_runs.assign(roi.height(), {});
+    for (int y = 0; y < roi.height(); ++y)
+        for (int x = 0; x < roi.width(); ++x) {
+            if (!(luma[size_t(y) * roi.width() + x] >= 0.5f * peak))
+                continue;
+            std::vector<Run>& row = m_runs[y];
+            if (!row.empty() && row.back().end == x)
+                ++row.back().end;
+            else
+                row.push_back({ x, x + 1 });
+            count += 1.0;
+            sx += x + 0.5;
+            sy += y + 0.5;
+        }
+    m_cx = sx / count;
+    m_cy = sy / count;
+    // count mask pixels become area π; the squeeze keeps the area.
+    const double unit = std::sqrt(pi / count);
+    m_sx = unit * std::sqrt(aspect);
+    m_sy = unit / std::sqrt(aspect);
+    m_max_radius = std::max(min_radius, max_radius);
+    double extent = 0.0;
+    for (int y = 0; y < roi.height(); ++y)
+        for (const Run& run : m_runs[y])
+            extent = std::max({ extent, std::abs(run.begin - m_cx) * m_sx,
+                                std::abs(run.end - m_cx) * m_sx, std::abs(y - m_cy) * m_sy,
+                                std::abs(y + 1 - m_cy) * m_sy });
+    m_reach = int(std::ceil(m_max_radius * extent)) + 2;
+    return true;
+}
+
+void MaskProfile::spans_at(double r, double weight, std::vector<RowSpan>& spans) const
+{
+    const int sub = 4;
+    const int rows = int(m_runs.size());
+    const int reach = int(std::ceil(r * (rows * m_sy))) + 1;
+    for (int j = -reach; j <= reach; ++j)
+        for (int s = 0; s < sub; ++s) {
+            // The sub-row's centre, in mask pixels.
+            const double y = (j - 0.5 + (s + 0.5) / sub) / (r * m_sy) + m_cy;
+            const int my = int(std::floor(y));
+            if (my < 0 || my >= rows)
+                continue;
+            for (const Run& run : m_runs[my])
+                spans.push_back({ j, (run.begin - m_cx) * m_sx * r, (run.end - m_cx) * m_sx * r,
+                                  weight / sub });
+        }
+}
+
+double MaskProfile::rows(double r, std::vector<RowSpan>& spans) const
+{
+    spans.clear();
+    const double x = std::clamp(r, min_radius, m_max_radius) * steps_per_pixel;
+    const double k = std::floor(x), t = x - k;
+    spans_at(k / steps_per_pixel, 1.0 - t, spans);
+    if (t > 0.0)
+        spans_at((k + 1) / steps_per_pixel, t, spans);
+    double area = 0.0;
+    for (const RowSpan& s : spans)
+        area += s.weight * (s.right - s.left);
+    return area;
+}
+
+Psf aperture_psf(std::shared_ptr<const RowProfile> profile)
 {
     return [profile](double r) {
         std::vector<RowSpan> spans;
         const double area = profile->rows(r, spans);
-        int x0 = 0, x1 = 0;
+        int x0 = 0, x1 = 0, y0 = 0, y1 = 0;
         for (const RowSpan& s : spans) {
             x0 = std::min(x0, int(std::floor(s.left + 0.5)));
             x1 = std::max(x1, int(std::floor(s.right + 0.5)));
+            y0 = std::min(y0, s.row);
+            y1 = std::max(y1, s.row);
         }
         Footprint fp;
         fp.x0 = x0;
-        fp.y0 = spans.front().row;
+        fp.y0 = y0;
         fp.width = x1 - x0 + 1;
-        fp.height = spans.back().row - fp.y0 + 1;
+        fp.height = y1 - y0 + 1;
         fp.weights.assign(size_t(fp.width) * fp.height, 0.0);
         for (const RowSpan& s : spans)
             for (int i = 0; i < fp.width; ++i) {
@@ -193,7 +288,7 @@ Psf aperture_psf(std::shared_ptr<const ApertureProfile> profile)
                 const double lo = std::max(s.left, x0 + i - 0.5);
                 const double hi = std::min(s.right, x0 + i + 0.5);
                 if (hi > lo)
-                    fp.weights[size_t(s.row - fp.y0) * fp.width + i] += (hi - lo) / area;
+                    fp.weights[size_t(s.row - fp.y0) * fp.width + i] += s.weight * (hi - lo) / area;
             }
         return fp;
     };

@@ -86,7 +86,7 @@ namespace {
 /// One layer through the aperture's fast filter, or through the hybrid
 /// method when a PSF image is set.
 bool spread_layer(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
-                  const RenderSettings& settings, const ApertureProfile* profile,
+                  const RenderSettings& settings, const RowProfile* profile,
                   int64_t& psf_pixels, int nthreads)
 {
     auto fast = [&](ImageBuf& out, const ImageBuf& in) {
@@ -148,14 +148,21 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
     });
 
     // Scanline apertures share one profile, sized to the largest blur.
-    std::unique_ptr<ApertureProfile> profile;
-    if (settings.aperture.shape == ApertureShape::Disc
-        || settings.aperture.shape == ApertureShape::Polygon) {
-        double max_radius = 0.0;
-        for (const LayerReport& d : depths)
-            max_radius = std::max({ max_radius, 0.5 * std::abs(d.coc_min),
-                                    0.5 * std::abs(d.coc_max) });
-        profile = std::make_unique<ApertureProfile>(settings.aperture, max_radius);
+    std::unique_ptr<RowProfile> profile;
+    double max_radius = 0.0;
+    for (const LayerReport& d : depths)
+        max_radius = std::max({ max_radius, 0.5 * std::abs(d.coc_min), 0.5 * std::abs(d.coc_max) });
+    const Aperture& aperture = settings.aperture;
+    if (aperture.shape == ApertureShape::Disc || aperture.shape == ApertureShape::Polygon) {
+        profile = std::make_unique<ApertureProfile>(aperture, max_radius);
+    } else if (aperture.shape == ApertureShape::Mask) {
+        auto mask = std::make_unique<MaskProfile>();
+        std::string error;
+        if (!mask->load(aperture.mask_file, aperture.aspect, max_radius, error)) {
+            dst.errorfmt("{}", error);
+            return false;
+        }
+        profile = std::move(mask);
     }
     ImageBuf result;
     for (size_t i : order) {

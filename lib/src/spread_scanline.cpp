@@ -17,7 +17,7 @@
 namespace defocus {
 
 bool spread_scanline(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
-                     const ApertureProfile& profile, ROI roi, int nthreads)
+                     const RowProfile& profile, ROI roi, int nthreads)
 {
     const SpreadInputs in = prepare_spread(dst, src, radius, roi, nthreads);
     if (!in.valid)
@@ -60,8 +60,9 @@ bool spread_scanline(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
                     const double ia = std::floor(a), ib = std::floor(b);
                     const double fa = a - ia, fb = b - ib;
                     const int col[4] = { int(ia), int(ia) + 1, int(ib), int(ib) + 1 };
-                    const double w[4] = { (1.0 - fa) / area, fa / area,
-                                          -(1.0 - fb) / area, -fb / area };
+                    const double scale = s.weight / area;
+                    const double w[4] = { (1.0 - fa) * scale, fa * scale,
+                                          -(1.0 - fb) * scale, -fb * scale };
                     for (int i = 0; i < 4; ++i) {
                         double* p = out + size_t(col[i]) * nc;
                         for (int c = 0; c < nc; ++c)

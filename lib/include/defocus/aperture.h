@@ -11,6 +11,7 @@ enum class ApertureShape {
     Polygon,  ///< an iris of `blades` straight (or rounded) blades
     Tent,     ///< a smooth second-order PSF (two boxes convolved), constant time
     Smooth,   ///< a third-order B-spline PSF, close to a Gaussian, constant time
+    Mask,     ///< a shape taken from an image, spread scanline by scanline
 };
 
 struct Aperture {
@@ -19,9 +20,11 @@ struct Aperture {
     double rotation_deg = 0.0;  ///< polygon: counterclockwise in the image; 0 = a vertex pointing right
     double roundness = 0.0;     ///< polygon: 0 = straight edges, 1 = a disc
     double aspect = 1.0;        ///< anamorphic squeeze: < 1 narrows the bokeh horizontally
+    std::string mask_file;      ///< mask: the image of the shape
 };
 
-/// "box", "disc", "polygon", "tent" or "smooth"; false for any other name.
+/// "box", "disc", "polygon", "tent", "smooth" or "mask"; false for any
+/// other name.
 bool parse_aperture_shape(const std::string& name, ApertureShape& shape);
 const char* aperture_shape_name(ApertureShape shape);
 

@@ -37,7 +37,7 @@ bool spread_box(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
 /// horizontally once. The cost per pixel is the footprint's height. dst
 /// covers `roi` grown by the profile's reach; its sum equals src's.
 bool spread_scanline(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
-                     const ApertureProfile& profile, ROI roi = {}, int nthreads = 0);
+                     const RowProfile& profile, ROI roi = {}, int nthreads = 0);
 
 /// Smooth PSFs in constant time by repeated integration: order 2 is the
 /// tent (two boxes convolved), order 3 a quadratic B-spline (three boxes),
