@@ -144,7 +144,7 @@ void BM_direct(benchmark::State& state)
 
 }  // namespace
 
-BENCHMARK(BM_box)->Arg(1)->Arg(8)->Arg(64)->Arg(256)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_box)->Arg(1)->Arg(8)->Arg(32)->Arg(64)->Arg(256)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_disc)->Arg(8)->Arg(32)->Arg(128)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_polygon)->Arg(32)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_tent)->Arg(8)->Arg(64)->Unit(benchmark::kMillisecond)->UseRealTime();
