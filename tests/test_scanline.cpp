@@ -16,21 +16,6 @@ using OIIO::ROI;
 
 namespace {
 
-ImageBuf impulse_at_origin()
-{
-    ImageBuf image = zero_image(ROI(0, 1, 0, 1), 4);
-    const float one[4] = { 1, 1, 1, 1 };
-    image.setpixel(0, 0, one);
-    return image;
-}
-
-ImageBuf uniform(const ROI& roi, float r)
-{
-    ImageBuf radius = zero_image(roi, 1);
-    OIIO::ImageBufAlgo::fill(radius, { r });
-    return radius;
-}
-
 Aperture polygon(int blades, double rotation = 0.0, double roundness = 0.0, double aspect = 1.0)
 {
     Aperture a;
@@ -87,15 +72,15 @@ TEST_CASE("scanline spreading equals the direct reference for discs and polygons
 TEST_CASE("an impulse lights the analytic shape: disc pi r^2, hexagon 3 sqrt(3)/2 R^2")
 {
     const double r = 20.0;
-    const ImageBuf impulse = impulse_at_origin();
+    const ImageBuf one = impulse();
     ImageBuf disc, hexagon;
     const ApertureProfile disc_profile(Aperture(), r);
-    REQUIRE(spread_scanline(disc, impulse, uniform(impulse.roi(), float(r)), disc_profile));
+    REQUIRE(spread_scanline(disc, one, constant_radius(one.roi(), float(r)), disc_profile));
     CHECK(lit_area(disc) == Approx(M_PI * r * r).epsilon(0.01));
     CHECK(channel_sum(disc, 0) == Approx(1.0).epsilon(1e-6));
     // A hexagon of the disc's area has circumradius R with (3√3/2)R² = πr².
     const ApertureProfile hex_profile(polygon(6), r);
-    REQUIRE(spread_scanline(hexagon, impulse, uniform(impulse.roi(), float(r)), hex_profile));
+    REQUIRE(spread_scanline(hexagon, one, constant_radius(one.roi(), float(r)), hex_profile));
     const double R = std::sqrt(2.0 * M_PI * r * r / (3.0 * std::sqrt(3.0)));
     CHECK(lit_area(hexagon) == Approx(3.0 * std::sqrt(3.0) / 2.0 * R * R).epsilon(0.01));
     // With a vertex pointing right, the hexagon reaches R along x and
@@ -111,11 +96,11 @@ TEST_CASE("an impulse lights the analytic shape: disc pi r^2, hexagon 3 sqrt(3)/
 
 TEST_CASE("anamorphic squeeze narrows the bokeh horizontally")
 {
-    const ImageBuf impulse = impulse_at_origin();
+    const ImageBuf one = impulse();
     ImageBuf squeezed;
     Aperture a;
     a.aspect = 0.5;
-    REQUIRE(spread_scanline(squeezed, impulse, uniform(impulse.roi(), 16.0f), ApertureProfile(a, 16.0)));
+    REQUIRE(spread_scanline(squeezed, one, constant_radius(one.roi(), 16.0f), ApertureProfile(a, 16.0)));
     float p[4];
     squeezed.getpixel(14, 0, p);  // beyond 16·√0.5 = 11.3 horizontally
     CHECK(p[0] == 0.0f);
@@ -125,30 +110,21 @@ TEST_CASE("anamorphic squeeze narrows the bokeh horizontally")
 
 TEST_CASE("a disc footprint changes continuously with the radius")
 {
-    const ImageBuf impulse = impulse_at_origin();
     const ApertureProfile profile(Aperture(), 5.0);
-    ImageBuf previous;
-    double largest_step = 0.0;
-    for (int i = 0; i <= 100; ++i) {
+    const double largest_step = largest_footprint_step([&](float r) {
         ImageBuf out;
-        REQUIRE(spread_scanline(out, impulse, uniform(impulse.roi(), 3.0f + 0.01f * i), profile));
-        if (previous.initialized()) {
-            double moved = 0.0;
-            for (OIIO::ImageBuf::ConstIterator<float> a(out), b(previous); !a.done(); ++a, ++b)
-                moved += std::abs(a[0] - b[0]);
-            largest_step = std::max(largest_step, moved);
-        }
-        previous = out;
-    }
+        REQUIRE(spread_scanline(out, impulse(), constant_radius(ROI(0, 1, 0, 1), r), profile));
+        return out;
+    }, 3.0f, 0.01f, 100);
     // Smoothly, a 0.01 px step moves about 2·0.01/r of the energy.
     CHECK(largest_step < 0.02);
 }
 
 TEST_CASE("an in-focus pixel stays itself under a disc")
 {
-    const ImageBuf impulse = impulse_at_origin();
+    const ImageBuf one = impulse();
     ImageBuf out;
-    REQUIRE(spread_scanline(out, impulse, uniform(impulse.roi(), 0.0f), ApertureProfile(Aperture(), 1.0)));
+    REQUIRE(spread_scanline(out, one, constant_radius(one.roi(), 0.0f), ApertureProfile(Aperture(), 1.0)));
     float p[4];
     out.getpixel(0, 0, p);
     CHECK(p[0] == Approx(1.0f).epsilon(1e-6));
@@ -206,7 +182,7 @@ TEST_CASE("a mask aperture, holes and all, equals the direct reference")
     // 24 pixels from the centre (its area is the disc's).
     const auto wide_ring = load_mask(write_mask("ring", 0.55), 20.0);
     ImageBuf out;
-    REQUIRE(spread_scanline(out, impulse_at_origin(), uniform(ROI(0, 1, 0, 1), 20.0f), *wide_ring));
+    REQUIRE(spread_scanline(out, impulse(), constant_radius(ROI(0, 1, 0, 1), 20.0f), *wide_ring));
     float p[4];
     out.getpixel(0, 0, p);
     CHECK(p[0] == Approx(0.0f).margin(1e-9));  // prefix-sum rounding only
@@ -218,22 +194,13 @@ TEST_CASE("a disc drawn as a mask lights the disc's area, continuously in size")
 {
     const auto disc = load_mask(write_mask("disc", 0.0), 21.0);
     ImageBuf out;
-    REQUIRE(spread_scanline(out, impulse_at_origin(), uniform(ROI(0, 1, 0, 1), 20.0f), *disc));
+    REQUIRE(spread_scanline(out, impulse(), constant_radius(ROI(0, 1, 0, 1), 20.0f), *disc));
     CHECK(lit_area(out) == Approx(M_PI * 400.0).epsilon(0.02));
     CHECK(channel_sum(out, 0) == Approx(1.0).epsilon(1e-6));
-    ImageBuf previous;
-    double largest_step = 0.0;
-    for (int i = 0; i <= 50; ++i) {
+    const double largest_step = largest_footprint_step([&](float r) {
         ImageBuf step;
-        REQUIRE(spread_scanline(step, impulse_at_origin(), uniform(ROI(0, 1, 0, 1), 5.0f + 0.01f * i),
-                                *disc));
-        if (previous.initialized()) {
-            double moved = 0.0;
-            for (OIIO::ImageBuf::ConstIterator<float> a(step), b(previous); !a.done(); ++a, ++b)
-                moved += std::abs(a[0] - b[0]);
-            largest_step = std::max(largest_step, moved);
-        }
-        previous = step;
-    }
+        REQUIRE(spread_scanline(step, impulse(), constant_radius(ROI(0, 1, 0, 1), r), *disc));
+        return step;
+    }, 5.0f, 0.01f, 50);
     CHECK(largest_step < 0.03);
 }

@@ -38,12 +38,6 @@ struct RandomLayer {
     }
 };
 
-ImageBuf uniform_radius(const ROI& roi, float r)
-{
-    ImageBuf radius = zero_image(roi, 1);
-    OIIO::ImageBufAlgo::fill(radius, { r });
-    return radius;
-}
 
 }  // namespace
 
@@ -97,7 +91,7 @@ TEST_CASE("an in-focus layer comes out unchanged")
     const ROI roi(0, 32, 0, 24);
     RandomLayer layer(roi, 0.001, 1000.0, 0.0, 0.0, 3);
     ImageBuf out;
-    REQUIRE(spread_box(out, layer.color, uniform_radius(roi, 0.0f)));
+    REQUIRE(spread_box(out, layer.color, constant_radius(roi, 0.0f)));
     CHECK(worst_relative_error(out, layer.color, 1e-6, 1e-9) <= 1.0);
 }
 
@@ -106,30 +100,12 @@ TEST_CASE("the footprint changes continuously with the radius")
     // An impulse spread at radii 3.0 .. 4.0 in steps of 0.01: a step of the
     // radius must never move more than its share of the energy. With
     // integer-snapped boxes a change of size moves most of it at once.
-    const ROI roi(0, 1, 0, 1);
-    ImageBuf impulse = zero_image(roi, 4);
-    const float one[4] = { 1, 1, 1, 1 };
-    impulse.setpixel(0, 0, one);
-    ImageBuf previous;
-    double largest_step = 0.0;
-    for (int i = 0; i <= 100; ++i) {
-        const float r = 3.0f + 0.01f * i;
+    const ImageBuf one = impulse();
+    const double largest_step = largest_footprint_step([&](float r) {
         ImageBuf out;
-        REQUIRE(spread_box(out, impulse, uniform_radius(roi, r)));
-        if (previous.initialized()) {
-            const ROI all = roi_union(out.roi(), previous.roi());
-            double moved = 0.0;
-            for (int y = all.ybegin; y < all.yend; ++y)
-                for (int x = all.xbegin; x < all.xend; ++x) {
-                    float a[4], b[4];
-                    out.getpixel(x, y, a);
-                    previous.getpixel(x, y, b);
-                    moved += std::abs(a[0] - b[0]);
-                }
-            largest_step = std::max(largest_step, moved);
-        }
-        previous = out;
-    }
+        REQUIRE(spread_box(out, one, constant_radius(one.roi(), r)));
+        return out;
+    }, 3.0f, 0.01f, 100);
     // Smoothly, a step moves about 4·ds/s of the energy (side s = r·√π,
     // ds = 0.01·√π): 0.013 here. Snapping the side to whole pixels would
     // move ~0.6 at once.
@@ -185,7 +161,7 @@ TEST_CASE("bad radius images are reported, not crashed on")
     ImageBuf small = zero_image(ROI(0, 4, 0, 4), 1);
     ImageBuf out2;
     CHECK_FALSE(spread_box(out2, color, small));
-    ImageBuf huge = uniform_radius(roi, INFINITY);
+    ImageBuf huge = constant_radius(roi, INFINITY);
     ImageBuf out3;
     CHECK_FALSE(spread_box(out3, color, huge));
 }

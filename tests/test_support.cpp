@@ -26,6 +26,43 @@ ImageBuf zero_image(const ROI& roi, int nchannels)
     return image;
 }
 
+ImageBuf impulse()
+{
+    ImageBuf image = zero_image(ROI(0, 1, 0, 1), 4);
+    const float one[4] = { 1, 1, 1, 1 };
+    image.setpixel(0, 0, one);
+    return image;
+}
+
+ImageBuf constant_radius(const ROI& roi, float r)
+{
+    ImageBuf radius = zero_image(roi, 1);
+    ImageBufAlgo::fill(radius, { r });
+    return radius;
+}
+
+double largest_footprint_step(const std::function<ImageBuf(float)>& spread_at, float r0,
+                              float step, int count)
+{
+    ImageBuf previous = spread_at(r0);
+    double largest = 0.0;
+    for (int i = 1; i <= count; ++i) {
+        const ImageBuf next = spread_at(r0 + step * i);
+        const ROI all = roi_union(next.roi(), previous.roi());
+        double moved = 0.0;
+        for (int y = all.ybegin; y < all.yend; ++y)
+            for (int x = all.xbegin; x < all.xend; ++x) {
+                float a[4], b[4];
+                next.getpixel(x, y, a);
+                previous.getpixel(x, y, b);
+                moved += std::abs(a[0] - b[0]);
+            }
+        largest = std::max(largest, moved);
+        previous = next;
+    }
+    return largest;
+}
+
 defocus::Camera synthetic_camera(double focus)
 {
     defocus::Camera cam;

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdlib>
+#include <functional>
 #include <string>
 
 #include <OpenImageIO/imagebuf.h>
@@ -19,6 +20,18 @@ ImageBuf zero_image(const ROI& roi, int nchannels);
 /// The synthetic scenes' camera: over a 120-pixel-wide frame its CoC is
 /// k·(1/focus - 1/z) with k = f²/(N s)·W = 0.1·(100/36)·120 = 33.3 px.
 defocus::Camera synthetic_camera(double focus);
+
+/// An impulse: one RGBA pixel of 1 at the origin.
+ImageBuf impulse();
+
+/// A one-channel radius image of constant r over roi.
+ImageBuf constant_radius(const ROI& roi, float r);
+
+/// How continuously a footprint grows: the largest L1 change of channel 0
+/// between spread_at(r) for consecutive r = r0, r0 + step, ... (count
+/// steps), over the union of their windows.
+double largest_footprint_step(const std::function<ImageBuf(float)>& spread_at, float r0,
+                              float step, int count);
 
 /// Deterministic uniform random values in [0, 1).
 class Random {
