@@ -175,6 +175,9 @@ TEST_CASE("every bad input ends in a one-line error and no output")
         { example_scene() + " -o " + out + camera + " --threads x", "--threads" },
         { example_scene() + " -o " + out + camera + " --aperture heart", "heart" },
         { example_scene() + " -o " + out + camera + " --blades 2", "--blades" },
+        { example_scene() + " -o " + out + camera + " --output depth", "--output: unknown kind 'depth'" },
+        { example_scene() + " -o " + out + camera + " --output focusmap --preview " + dir + "/p.png",
+          "--preview does not apply" },
         { example_scene() + " -o " + out + camera + " --aperture mask:" + dir + "/no_mask.png",
           "no_mask.png: cannot read the aperture mask" },
         { example_scene() + " -o " + out + camera + " --psf-image " + dir + "/no_psf.exr",
@@ -208,7 +211,7 @@ TEST_CASE("the help teaches the options")
     REQUIRE(run_defocus("--help", log) == 0);
     for (const char* option : { "--focal", "--fstop", "--focus", "--sensor", "--lens",
                                 "--max-blur", "--aperture", "--blades", "--rotation", "--roundness",
-                                "--aspect", "--psf-image", "--hybrid-threshold", "-o", "-d",
+                                "--aspect", "--psf-image", "--hybrid-threshold", "-o", "--output", "-d",
                                 "--compression",
                                 "--crop", "-v", "--threads", "Examples" })
         CHECK(Strutil::contains(log, option));

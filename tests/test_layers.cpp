@@ -6,6 +6,7 @@
 
 #include <OpenImageIO/imagebufalgo.h>
 
+#include <defocus/focus_map.h>
 #include <defocus/layered_dof.h>
 #include <defocus/spread.h>
 
@@ -142,4 +143,37 @@ TEST_CASE("layers are composited back to front whatever their file order")
     CHECK(report[1].name == "card");
     CHECK(report[1].coc_min == Approx(0.0).margin(1e-9));
     CHECK(report[0].coc_min == Approx(100.0 / 3.0 * 0.9).epsilon(1e-6));
+}
+
+TEST_CASE("the focus map shows in-focus green, in front red, behind blue")
+{
+    auto colour_at = [](const ImageBuf& map, int x, int y, float rgba[4]) {
+        map.getpixel(x, y, rgba);
+    };
+    float p[4];
+    // Focus on the card: the card is green, the wall behind it blue.
+    ImageBuf map;
+    REQUIRE(focus_map(map, two_layer_scene(), synthetic_camera(near_z)));
+    colour_at(map, 60, 40, p);
+    CHECK(p[1] == 1.0f);
+    CHECK(p[0] == 0.0f);
+    colour_at(map, 10, 10, p);
+    CHECK(p[2] > 0.5f);
+    CHECK(p[0] == 0.0f);
+    CHECK(p[1] == 0.0f);
+    // Focus on the wall: the card is red, the wall green.
+    REQUIRE(focus_map(map, two_layer_scene(), synthetic_camera(far_z)));
+    colour_at(map, 60, 40, p);
+    CHECK(p[0] > 0.5f);
+    CHECK(p[1] == 0.0f);
+    colour_at(map, 10, 10, p);
+    CHECK(p[1] == 1.0f);
+    // Where the blur reaches the max, the colour is whitened.
+    Camera clamped = synthetic_camera(far_z);
+    clamped.max_blur_px = 10;
+    REQUIRE(focus_map(map, two_layer_scene(), clamped));
+    colour_at(map, 60, 40, p);
+    CHECK(p[0] > 0.9f);
+    CHECK(p[1] >= 0.5f);
+    CHECK(p[2] >= 0.5f);
 }

@@ -134,6 +134,24 @@ TEST_CASE("the hybrid method beats the box alone, taking few pixels the slow way
     }
 }
 
+TEST_CASE("the garden focus map at 3 m: the torus green, the pole red")
+{
+    const std::string out = scratch_dir("focusmap") + "/map.exr";
+    run_ok(DEFOCUS_BIN, garden("layers.exr") + " -o " + out + garden_camera
+                            + " --focus 3 --output focusmap -d float");
+    const ImageBuf map = read_float(out);
+    float torus[4], pole[4], wall[4];
+    map.getpixel(620, 280, torus);  // the torus's right side
+    map.getpixel(410, 100, pole);   // the pole, 1.2 m away
+    map.getpixel(100, 300, wall);   // the far wall, 12 m away
+    CHECK(torus[1] > 0.8f);
+    CHECK(torus[1] > 4.0f * std::max(torus[0], torus[2]));
+    CHECK(pole[0] > 0.5f);
+    CHECK(pole[1] == 0.0f);
+    CHECK(wall[2] > 0.5f);
+    CHECK(wall[1] == 0.0f);
+}
+
 TEST_CASE("flat renders score above plain hard slicing, directly and through layerize")
 {
     // Hard slicing into 8 layers uniform in 1/z reaches 29.3 and 27.5 dB.

@@ -15,6 +15,7 @@
 
 #include <defocus/aperture_profile.h>
 #include <defocus/color.h>
+#include <defocus/focus_map.h>
 #include <defocus/image_output.h>
 #include <defocus/layered_dof.h>
 #include <defocus/layering.h>
@@ -35,6 +36,7 @@ struct Options {
     TypeDesc type = TypeUnknown;
     std::string compression;
     bool verbose = false;
+    bool focusmap = false;  ///< --output focusmap
     std::string colorconfig, input_space, output_space;
     std::string preview, display, display_view;
 };
@@ -136,6 +138,12 @@ std::string parse_command_line(int argc, const char* argv[], Options& opt,
     ap.separator("Output:");
     ap.arg("-o FILE").help("Output file (required); its extension picks the format")
         .action(store_into(opt.output));
+    std::string output_kind = "image";
+    ap.arg("--output KIND")
+        .help("image: the defocused image (default); focusmap: where the focus "
+              "falls, green in focus, red in front, blue behind, brighter with more "
+              "blur, whitened where the blur reaches --max-blur")
+        .action(store_into(output_kind));
     ap.arg("-d TYPE")
         .help("Output pixel type: half or float (default: the input's)")
         .action(store_into(type));
@@ -191,6 +199,13 @@ std::string parse_command_line(int argc, const char* argv[], Options& opt,
     }
     if (a.blades != blade_count)
         return "--blades: " + blades + " is not a whole number";
+    if (output_kind == "focusmap")
+        opt.focusmap = true;
+    else if (output_kind != "image")
+        return "--output: unknown kind '" + output_kind + "' (choose image or focusmap)";
+    if (opt.focusmap && !opt.preview.empty())
+        return "--preview does not apply to --output focusmap, which is already a "
+               "display image";
     if (type == "half")
         opt.type = TypeHalf;
     else if (type == "float")
@@ -367,9 +382,18 @@ int main(int argc, const char* argv[])
 
     ImageBuf result;
     std::vector<LayerReport> layers;
-    if (!render_layered_dof(result, scene, opt.render, &layers, threads))
-        return fail("{}: {}", scene.source, result.geterror());
-    lap("render");
+    if (opt.focusmap) {
+        if (!focus_map(result, scene, opt.render.camera, 8.0, threads))
+            return fail("{}: {}", scene.source, result.geterror());
+        result.specmod().extra_attribs = scene.spec.extra_attribs;
+        erase_part_attributes(result.specmod());
+        colour.loaded = false;  // false colour: not converted
+        lap("focus map");
+    } else {
+        if (!render_layered_dof(result, scene, opt.render, &layers, threads))
+            return fail("{}: {}", scene.source, result.geterror());
+        lap("render");
+    }
 
     if (!opt.preview.empty()) {
         if (!write_preview(result, colour, opt, error))
