@@ -37,28 +37,34 @@ void report(benchmark::State& state, const Layer& layer)
         benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 
-void BM_box(benchmark::State& state)
+/// Times spread(out, layer) on a width x height layer of the benchmark's
+/// radius.
+template<typename Spread>
+void measure(benchmark::State& state, int width, int height, Spread&& spread)
 {
-    const Layer layer = make_layer(4096, 2160, float(state.range(0)));
+    const Layer layer = make_layer(width, height, float(state.range(0)));
     for (auto _ : state) {
         ImageBuf out;
-        defocus::spread_box(out, layer.color, layer.radius);
+        spread(out, layer);
         benchmark::DoNotOptimize(out.localpixels());
     }
     report(state, layer);
 }
 
+void BM_box(benchmark::State& state)
+{
+    measure(state, 4096, 2160, [](ImageBuf& out, const Layer& l) {
+        defocus::spread_box(out, l.color, l.radius);
+    });
+}
+
 /// Scanline spreading of an aperture on the same 4096x2160 layer.
 void scanline(benchmark::State& state, const defocus::Aperture& aperture)
 {
-    const Layer layer = make_layer(4096, 2160, float(state.range(0)));
     const defocus::ApertureProfile profile(aperture, double(state.range(0)));
-    for (auto _ : state) {
-        ImageBuf out;
-        defocus::spread_scanline(out, layer.color, layer.radius, profile);
-        benchmark::DoNotOptimize(out.localpixels());
-    }
-    report(state, layer);
+    measure(state, 4096, 2160, [&](ImageBuf& out, const Layer& l) {
+        defocus::spread_scanline(out, l.color, l.radius, profile);
+    });
 }
 
 void BM_disc(benchmark::State& state)
@@ -76,13 +82,9 @@ void BM_polygon(benchmark::State& state)
 /// Tent (order 2) and smooth (order 3) by repeated integration.
 void smooth(benchmark::State& state, int order)
 {
-    const Layer layer = make_layer(4096, 2160, float(state.range(0)));
-    for (auto _ : state) {
-        ImageBuf out;
-        defocus::spread_smooth(out, layer.color, layer.radius, order);
-        benchmark::DoNotOptimize(out.localpixels());
-    }
-    report(state, layer);
+    measure(state, 4096, 2160, [order](ImageBuf& out, const Layer& l) {
+        defocus::spread_smooth(out, l.color, l.radius, order);
+    });
 }
 
 void BM_tent(benchmark::State& state)
@@ -133,13 +135,9 @@ void BM_hybrid_box(benchmark::State& state)
 
 void BM_direct(benchmark::State& state)
 {
-    const Layer layer = make_layer(512, 270, float(state.range(0)));
-    for (auto _ : state) {
-        ImageBuf out;
-        defocus::spread_direct(out, layer.color, layer.radius, defocus::box_footprint);
-        benchmark::DoNotOptimize(out.localpixels());
-    }
-    report(state, layer);
+    measure(state, 512, 270, [](ImageBuf& out, const Layer& l) {
+        defocus::spread_direct(out, l.color, l.radius, defocus::box_footprint);
+    });
 }
 
 }  // namespace

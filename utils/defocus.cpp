@@ -387,7 +387,6 @@ int main(int argc, const char* argv[])
             return fail("{}: {}", scene.source, result.geterror());
         result.specmod().extra_attribs = scene.spec.extra_attribs;
         erase_part_attributes(result.specmod());
-        colour.loaded = false;  // false colour: not converted
         lap("focus map");
     } else {
         if (!render_layered_dof(result, scene, opt.render, &layers, threads))
@@ -400,7 +399,7 @@ int main(int argc, const char* argv[])
             return fail("{}", error);
         lap("preview");
     }
-    if (colour.loaded) {
+    if (colour.loaded && !opt.focusmap) {  // a focus map is false colour
         if (!colour.config.convert(result, colour.working, colour.output, error, threads))
             return fail("{}: {}", opt.output, error);
         result.specmod().attribute("oiio:ColorSpace", colour.output);
