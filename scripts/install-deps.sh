@@ -7,6 +7,7 @@ packages=(
     libopenimageio-dev openimageio-tools   # image I/O, ImageBuf, ArgParse, threads
     libopenexr-dev openexr                 # multi-part and deep EXR, file checks
     libopencolorio-dev opencolorio-tools   # colour management, ociocheck
+    nlohmann-json3-dev                     # .dof scene files (JSON)
     catch2                                 # tests
     libbenchmark-dev                       # benchmark programs
 )

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <regex>
+#include <set>
 
 #include <OpenColorIO/OpenColorIO.h>
 #include <OpenImageIO/filesystem.h>
@@ -16,6 +18,7 @@
 
 using namespace defocus_test;
 using namespace OIIO;
+using Strutil::fmt::format;
 namespace OCIO = OCIO_NAMESPACE;
 
 namespace {
@@ -92,9 +95,19 @@ TEST_CASE("defocus renders a generated multi-part scene")
     CHECK(spec.get_string_attribute("defocus:aperture") == "disc");  // the default
     CHECK(spec.get_string_attribute("defocus:exampleCamera") != "");
     CHECK(spec.get_string_attribute("compression") == "zip");
-    // The blur grows the data window beyond the input's overscan.
-    CHECK(spec.x < -16);
+    // The input's data window, as oiiotool's filters keep it.
+    CHECK(spec.x == input.spec().x);
+    CHECK(spec.width == input.spec().width);
+    CHECK(spec.height == input.spec().height);
     CHECK(no_nan(result));
+
+    // --grow keeps the light spread beyond the input's overscan.
+    const std::string grown = dir + "/grown.exr";
+    REQUIRE(run_defocus(example_scene() + " -o " + grown + camera + " --grow", log) == 0);
+    ImageBuf g(grown);
+    REQUIRE(g.init_spec(grown, 0, 0));
+    CHECK(g.spec().x < input.spec().x);
+    CHECK(g.spec().width > input.spec().width);
 
     // --crop clips to the display window; -d and --compression are obeyed.
     const std::string cropped = dir + "/cropped.exr";
@@ -109,7 +122,7 @@ TEST_CASE("defocus renders a generated multi-part scene")
     // No temporary files are left beside the outputs.
     std::vector<std::string> files;
     Filesystem::get_directory_entries(dir, files);
-    CHECK(files.size() == 2);
+    CHECK(files.size() == 3);
 }
 
 TEST_CASE("bad pixels are handled, counted and never reach the output")
@@ -390,4 +403,167 @@ TEST_CASE("colour: any format OIIO writes, e.g. an sRGB JPEG proxy")
         const float encoded = v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1 / 2.4f) - 0.055f;
         CHECK(b[c] == Approx(std::clamp(encoded * a[3], 0.0f, 1.0f)).margin(4.0 / 255));
     }
+}
+
+namespace {
+
+/// The option names a text lists: at a line's start for --help, in the
+/// first column of a table for the README.
+std::set<std::string> option_names(const std::string& text, const std::string& before)
+{
+    std::set<std::string> names;
+    const std::regex option("^" + before + "(-{1,2}[a-z][-a-z]*)");
+    for (const std::string& line : Strutil::splits(text, "\n")) {
+        std::smatch m;
+        if (std::regex_search(line, m, option))
+            names.insert(m[1]);
+    }
+    return names;
+}
+
+/// A flat RGBA+Z scene, 20x20: opaque, the left half at 2 m, the right
+/// half at 6 m.
+std::string two_depth_scene(const std::string& dir)
+{
+    ImageSpec spec(20, 20, 5, TypeFloat);
+    spec.channelnames = { "R", "G", "B", "A", "Z" };
+    ImageBuf image(spec);
+    ImageBufAlgo::fill(image, { 0.5f, 0.5f, 0.5f, 1.0f, 2.0f });
+    ImageBufAlgo::fill(image, { 0.2f, 0.4f, 0.8f, 1.0f, 6.0f }, ROI(10, 20, 0, 20));
+    const std::string path = dir + "/two_depths.exr";
+    REQUIRE(image.write(path));
+    return path;
+}
+
+float attribute(const std::string& file, const char* name)
+{
+    ImageBuf image(file);
+    REQUIRE(image.init_spec(file, 0, 0));
+    const ParamValue* value = image.spec().find_attribute(name);
+    if (!value)
+        return -1.0f;
+    return value->type() == TypeInt ? float(value->get_int()) : value->get_float();
+}
+
+}  // namespace
+
+TEST_CASE("sequences: frame patterns in and out, keyframes, per-frame metadata")
+{
+    const std::string dir = scratch_dir("cli_sequence");
+    for (int f : { 1001, 1002, 1003 })
+        REQUIRE(Filesystem::copy(example_scene(), format("{}/in.{}.exr", dir, f)));
+    std::string log;
+    REQUIRE(run_defocus(dir + "/in.#.exr -o " + dir + "/out.#.exr --focal 50 --fstop 1001:2,1003:4"
+                            + " --focus 1001:1,1003:4 --frames 1001-1003",
+                        log) == 0);
+    // Plain lines when stdout is not a terminal, and a summary.
+    CHECK(std::regex_search(log, std::regex("frame 1002 \\([123]/3\\): wrote .*/out.1002.exr in ")));
+    CHECK(Strutil::contains(log, "defocus: 3 of 3 frames written"));
+    // Focus linear in 1/z: 1/z at 1002 is halfway between 1/1 and 1/4.
+    CHECK(attribute(dir + "/out.1001.exr", "defocus:focusDistance") == 1.0f);
+    CHECK(attribute(dir + "/out.1002.exr", "defocus:focusDistance") == Approx(1.6f));
+    CHECK(attribute(dir + "/out.1003.exr", "defocus:focusDistance") == 4.0f);
+    CHECK(attribute(dir + "/out.1002.exr", "defocus:fNumber") == Approx(1.0 / (0.5 / 2 + 0.5 / 4)));
+    CHECK(attribute(dir + "/out.1002.exr", "defocus:frame") == 1002.0f);
+
+    // The input's own frames by default; '@' and %0Nd patterns; -q is silent.
+    REQUIRE(run_defocus(dir + "/in.%04d.exr -o " + dir + "/b.@@@@.exr" + camera + " -q", log) == 0);
+    CHECK(log.empty());
+    for (int f : { 1001, 1002, 1003 })
+        CHECK(Filesystem::exists(format("{}/b.{}.exr", dir, f)));
+
+    // Several frames into one file name would overwrite each other.
+    REQUIRE(run_defocus(dir + "/in.#.exr -o " + dir + "/one.exr" + camera, log) == 1);
+    CHECK(one_line_naming(log, "3 frames need a frame pattern"));
+    // A still with keyframes needs frames.
+    REQUIRE(run_defocus(example_scene() + " -o " + dir + "/s.exr --focus 1:1,3:4", log) == 1);
+    CHECK(one_line_naming(log, "give --frames"));
+    // One still rendered over frames: a focus pull.
+    REQUIRE(run_defocus(example_scene() + " --frames 1-2 -o " + dir + "/pull.#.exr --focus 1:1,2:4",
+                        log) == 0);
+    CHECK(attribute(dir + "/pull.0002.exr", "defocus:focusDistance") == 4.0f);
+}
+
+TEST_CASE("a bad frame is named, the others are written, the exit is non-zero")
+{
+    const std::string dir = scratch_dir("cli_bad_frame");
+    for (int f : { 1, 2, 3, 4 })
+        REQUIRE(Filesystem::copy(example_scene(), format("{}/in.{:04}.exr", dir, f)));
+    Filesystem::write_text_file(dir + "/in.0003.exr", "not an EXR");
+    std::string log;
+    REQUIRE(run_defocus(dir + "/in.#.exr -o " + dir + "/out.#.exr" + camera + " -q", log) == 1);
+    CHECK(Strutil::contains(log, "defocus: frame 3: " + dir + "/in.0003.exr"));
+    CHECK(Strutil::contains(log, "defocus: 3 of 4 frames written; failed: 3\n"));
+    for (int f : { 1, 2, 4 })
+        CHECK(Filesystem::exists(format("{}/out.{:04}.exr", dir, f)));
+    CHECK_FALSE(Filesystem::exists(dir + "/out.0003.exr"));
+
+    // --stop-on-error: nothing starts after the bad frame. The first frame
+    // runs alone, so a bad first frame stops everything.
+    Filesystem::write_text_file(dir + "/in.0001.exr", "not an EXR");
+    REQUIRE(run_defocus(dir + "/in.#.exr -o " + dir + "/stop.#.exr" + camera
+                            + " -q --stop-on-error",
+                        log) == 1);
+    CHECK(Strutil::contains(log, "0 of 4 frames written; failed: 1; stopped at the first bad frame"));
+    CHECK_FALSE(Filesystem::exists(dir + "/stop.0002.exr"));
+}
+
+TEST_CASE(".dof scene files: saved, rendered, overridden by flags, errors in one line")
+{
+    const std::string dir = scratch_dir("cli_dof");
+    std::string log;
+    const std::string settings = " --focal 50 --fstop 1.8 --focus 4 --aperture polygon --blades 5";
+    REQUIRE(run_defocus(example_scene() + settings + " -o " + dir + "/direct.exr", log) == 0);
+    // Without -o, --save-scene only saves.
+    REQUIRE(run_defocus(example_scene() + settings + " --save-scene " + dir + "/shot.dof", log) == 0);
+    CHECK(Strutil::contains(log, "wrote " + dir + "/shot.dof"));
+    REQUIRE(run_defocus(dir + "/shot.dof -o " + dir + "/from_dof.exr", log) == 0);
+    ImageBuf direct(dir + "/direct.exr"), from_dof(dir + "/from_dof.exr");
+    CHECK(ImageBufAlgo::compare(direct, from_dof, 0.0f, 0.0f).nfail == 0);
+
+    // Flags override the file's values.
+    REQUIRE(run_defocus(dir + "/shot.dof -o " + dir + "/f4.exr --fstop 4", log) == 0);
+    CHECK(attribute(dir + "/f4.exr", "defocus:fNumber") == 4.0f);
+    CHECK(attribute(dir + "/f4.exr", "defocus:blades") == 5.0f);
+
+    Filesystem::write_text_file(dir + "/broken.dof", "{\"version\": 1,");
+    REQUIRE(run_defocus(dir + "/broken.dof -o " + dir + "/x.exr", log) == 1);
+    CHECK(one_line_naming(log, "broken.dof: not valid JSON"));
+    Filesystem::write_text_file(dir + "/missing.dof", "{\"version\": 1, \"inputs\": [\"gone.exr\"]}");
+    REQUIRE(run_defocus(dir + "/missing.dof -o " + dir + "/x.exr", log) == 1);
+    CHECK(one_line_naming(log, "gone.exr: no such file"));
+    REQUIRE(run_defocus(dir + "/shot.dof " + example_scene() + " -o " + dir + "/x.exr", log) == 1);
+    CHECK(one_line_naming(log, "must be the only input"));
+    CHECK_FALSE(Filesystem::exists(dir + "/x.exr"));
+}
+
+TEST_CASE("defocus --focus-at focuses on what is seen at a pixel, keyframed too")
+{
+    const std::string dir = scratch_dir("cli_focus_at");
+    const std::string scene = two_depth_scene(dir);
+    std::string log;
+    REQUIRE(run_defocus(scene + " -o " + dir + "/a.exr --focus-at 3,10", log) == 0);
+    CHECK(attribute(dir + "/a.exr", "defocus:focusDistance") == 2.0f);
+    // At x=10 the 5x5 window sees 10 pixels at 2 m and 15 at 6 m.
+    REQUIRE(run_defocus(scene + " -o " + dir + "/b.#.exr --frames 1-3 --focus-at 1:3,10,3:17,10",
+                        log) == 0);
+    CHECK(attribute(dir + "/b.0001.exr", "defocus:focusDistance") == 2.0f);
+    CHECK(attribute(dir + "/b.0002.exr", "defocus:focusDistance") == 6.0f);
+    CHECK(attribute(dir + "/b.0003.exr", "defocus:focusDistance") == 6.0f);
+    REQUIRE(run_defocus(scene + " -o " + dir + "/c.exr --focus-at 30,10", log) == 1);
+    CHECK(one_line_naming(log, "outside the 20x20 display window"));
+}
+
+TEST_CASE("the help and the README document the same options")
+{
+    std::string help, readme;
+    REQUIRE(run_defocus("--help", help) == 0);
+    REQUIRE(Filesystem::read_text_file(README_FILE, readme));
+    const size_t table = readme.find("### Options");
+    REQUIRE(table != std::string::npos);
+    const std::set<std::string> in_help = option_names(help, "\\s+");
+    const std::set<std::string> in_readme = option_names(readme.substr(table), "\\| `");
+    CHECK(in_help.size() > 30);
+    CHECK(in_help == in_readme);
+    CHECK(Strutil::contains(help, "Examples:"));
 }

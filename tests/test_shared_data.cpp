@@ -5,6 +5,8 @@
 #define CATCH_CONFIG_RUNNER
 #include <catch2/catch.hpp>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -313,6 +315,85 @@ TEST_CASE("the Beachball stereo sequence's views defocus to sane images")
         CHECK(image.spec().full_height == 1556);
         CHECK(finite_with_alpha_in_unit_range(image));
         CHECK(channel_sum(image, 3) > 1000.0);
+    }
+}
+
+TEST_CASE("the Beachball sequence: 8 frames of the left view, the input's windows")
+{
+    const std::string dir = scratch_dir("beachball_sequence");
+    std::string log;
+    // As a user runs it, from the sequence's folder.
+    REQUIRE(run(format("cd {} && {} multipart.#.exr --frames 1-8 --view left --focal 50 "
+                       "--fstop 2 --focus 5 -o {}/out.#.exr",
+                       openexr("Beachball"), DEFOCUS_BIN, dir),
+                log) == 0);
+    CHECK(OIIO::Strutil::contains(log, "8 of 8 frames written"));
+    for (int frame = 1; frame <= 8; ++frame) {
+        INFO("frame " << frame);
+        defocus::Scene input;
+        std::string error;
+        REQUIRE(defocus::read_scene({ openexr(format("Beachball/multipart.{:04}.exr", frame)) },
+                                    { "left", "" }, input, error));
+        const ImageBuf image = read_float(format("{}/out.{:04}.exr", dir, frame));
+        const OIIO::ImageSpec& spec = image.spec();
+        CHECK(spec.full_width == input.spec.full_width);
+        CHECK(spec.full_height == input.spec.full_height);
+        CHECK(spec.roi() == OIIO::ROI(input.spec.x, input.spec.x + input.spec.width,
+                                      input.spec.y, input.spec.y + input.spec.height, 0, 1, 0, 4));
+        CHECK(finite_with_alpha_in_unit_range(image));
+        CHECK(spec.get_int_attribute("defocus:frame") == frame);
+    }
+}
+
+TEST_CASE("a damaged frame in the Beachball sequence: the 7 good frames are written")
+{
+    const std::string dir = scratch_dir("beachball_bad_frame");
+    std::vector<std::string> damaged;
+    OIIO::Filesystem::get_directory_entries(openexr("Damaged"), damaged);
+    REQUIRE(!damaged.empty());
+    std::sort(damaged.begin(), damaged.end());
+    for (int frame = 1; frame <= 8; ++frame) {
+        const std::string source = frame == 5 ? damaged.front()
+                                              : openexr(format("Beachball/multipart.{:04}.exr", frame));
+        REQUIRE(symlink(source.c_str(), format("{}/multipart.{:04}.exr", dir, frame).c_str()) == 0);
+    }
+    std::string log;
+    CHECK(run(format("{} {}/multipart.#.exr --frames 1-8 --view left --focal 50 --fstop 2 "
+                     "--focus 5 -o {}/out.#.exr",
+                     DEFOCUS_BIN, dir, dir),
+              log) == 1);
+    INFO(log);
+    CHECK(OIIO::Strutil::contains(log, "defocus: frame 5: "));
+    CHECK(OIIO::Strutil::contains(log, "defocus: 7 of 8 frames written; failed: 5\n"));
+    for (int frame = 1; frame <= 8; ++frame)
+        CHECK(OIIO::Filesystem::exists(format("{}/out.{:04}.exr", dir, frame)) == (frame != 5));
+}
+
+TEST_CASE("a focus pull over 24 frames changes the image smoothly, without popping")
+{
+    // Focus from 1.25 m to 3 m, linear in 1/z: the CoC moves 2.8 px a frame.
+    for (const char* input : { "layers.exr", "flat.exr" }) {
+        INFO(input);
+        const std::string dir = scratch_dir("focus_pull");
+        run_ok(DEFOCUS_BIN, format("{} --frames 1-24 --focus 1:1.25,24:3.0{} -o {}/pull.#.exr -q",
+                                   garden(input), garden_camera, dir));
+        // RMS between consecutive frames in the garden metric's domain
+        // (sRGB, clamped): what a viewer sees. In linear light a highlight
+        // 34 times brighter than white dominates while it leaves focus.
+        std::vector<double> steps;
+        ImageBuf previous = read_float(dir + "/pull.0001.exr");
+        for (int frame = 2; frame <= 24; ++frame) {
+            ImageBuf current = read_float(format("{}/pull.{:04}.exr", dir, frame));
+            steps.push_back(std::pow(10.0, -garden_psnr(current, previous) / 20.0));
+            previous = std::move(current);
+        }
+        std::vector<double> sorted = steps;
+        std::sort(sorted.begin(), sorted.end());
+        const double median = sorted[sorted.size() / 2];
+        const double largest = sorted.back();
+        WARN(input << ": largest step " << largest / median << "x the median");
+        CHECK(largest <= 2.0 * median);
+        CHECK(sorted.front() > 0.0);  // every frame moved
     }
 }
 

@@ -1,130 +1,76 @@
 #include "cli_options.h"
 
-#include <cerrno>
-#include <cmath>
-#include <cstdlib>
-
-#include <OpenImageIO/strutil.h>
+#include <defocus/option_value.h>
 
 namespace defocus {
 
 using OIIO::ArgParse;
 using OIIO::cspan;
 
-bool parse_number(const char* option, const std::string& text, double lo,
-                  double hi, double& value, std::string& error)
-{
-    const char* begin = text.c_str();
-    char* end         = nullptr;
-    errno             = 0;
-    const double v    = std::strtod(begin, &end);
-    if (text.empty() || end == begin || *end != '\0' || errno == ERANGE
-        || !std::isfinite(v)) {
-        error = OIIO::Strutil::fmt::format("{}: '{}' is not a number", option, text);
-        return false;
-    }
-    if (v < lo || v > hi) {
-        error = OIIO::Strutil::fmt::format("{}: {} is out of range [{}, {}]",
-                                           option, text, lo, hi);
-        return false;
-    }
-    value = v;
-    return true;
-}
-
 std::function<void(cspan<const char*>)> store_into(std::string& into)
 {
     return [&into](cspan<const char*> argv) { into = argv[1]; };
 }
 
-namespace {
-
-bool parse_count(const char* option, const std::string& text, int hi, int& value,
-                 std::string& error)
+void ShotArguments::add(ArgParse& ap, const char* spec, const char* setting, const char* help,
+                        const char* value)
 {
-    double v = 0;
-    if (!parse_number(option, text, 0, hi, v, error))
-        return false;
-    if (v != std::floor(v)) {
-        error = OIIO::Strutil::fmt::format("{}: {} is not a whole number", option, text);
-        return false;
-    }
-    value = int(v);
-    return true;
+    ap.arg(spec).help(help).action([this, setting, value](cspan<const char*> argv) {
+        m_given.emplace_back(setting, value ? value : argv[1]);
+    });
 }
 
-}  // namespace
-
-void SceneArguments::add_camera(ArgParse& ap)
+void ShotArguments::add_camera(ArgParse& ap)
 {
-    ap.separator("Camera:");
-    ap.arg("--focal MM").help("Focal length in mm (default: 50)").action(store_into(m_focal));
-    ap.arg("--fstop N").help("Aperture f-number (default: 2.8)").action(store_into(m_fstop));
-    ap.arg("--focus DIST").help("Focus distance in metres (required)").action(store_into(m_focus));
-    ap.arg("--sensor MM")
-        .help("Horizontal filmback width in mm, spanning the display window "
-              "(default: 36)")
-        .action(store_into(m_sensor));
-    ap.arg("--lens MODEL")
-        .help("thin: render cameras, no breathing (default); optical: "
-              "Potmesil & Chakravarty")
-        .action(store_into(m_lens));
-    ap.arg("--max-blur PX")
-        .help("Largest CoC diameter in pixels; larger blur is clamped "
-              "(default: 512)")
-        .action(store_into(m_max_blur));
+    ap.separator("Camera (DIST, N and MM take keyframes FRAME:VALUE,... for a focus pull):");
+    add(ap, "--focus DIST", "focus",
+        "Focus distance in metres, e.g. 3 or 1001:3,1040:1.2 (required, or --focus-at)");
+    add(ap, "--focus-at X,Y", "focus-at",
+        "Focus on what is seen at display-window pixel X,Y: the median depth of the "
+        "front-most opaque surface over 5x5 pixels; keyframes F:X,Y,F:X,Y...");
+    add(ap, "--focal MM", "focal", "Focal length in mm (default: 50)");
+    add(ap, "--fstop N", "fstop", "Aperture f-number (default: 2.8)");
+    add(ap, "--sensor MM", "sensor",
+        "Horizontal filmback width in mm, spanning the display window (default: 36)");
+    add(ap, "--lens MODEL", "lens",
+        "thin: render cameras, no breathing (default); optical: Potmesil & Chakravarty");
+    add(ap, "--max-blur PX", "max-blur",
+        "Largest CoC diameter in pixels; larger blur is clamped (default: 512)");
 }
 
-void SceneArguments::add_scene(ArgParse& ap)
+void ShotArguments::add_scene(ArgParse& ap)
 {
     ap.separator("Scene:");
-    ap.arg("--view NAME")
-        .help("View of a multi-view EXR (default: the first part's view)")
-        .action(store_into(m_view));
-    ap.arg("--layer NAME")
-        .help("Channel prefix of colour and depth, e.g. 'beauty' for beauty.R.."
-              "beauty.Z, or Blender's view layer name (default: plain R,G,B,A,Z or "
-              "the file's only prefixed set)")
-        .action(store_into(m_layer));
-    ap.arg("--layers N")
-        .help("Depth layers to cut deep and flat inputs into, spaced evenly in "
-              "CoC (default: 0 = automatic: boundaries in the gaps between "
-              "objects, at most 24 px of CoC per layer)")
-        .action(store_into(m_layers));
+    add(ap, "--view NAME", "view",
+        "View of a multi-view EXR (default: the first part's view)");
+    add(ap, "--layer NAME", "layer",
+        "Channel prefix of colour and depth, e.g. 'beauty' for beauty.R..beauty.Z, or "
+        "Blender's view layer name (default: plain R,G,B,A,Z or the file's only "
+        "prefixed set)");
+    add(ap, "--layers N", "layers",
+        "Depth layers to cut deep and flat inputs into, spaced evenly in CoC (default: "
+        "0 = automatic: boundaries in the gaps between objects, at most 24 px of CoC "
+        "per layer)");
 }
 
-void SceneArguments::add_threads(ArgParse& ap)
+void ShotArguments::add_threads(ArgParse& ap)
 {
     ap.arg("--threads N").help("Worker threads (default: 0 = all cores)")
         .action(store_into(m_threads));
 }
 
-bool SceneArguments::resolve(SceneSettings& s, std::string& error) const
+bool ShotArguments::apply(Shot& shot, std::string& error) const
 {
-    Camera& cam = s.camera;
-    if (!parse_number("--focal", m_focal, 1e-3, 1e5, cam.focal_length_mm, error)
-        || !parse_number("--fstop", m_fstop, 0.1, 1e4, cam.fstop, error)
-        || !parse_number("--sensor", m_sensor, 1e-3, 1e4, cam.sensor_width_mm, error)
-        || !parse_number("--max-blur", m_max_blur, 0.0, 1e5, cam.max_blur_px, error)
-        || !parse_count("--threads", m_threads, 1024, s.threads, error)
-        || !parse_count("--layers", m_layers, 256, s.layering.layers, error))
-        return false;
-    if (m_focus.empty()) {
-        error = "--focus DIST is required: the distance of the plane in focus";
-        return false;
-    }
-    if (!parse_number("--focus", m_focus, 1e-6, 1e30, cam.focus_distance, error))
-        return false;
-    if (!parse_lens_model(m_lens, cam.lens)) {
-        error = "--lens: unknown model '" + m_lens + "' (choose thin or optical)";
-        return false;
-    }
-    error = validate(cam);
-    if (!error.empty())
-        return false;
-    s.read.view  = m_view;
-    s.read.layer = m_layer;
+    for (const auto& [setting, value] : m_given)
+        if (!set_shot_setting(shot, setting, value, error,
+                              setting == "pixel-type" ? "-d" : ""))
+            return false;
     return true;
+}
+
+bool ShotArguments::threads(int& threads, std::string& error) const
+{
+    return parse_whole_number("--threads", m_threads, 0, 1024, threads, error);
 }
 
 }  // namespace defocus

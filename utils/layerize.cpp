@@ -12,6 +12,7 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/focus_at.h>
 #include <defocus/image_output.h>
 #include <defocus/layered_dof.h>
 #include <defocus/layering.h>
@@ -39,7 +40,7 @@ int main(int argc, const char* argv[])
     std::vector<std::string> inputs;
     std::string output;
     bool info = false;
-    SceneArguments scene_args;
+    ShotArguments shot_args;
 
     ArgParse ap;
     ap.intro("layerize -- the depth layers defocus would use")
@@ -59,26 +60,33 @@ int main(int argc, const char* argv[])
               "  layerize flat.exr -o layers.exr --focal 85 --fstop 1.4 --focus 3\n"
               "  defocus layers.exr -o out.exr --focal 85 --fstop 1.4 --focus 3\n");
     ap.arg("filename").hidden().action([&](cspan<const char*> a) { inputs.emplace_back(a[0]); });
-    scene_args.add_camera(ap);
-    scene_args.add_scene(ap);
+    shot_args.add_camera(ap);
+    shot_args.add_scene(ap);
     ap.separator("Output:");
     ap.arg("-o FILE").help("Multi-part EXR to write the layers to")
         .action(store_into(output));
     ap.arg("--info").help("Print the layers instead of writing them")
         .action([&](cspan<const char*>) { info = true; });
     ap.separator("General:");
-    scene_args.add_threads(ap);
+    shot_args.add_threads(ap);
 
     if (ap.parse_args(argc, argv) < 0)
         return fail("{}", ap.geterror());
     if (ap.aborted())
         return EXIT_SUCCESS;
-    SceneSettings settings;
+    Shot shot;
+    shot.inputs = inputs;
+    int threads = 0;
     std::string error;
-    if (!scene_args.resolve(settings, error))
+    if (!shot_args.apply(shot, error) || !shot_args.threads(threads, error))
         return fail("{}", error);
     if (inputs.empty())
         return fail("no input file (see --help)");
+    error = validate(shot);
+    if (!error.empty())
+        return fail("{}", error);
+    if (is_animated(shot))
+        return fail("layerize renders no frames: give the camera without keyframes");
     if (info == !output.empty())
         return fail("give either -o OUTPUT.exr or --info");
     for (const std::string& input : inputs) {
@@ -86,19 +94,22 @@ int main(int argc, const char* argv[])
         if (std::filesystem::equivalent(input, output, ec))
             return fail("{}: the output would overwrite the input", output);
     }
-    OIIO::attribute("threads", settings.threads);
+    OIIO::attribute("threads", threads);
 
     Scene scene;
-    if (!read_scene(inputs, settings.read, scene, error))
+    if (!read_scene(inputs, shot.read, scene, error))
         return fail("{}", error);
-    sanitize(scene, settings.threads);
-    const CircleOfConfusion coc(settings.camera, scene.spec.full_width);
-    decompose_layers(scene, coc, settings.layering, settings.threads);
+    sanitize(scene, threads);
+    Camera camera;
+    if (!shot_camera(shot, scene, 0, camera, error))
+        return fail("{}", error);
+    const CircleOfConfusion coc(camera, scene.spec.full_width);
+    decompose_layers(scene, coc, shot.layering, threads);
 
     if (info) {
         std::vector<LayerReport> reports;
         for (const Layer& layer : scene.layers)
-            reports.push_back(describe_layer(layer, coc, settings.threads));
+            reports.push_back(describe_layer(layer, coc, threads));
         std::stable_sort(reports.begin(), reports.end(), [](const auto& a, const auto& b) {
             return a.mean_inverse_depth < b.mean_inverse_depth;
         });
@@ -109,7 +120,7 @@ int main(int argc, const char* argv[])
         return EXIT_SUCCESS;
     }
     ImageSpec spec = scene.spec;
-    record_camera(spec, settings.camera);
+    record_camera(spec, camera);
     if (!write_layers_atomic(scene.layers, spec, output, error))
         return fail("{}", error);
     return EXIT_SUCCESS;

@@ -22,6 +22,17 @@ std::string temporary_name(const std::string& filename)
     return dir.empty() ? name : dir + "/" + name;
 }
 
+/// Renames the complete temporary file over `filename`, or removes it.
+bool commit(const std::string& tmp, const std::string& filename, std::string& error)
+{
+    std::string rename_error;
+    if (Filesystem::rename(tmp, filename, rename_error))
+        return true;
+    Filesystem::remove(tmp);
+    error = Strutil::fmt::format("{}: {}", filename, rename_error);
+    return false;
+}
+
 }  // namespace
 
 bool write_atomic(const std::string& filename,
@@ -45,12 +56,19 @@ bool write_atomic(const std::string& filename,
         return fail(why.empty() ? "cannot write" : why);
     }
     out.reset();
-    std::string rename_error;
-    if (!Filesystem::rename(tmp, filename, rename_error)) {
+    return commit(tmp, filename, error);
+}
+
+bool write_text_atomic(const std::string& filename, const std::string& text,
+                       std::string& error)
+{
+    const std::string tmp = temporary_name(filename);
+    if (!Filesystem::write_text_file(tmp, text)) {
         Filesystem::remove(tmp);
-        return fail(rename_error);
+        error = filename + ": cannot write";
+        return false;
     }
-    return true;
+    return commit(tmp, filename, error);
 }
 
 bool write_image_atomic(const ImageBuf& image, const std::string& filename,

@@ -8,6 +8,7 @@
 
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/parallel.h>
+#include <OpenImageIO/timer.h>
 
 #include <defocus/spread.h>
 
@@ -130,7 +131,7 @@ bool spread_layer(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
 }
 
 bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& settings,
-                   std::vector<LayerReport>* report, int nthreads)
+                   std::vector<LayerReport>* report, RenderTimings& timings, int nthreads)
 {
     if (!scene.flat.empty() || !scene.deep.empty()) {
         dst.errorfmt("the scene has flat or deep content: cut it into layers first "
@@ -172,6 +173,7 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
                 report->push_back(depths[i]);
             continue;
         }
+        Timer spread_timer;
         ImageBuf radius, spread;
         if (!coc_radius(radius, layer.depth, coc, {}, nthreads)
             || !spread_layer(spread, layer.color, radius, settings, profile.get(),
@@ -182,17 +184,20 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
         }
         if (report)
             report->push_back(depths[i]);
+        timings.spread += spread_timer();
+        Timer composite_timer;
         normalize_coverage(spread, nthreads);
         if (!result.initialized()) {
             result = std::move(spread);
-            continue;
+        } else {
+            ImageBuf composite;
+            if (!ImageBufAlgo::over(composite, spread, result, {}, nthreads)) {
+                dst.errorfmt("layer '{}': {}", layer.name, composite.geterror());
+                return false;
+            }
+            result = std::move(composite);
         }
-        ImageBuf composite;
-        if (!ImageBufAlgo::over(composite, spread, result, {}, nthreads)) {
-            dst.errorfmt("layer '{}': {}", layer.name, composite.geterror());
-            return false;
-        }
-        result = std::move(composite);
+        timings.composite += composite_timer();
     }
 
     const ROI display(scene.spec.full_x, scene.spec.full_x + scene.spec.full_width,
@@ -205,9 +210,11 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
         result.reset(empty);
         ImageBufAlgo::zero(result);
     }
-    if (settings.crop) {
+    if (settings.window != OutputWindow::Grown) {
+        ROI window = settings.window == OutputWindow::Display ? display : scene.spec.roi();
+        window.chend = 4;
         ImageBuf cropped;
-        ImageBufAlgo::crop(cropped, result, display, nthreads);
+        ImageBufAlgo::crop(cropped, result, window, nthreads);
         result = std::move(cropped);
     }
     ImageSpec& spec   = result.specmod();
@@ -222,6 +229,26 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
 }
 
 }  // namespace
+
+bool parse_output_window(const std::string& name, OutputWindow& window)
+{
+    for (OutputWindow w : { OutputWindow::Input, OutputWindow::Display, OutputWindow::Grown })
+        if (name == output_window_name(w)) {
+            window = w;
+            return true;
+        }
+    return false;
+}
+
+const char* output_window_name(OutputWindow window)
+{
+    switch (window) {
+    case OutputWindow::Input: return "input";
+    case OutputWindow::Display: return "display";
+    case OutputWindow::Grown: return "grown";
+    }
+    return "?";
+}
 
 void normalize_coverage(ImageBuf& layer, int nthreads)
 {
@@ -242,12 +269,15 @@ void normalize_coverage(ImageBuf& layer, int nthreads)
 
 bool render_layered_dof(ImageBuf& dst, const Scene& scene,
                         const RenderSettings& settings,
-                        std::vector<LayerReport>* report, int nthreads)
+                        std::vector<LayerReport>* report, RenderTimings* timings,
+                        int nthreads)
 {
+    RenderTimings unused;
     // Errors are reported, never thrown through the API; running out of
     // memory on a huge blur is the one exception the filters can raise.
     try {
-        return render_layers(dst, scene, settings, report, nthreads);
+        return render_layers(dst, scene, settings, report, timings ? *timings : unused,
+                             nthreads);
     } catch (const std::bad_alloc&) {
         dst.errorfmt("out of memory (the layers and the blur are too large)");
         return false;

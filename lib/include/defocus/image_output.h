@@ -20,6 +20,10 @@ bool write_atomic(const std::string& filename,
                                            const std::string& temporary)>& write,
                   std::string& error);
 
+/// Writes a text file atomically, as write_atomic() does.
+bool write_text_atomic(const std::string& filename, const std::string& text,
+                       std::string& error);
+
 /// Writes `image` to `filename` in the format its extension names, as
 /// `type` (TypeUnknown: the image's own pixel type) with `compression`
 /// ("" for the image's own or the format's default), atomically. A format

@@ -29,6 +29,17 @@ bool coc_radius(OIIO::ImageBuf& dst, const OIIO::ImageBuf& depth,
 /// prefix sums below 0 is cleared.
 void normalize_coverage(OIIO::ImageBuf& layer, int nthreads = 0);
 
+/// The data window of a result.
+enum class OutputWindow {
+    Input,    ///< the input's data window, as oiiotool's filters keep it
+    Display,  ///< the display window
+    Grown,    ///< the input's data window grown by the blur: all of the light
+};
+
+/// "input", "display" or "grown"; false for any other name.
+bool parse_output_window(const std::string& name, OutputWindow& window);
+const char* output_window_name(OutputWindow window);
+
 struct RenderSettings {
     Camera camera;
     Aperture aperture;
@@ -37,9 +48,7 @@ struct RenderSettings {
     /// PSF image, the others with the aperture's fast filter.
     std::shared_ptr<const PsfImage> psf_image;
     double hybrid_threshold = 4.0;
-    /// Clip the result to the display window; otherwise it covers the
-    /// input data window grown by the blur.
-    bool crop = false;
+    OutputWindow window = OutputWindow::Input;
 };
 
 /// What one layer holds, for -v and layerize --info.
@@ -56,6 +65,12 @@ struct LayerReport {
 LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc,
                            int nthreads = 0);
 
+/// Where render_layered_dof() spends its time, in seconds.
+struct RenderTimings {
+    double spread    = 0.0;  ///< CoC radii and spreading, all layers
+    double composite = 0.0;  ///< coverage normalisation and "over"
+};
+
 /// Renders the defocused, flattened premultiplied RGBA of a sanitized
 /// scene (see sanitize()) whose content is all in layers (see
 /// decompose_layers()). Layers are taken back to front by their
@@ -64,6 +79,6 @@ LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc,
 bool render_layered_dof(OIIO::ImageBuf& dst, const Scene& scene,
                         const RenderSettings& settings,
                         std::vector<LayerReport>* report = nullptr,
-                        int nthreads = 0);
+                        RenderTimings* timings = nullptr, int nthreads = 0);
 
 }  // namespace defocus

@@ -1,0 +1,50 @@
+// One frame of a shot, from its files to the image to write:
+//
+//   read -> sanitize -> to scene-linear -> focus -> layers -> spread each
+//   layer -> composite -> from scene-linear -> metadata
+//
+// The defocus command and the OpenImageIO plugin both render through here.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <OpenImageIO/imagebuf.h>
+
+#include <defocus/color_plan.h>
+#include <defocus/layered_dof.h>
+#include <defocus/scene.h>
+#include <defocus/shot.h>
+
+namespace defocus {
+
+struct FrameResult {
+    std::string source;  ///< the files read, for messages
+    Camera camera;       ///< as used; the focus measured when focusing at a pixel
+    ColorPlan color;
+    /// The result in the output colour space, with the input's metadata
+    /// and the settings used (defocus:*, oiio:ColorSpace).
+    OIIO::ImageBuf image;
+    OIIO::TypeDesc pixel_type;  ///< to write it as
+    std::string compression;    ///< to write it with ("" = the format's default)
+    PixelCounts fixed;
+    std::string slicing;  ///< how flat or deep input was cut into layers ("" = not)
+    std::vector<LayerReport> layers;
+    /// Seconds per stage: read, colour, slice, spread, composite (or focus
+    /// map), colour out.
+    std::vector<std::pair<std::string, double>> timings;
+};
+
+/// Called as each stage of a frame starts ("read", "colour", "slice",
+/// "render"), for progress display.
+using StageCallback = std::function<void(const char* stage)>;
+
+/// Renders `frame` of a shot (the inputs' frame patterns and the keyframes
+/// are taken at it). False with `error` a one-line message naming the file
+/// and the problem.
+bool render_frame(const Shot& shot, int frame, FrameResult& result, std::string& error,
+                  const StageCallback& on_stage = {}, int nthreads = 0);
+
+}  // namespace defocus

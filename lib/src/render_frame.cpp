@@ -1,0 +1,150 @@
+#include <defocus/render_frame.h>
+
+#include <OpenImageIO/strutil.h>
+#include <OpenImageIO/timer.h>
+
+#include <defocus/focus_at.h>
+#include <defocus/focus_map.h>
+#include <defocus/frames.h>
+#include <defocus/layering.h>
+#include <defocus/scene_io.h>
+
+namespace defocus {
+
+using namespace OIIO;
+using Strutil::fmt::format;
+
+namespace {
+
+TypeDesc input_color_type(const ImageSpec& spec)
+{
+    const int r = spec.channelindex("R");
+    return r >= 0 ? spec.channelformat(r) : spec.format;
+}
+
+void record_settings(ImageSpec& spec, const Shot& shot, const Camera& camera, int frame)
+{
+    record_camera(spec, camera);
+    const Aperture& aperture = shot.aperture;
+    spec.attribute("defocus:aperture", aperture_shape_name(aperture.shape));
+    spec.attribute("defocus:aspect", float(aperture.aspect));
+    if (aperture.shape == ApertureShape::Mask)
+        spec.attribute("defocus:apertureMask", aperture.mask_file);
+    if (aperture.shape == ApertureShape::Polygon) {
+        spec.attribute("defocus:blades", aperture.blades);
+        spec.attribute("defocus:rotation", float(aperture.rotation_deg));
+        spec.attribute("defocus:roundness", float(aperture.roundness));
+    }
+    if (is_sequence(shot))
+        spec.attribute("defocus:frame", frame);
+    spec.attribute("Software", "defocus " DEFOCUS_VERSION);
+}
+
+bool render(const Shot& shot, int frame, FrameResult& out, std::string& error,
+            const StageCallback& on_stage, int nthreads)
+{
+    Timer timer;
+    auto stage = [&](const char* name) {
+        if (on_stage)
+            on_stage(name);
+    };
+    auto lap = [&](const char* name) { out.timings.emplace_back(name, timer.lap()); };
+
+    stage("read");
+    std::vector<std::string> files;
+    for (const std::string& input : shot.inputs)
+        files.push_back(frame_path(input, frame));
+    Scene scene;
+    if (!read_scene(files, shot.read, scene, error))
+        return false;
+    out.source = scene.source;
+    out.fixed  = sanitize(scene, nthreads);
+    lap("read");
+
+    stage("colour");
+    ColorPlan& color = out.color;
+    if (!plan_color(color, shot.color_config, shot.input_space, shot.output_space,
+                    scene.spec, error))
+        return false;
+    if (color.convert_input
+        && !convert_scene(scene, color.config, color.input, color.working, error, nthreads)) {
+        error = scene.source + ": " + error;
+        return false;
+    }
+    lap("colour");
+
+    stage("slice");
+    if (!shot_camera(shot, scene, frame, out.camera, error))
+        return false;
+    const CircleOfConfusion coc(out.camera, scene.spec.full_width);
+    const bool to_slice = !scene.flat.empty() || !scene.deep.empty();
+    const LayerBounds bounds = decompose_layers(scene, coc, shot.layering, nthreads);
+    if (to_slice) {
+        std::vector<std::string> edges;
+        for (int k = 0; k <= bounds.count(); ++k)
+            edges.push_back(format("{:.3g}", bounds.boundary(k)));
+        out.slicing = format("sliced into {} depth layer(s), bounds in px of CoC: {}",
+                             bounds.count(), Strutil::join(edges, " "));
+    }
+    lap("slice");
+
+    stage("render");
+    ImageBuf& image = out.image;
+    if (shot.output == OutputKind::FocusMap) {
+        if (!focus_map(image, scene, out.camera, 8.0, nthreads)) {
+            error = scene.source + ": " + image.geterror();
+            return false;
+        }
+        image.specmod().extra_attribs = scene.spec.extra_attribs;
+        erase_part_attributes(image.specmod());
+        lap("focus map");
+    } else {
+        RenderSettings settings;
+        settings.camera   = out.camera;
+        settings.aperture = shot.aperture;
+        settings.window   = shot.window;
+        settings.hybrid_threshold = shot.hybrid_threshold;
+        if (!shot.psf_image.empty()) {
+            auto psf = std::make_shared<PsfImage>();
+            if (!psf->load(shot.psf_image, error))
+                return false;
+            settings.psf_image = psf;
+        }
+        RenderTimings timings;
+        if (!render_layered_dof(image, scene, settings, &out.layers, &timings, nthreads)) {
+            error = scene.source + ": " + image.geterror();
+            return false;
+        }
+        out.timings.emplace_back("spread", timings.spread);
+        out.timings.emplace_back("composite", timings.composite);
+        timer.lap();
+        // A focus map is false colour: it has no colour space to convert.
+        if (color.loaded) {
+            if (!color.config.convert(image, color.working, color.output, error, nthreads))
+                return false;
+            image.specmod().attribute("oiio:ColorSpace", color.output);
+        }
+        lap("colour out");
+    }
+    record_settings(image.specmod(), shot, out.camera, frame);
+    out.pixel_type = shot.pixel_type != TypeUnknown ? shot.pixel_type
+                                                    : input_color_type(scene.spec);
+    out.compression = shot.compression;
+    return true;
+}
+
+}  // namespace
+
+bool render_frame(const Shot& shot, int frame, FrameResult& result, std::string& error,
+                  const StageCallback& on_stage, int nthreads)
+{
+    result = FrameResult();
+    try {
+        return render(shot, frame, result, error, on_stage, nthreads);
+    } catch (const std::bad_alloc&) {
+        error = result.source + ": out of memory";
+        return false;
+    }
+}
+
+}  // namespace defocus

@@ -1,0 +1,290 @@
+// Shots: keyframes, frame patterns, settings, .dof files and focusing on a
+// pixel.
+#include <catch2/catch.hpp>
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/strutil.h>
+
+#include <defocus/focus_at.h>
+#include <defocus/frames.h>
+#include <defocus/keyframes.h>
+#include <defocus/shot.h>
+#include <defocus/shot_file.h>
+
+#include "test_support.h"
+
+using namespace defocus;
+using namespace defocus_test;
+using OIIO::Strutil::contains;
+
+namespace {
+
+Keyframes parsed(const std::string& text, int arity = 1)
+{
+    Keyframes k;
+    std::string error;
+    INFO(text);
+    REQUIRE(Keyframes::parse("--focus", text, arity, 1e-6, 1e30, k, error));
+    return k;
+}
+
+std::string parse_error(const std::string& text, int arity = 1)
+{
+    Keyframes k;
+    std::string error;
+    CHECK_FALSE(Keyframes::parse("--focus", text, arity, 1e-6, 1e30, k, error));
+    return error;
+}
+
+/// Every setting's text, to compare shots.
+std::vector<std::string> settings_of(const Shot& shot)
+{
+    std::vector<std::string> all = shot.inputs;
+    for (const ShotSetting& s : shot_settings())
+        all.push_back(std::string(s.name) + "=" + shot_setting(shot, s.name));
+    return all;
+}
+
+/// A .dof's error, which must be one line naming the source.
+std::string dof_error(const std::string& text, const std::string& directory = "")
+{
+    Shot shot;
+    std::string error;
+    INFO(text);
+    CHECK_FALSE(parse_shot(text, directory, "shot.dof", shot, error));
+    CHECK(OIIO::Strutil::starts_with(error, "shot.dof: "));
+    CHECK(error.find('\n') == std::string::npos);
+    return error;
+}
+
+}  // namespace
+
+TEST_CASE("keyframes: constants, and focus pulls linear in 1/z")
+{
+    const Keyframes constant = parsed("2.5");
+    CHECK_FALSE(constant.animated());
+    CHECK(constant.at(-100, Interpolation::Reciprocal)[0] == 2.5);
+    CHECK(constant.to_string() == "2.5");
+
+    const Keyframes pull = parsed("1001:3,1040:1.2,1100:1.2");
+    CHECK(pull.animated());
+    CHECK(pull.at(900, Interpolation::Reciprocal)[0] == 3.0);  // the end keys hold
+    CHECK(pull.at(1001, Interpolation::Reciprocal)[0] == 3.0);
+    CHECK(pull.at(1070, Interpolation::Reciprocal)[0] == Approx(1.2));
+    CHECK(pull.at(2000, Interpolation::Reciprocal)[0] == 1.2);
+    // Halfway in frames is halfway in 1/z, so the CoC moves at an even rate.
+    const double mid = pull.at(1020.5, Interpolation::Reciprocal)[0];
+    CHECK(1.0 / mid == Approx(0.5 * (1.0 / 3.0 + 1.0 / 1.2)));
+    CHECK(pull.at(1020.5, Interpolation::Linear)[0] == Approx(2.1));
+    CHECK(pull.to_string() == "1001:3,1040:1.2,1100:1.2");
+
+    const Keyframes at = parsed("1:100,50,11:200,150", 2);
+    CHECK(at.at(6, Interpolation::Linear) == Keyframes::Value { 150.0, 100.0 });
+    CHECK(parsed("640,360", 2).at(3, Interpolation::Linear) == Keyframes::Value { 640, 360 });
+
+    CHECK(contains(parse_error("1:3,1:4"), "must increase"));
+    CHECK(contains(parse_error("5:3,2:4"), "must increase"));
+    CHECK(contains(parse_error("1:3,4"), "--focus"));
+    CHECK(contains(parse_error("1.5:3"), "whole number"));
+    CHECK(contains(parse_error("1:-2"), "out of range"));
+    CHECK(contains(parse_error("far"), "not a number"));
+    CHECK(contains(parse_error(""), "--focus"));
+    CHECK(contains(parse_error("640", 2), "X,Y"));
+}
+
+TEST_CASE("frame patterns in oiiotool's syntax")
+{
+    CHECK(is_frame_pattern("shot.#.exr"));
+    CHECK(is_frame_pattern("shot.@@.exr"));
+    CHECK(is_frame_pattern("shot.%03d.exr"));
+    CHECK(is_frame_pattern("shot.1-10#.exr"));
+    CHECK_FALSE(is_frame_pattern("shot.0001.exr"));
+    CHECK(frame_path("shot.#.exr", 7) == "shot.0007.exr");
+    CHECK(frame_path("shot.@@.exr", 7) == "shot.07.exr");
+    CHECK(frame_path("shot.%03d.exr", 1001) == "shot.1001.exr");
+    CHECK(frame_path("dir/shot.exr", 7) == "dir/shot.exr");
+
+    Shot shot;
+    std::vector<int> frames;
+    std::string error;
+    shot.inputs = { "still.exr" };
+    shot.focus  = Keyframes(3.0);
+    REQUIRE(shot_frames(shot, frames, error));
+    CHECK(frames == std::vector<int> { 1 });
+    CHECK_FALSE(is_sequence(shot));
+
+    shot.frames = "1-9x4,20,12-10";
+    REQUIRE(shot_frames(shot, frames, error));
+    CHECK(frames == std::vector<int> { 1, 5, 9, 20, 12, 11, 10 });
+    shot.frames = "1-";
+    CHECK_FALSE(shot_frames(shot, frames, error));
+    CHECK(contains(error, "--frames"));
+
+    // Without a list, an embedded range, else the files on disk.
+    const std::string dir = scratch_dir("shot_frames");
+    for (int f : { 3, 4, 6 })
+        OIIO::Filesystem::write_text_file(dir + "/seq." + std::to_string(f) + ".exr", "");
+    shot.frames = "";
+    shot.inputs = { dir + "/seq.@.exr" };
+    REQUIRE(shot_frames(shot, frames, error));
+    CHECK(frames == std::vector<int> { 3, 4, 6 });
+    shot.inputs = { dir + "/seq.2-3@.exr" };
+    REQUIRE(shot_frames(shot, frames, error));
+    CHECK(frames == std::vector<int> { 2, 3 });
+    shot.inputs = { dir + "/none.#.exr" };
+    CHECK_FALSE(shot_frames(shot, frames, error));
+    CHECK(contains(error, "no files match"));
+
+    // Keyframes on a still need frames to be taken at.
+    shot.inputs = { "still.exr" };
+    REQUIRE(set_shot_setting(shot, "focus", "1:1.25,24:3", error));
+    CHECK_FALSE(shot_frames(shot, frames, error));
+    CHECK(contains(error, "--frames"));
+}
+
+TEST_CASE("shot settings: command-line text, errors, focus and focus-at exclude each other")
+{
+    Shot shot;
+    std::string error;
+    REQUIRE(set_shot_setting(shot, "focus", "3", error));
+    REQUIRE(set_shot_setting(shot, "aperture", "mask:iris.png", error));
+    CHECK(shot.aperture.shape == ApertureShape::Mask);
+    CHECK(shot.aperture.mask_file == "iris.png");
+    REQUIRE(set_shot_setting(shot, "focus-at", "10,20", error));
+    CHECK(shot.focus.empty());
+    REQUIRE(set_shot_setting(shot, "focus", "2", error));
+    CHECK(shot.focus_at.empty());
+    REQUIRE(set_shot_setting(shot, "pixel-type", "half", error));
+    CHECK(shot.pixel_type == OIIO::TypeHalf);
+
+    CHECK_FALSE(set_shot_setting(shot, "blades", "2", error));
+    CHECK(contains(error, "--blades"));
+    CHECK_FALSE(set_shot_setting(shot, "blades", "6.5", error));
+    CHECK(contains(error, "whole number"));
+    CHECK_FALSE(set_shot_setting(shot, "lens", "fisheye", error, "camera.lens"));
+    CHECK(contains(error, "camera.lens: unknown model 'fisheye'"));
+    CHECK_FALSE(set_shot_setting(shot, "pixel-type", "int8", error, "-d"));
+    CHECK(contains(error, "-d: unknown type"));
+    CHECK_FALSE(set_shot_setting(shot, "window", "huge", error));
+    CHECK_FALSE(set_shot_setting(shot, "fcous", "3", error));
+    CHECK(contains(error, "unknown setting 'fcous'"));
+
+    const Camera camera = camera_at(shot, 1);
+    CHECK(camera.focus_distance == 2.0);
+    CHECK(camera.fstop == 2.8);  // the defaults
+    CHECK(camera.focal_length_mm == 50.0);
+}
+
+TEST_CASE(".dof files: every setting round-trips, paths relative to the file")
+{
+    const std::string dir = scratch_dir("shot_file");
+    OIIO::Filesystem::create_directory(dir + "/plates");
+    OIIO::Filesystem::write_text_file(dir + "/plates/a.exr", "");
+    Shot shot;
+    shot.inputs = { dir + "/plates/a.exr", dir + "/plates/b.#.exr" };
+    std::string error;
+    for (const auto& [name, value] :
+         std::vector<std::pair<std::string, std::string>> {
+             { "frames", "1-24" }, { "view", "left" }, { "layer", "beauty" },
+             { "layers", "12" }, { "focus", "1:1.25,24:3" }, { "focal", "85" },
+             { "fstop", "1:1.4,24:2.8" }, { "sensor", "24.89" }, { "lens", "optical" },
+             { "max-blur", "100" }, { "aperture", "polygon" }, { "blades", "7" },
+             { "rotation", "15" }, { "roundness", "0.25" }, { "aspect", "0.5" },
+             { "hybrid-threshold", "6" }, { "iscolorspace", "ACEScg" },
+             { "tocolorspace", "srgb_tx" }, { "output", "focusmap" },
+             { "pixel-type", "float" }, { "compression", "dwaa" }, { "window", "grown" } })
+        REQUIRE(set_shot_setting(shot, name, value, error));
+    REQUIRE(save_shot(shot, dir + "/shot.dof", error));
+
+    std::string text;
+    REQUIRE(OIIO::Filesystem::read_text_file(dir + "/shot.dof", text));
+    CHECK(contains(text, "\"plates/a.exr\""));  // relative: the folder can move
+    CHECK(contains(text, "\"focus\": {"));
+    CHECK(contains(text, "\"version\": 1"));
+
+    Shot loaded;
+    REQUIRE(load_shot(dir + "/shot.dof", loaded, error));
+    CHECK(settings_of(loaded) == settings_of(shot));
+
+    // Loading from elsewhere resolves paths against the file's folder.
+    Shot again;
+    REQUIRE(parse_shot(text, dir, "shot.dof", again, error));
+    CHECK(again.inputs.front() == dir + "/plates/a.exr");
+}
+
+TEST_CASE(".dof files: one-line errors for bad JSON, keys, types, values and files")
+{
+    const std::string dir = scratch_dir("shot_file_errors");
+    OIIO::Filesystem::write_text_file(dir + "/a.exr", "");
+    const std::string head = "{\"version\": 1, \"inputs\": [\"a.exr\"], ";
+    CHECK(contains(dof_error("{\"version\": 1,\n \"inputs\": [\"a.exr\"}", dir),
+                   "not valid JSON: parse error at line 2"));
+    CHECK(contains(dof_error("[1, 2]", dir), "expected a JSON object"));
+    CHECK(contains(dof_error("{\"inputs\": [\"a.exr\"]}", dir), "no \"version\""));
+    CHECK(contains(dof_error("{\"version\": 9, \"inputs\": [\"a.exr\"]}", dir), "newer"));
+    CHECK(contains(dof_error("{\"version\": 1}", dir), "no \"inputs\""));
+    CHECK(contains(dof_error("{\"version\": 1, \"inputs\": [\"b.exr\"]}", dir),
+                   "b.exr: no such file"));
+    CHECK(contains(dof_error("{\"version\": 1, \"inputs\": \"a.exr\"}", dir),
+                   "inputs: expected a list"));
+    CHECK(contains(dof_error(head + "\"camra\": {}}", dir), "unknown key 'camra'"));
+    CHECK(contains(dof_error(head + "\"camera\": {\"fcous\": 3}}", dir),
+                   "unknown key 'camera.fcous'"));
+    CHECK(contains(dof_error(head + "\"camera\": {\"focus\": \"3\"}}", dir),
+                   "camera.focus: expected a number or keyframes"));
+    CHECK(contains(dof_error(head + "\"camera\": {\"focus\": {\"one\": 3}}}", dir),
+                   "camera.focus: key 'one' is not a frame number"));
+    CHECK(contains(dof_error(head + "\"camera\": {\"focus_at\": [1]}}", dir),
+                   "camera.focus_at: expected [x, y]"));
+    CHECK(contains(dof_error(head + "\"camera\": {\"fstop\": -2}}", dir),
+                   "camera.fstop: -2 is out of range"));
+    CHECK(contains(dof_error(head + "\"camera\": {\"focus\": 3, \"focus_at\": [1, 2]}}", dir),
+                   "not both"));
+    CHECK(contains(dof_error(head + "\"aperture\": {\"blades\": 4.5}}", dir),
+                   "aperture.blades: 4.5 is not a whole number"));
+    CHECK(contains(dof_error(head + "\"output\": []}", dir), "output: expected an object"));
+
+    Shot shot;
+    std::string error;
+    CHECK_FALSE(load_shot(dir + "/missing.dof", shot, error));
+    CHECK(error == dir + "/missing.dof: no such file");
+}
+
+TEST_CASE("focus-at: the median depth of the front-most opaque surface")
+{
+    // A 20x20 display window: a far wall at 8 m, a half-transparent veil at
+    // 1 m over all of it, and an opaque post at 2 m over columns 8..12
+    // with one stray pixel at 30 m.
+    Scene scene;
+    scene.spec = OIIO::ImageSpec(20, 20, 4, OIIO::TypeFloat);
+    auto layer = [&](float z, float alpha, ROI roi) {
+        Layer l;
+        l.color = zero_image(roi, 4);
+        l.depth = zero_image(roi, 1);
+        const float rgba[4] = { alpha, alpha, alpha, alpha };
+        OIIO::ImageBufAlgo::fill(l.color, rgba);
+        OIIO::ImageBufAlgo::fill(l.depth, { z });
+        return l;
+    };
+    scene.layers.push_back(layer(8.0f, 1.0f, ROI(0, 20, 0, 20)));
+    scene.layers.push_back(layer(1.0f, 0.4f, ROI(0, 20, 0, 20)));
+    scene.layers.push_back(layer(2.0f, 1.0f, ROI(8, 13, 0, 20)));
+    OIIO::ImageBufAlgo::fill(scene.layers[2].depth, { 30.0f }, ROI(10, 11, 10, 11));
+
+    double distance = 0;
+    std::string error;
+    REQUIRE(focus_distance_at(scene, 10, 10, distance, error));
+    CHECK(distance == 2.0);  // the veil is not opaque; the stray pixel is outvoted
+    REQUIRE(focus_distance_at(scene, 2, 3, distance, error));
+    CHECK(distance == 8.0);
+    scene.layers[1] = layer(1.0f, 0.6f, ROI(0, 20, 0, 20));
+    REQUIRE(focus_distance_at(scene, 2, 3, distance, error));
+    CHECK(distance == 1.0);  // now the veil is
+
+    CHECK_FALSE(focus_distance_at(scene, 25, 3, distance, error));
+    CHECK(contains(error, "outside the 20x20 display window"));
+    scene.layers.clear();
+    CHECK_FALSE(focus_distance_at(scene, 2, 3, distance, error));
+    CHECK(contains(error, "nothing opaque"));
+}

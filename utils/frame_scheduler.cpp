@@ -1,0 +1,76 @@
+#include "frame_scheduler.h"
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <atomic>
+#include <mutex>
+#include <thread>
+
+#include <OpenImageIO/sysutil.h>
+
+namespace defocus {
+
+namespace {
+
+size_t peak_resident_bytes()
+{
+    struct rusage usage {};
+    getrusage(RUSAGE_SELF, &usage);
+    return size_t(usage.ru_maxrss) * 1024;  // Linux reports kilobytes
+}
+
+}  // namespace
+
+ScheduleResult run_frames(int count, int threads, bool stop_on_error, const FrameJob& job)
+{
+    ScheduleResult result;
+    if (count <= 0)
+        return result;
+    const int cores = threads > 0 ? threads : int(OIIO::Sysutil::hardware_concurrency());
+
+    const size_t before = OIIO::Sysutil::memory_used(true);
+    result.run = 1;
+    if (!job(0, cores)) {
+        result.failed.push_back(0);
+        if (stop_on_error)
+            return result;
+    }
+    if (count == 1)
+        return result;
+    const size_t peak      = peak_resident_bytes();
+    const size_t per_frame = std::max(peak > before ? peak - before : 0, size_t(64) << 20);
+    const size_t budget    = OIIO::Sysutil::physical_memory() / 2;
+    const int workers = int(std::clamp<size_t>(budget / per_frame, 1,
+                                               size_t(std::min(cores, count - 1))));
+    const int threads_each = std::max(1, cores / std::max(workers, 1));
+
+    std::atomic<int> next { 1 };
+    std::atomic<bool> stop { false };
+    std::mutex mutex;
+    auto work = [&] {
+        for (;;) {
+            if (stop)
+                return;
+            const int i = next++;
+            if (i >= count)
+                return;
+            const bool ok = job(i, threads_each);
+            std::lock_guard<std::mutex> lock(mutex);
+            ++result.run;
+            if (!ok) {
+                result.failed.push_back(i);
+                stop = stop_on_error;
+            }
+        }
+    };
+    std::vector<std::thread> pool;
+    for (int w = 0; w < workers; ++w)
+        pool.emplace_back(work);
+    for (std::thread& t : pool)
+        t.join();
+    std::sort(result.failed.begin(), result.failed.end());
+    return result;
+}
+
+}  // namespace defocus

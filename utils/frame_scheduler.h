@@ -1,0 +1,26 @@
+// Running the frames of a sequence on all cores within the machine's memory.
+#pragma once
+
+#include <functional>
+#include <vector>
+
+namespace defocus {
+
+/// Renders one frame (by index) with `nthreads` threads; false when it
+/// failed.
+using FrameJob = std::function<bool(int index, int nthreads)>;
+
+struct ScheduleResult {
+    std::vector<int> failed;  ///< indices, in order
+    int run = 0;              ///< frames attempted
+};
+
+/// Runs frames 0..count-1 in order of starting. The first runs alone with
+/// all `threads`; its peak memory then sets how many frames may run at once
+/// (at most half the machine's memory in all), each with an equal share of
+/// the threads: one frame alone rarely fills the cores (reading, checking
+/// and writing EXR are largely serial), frames side by side do. With
+/// `stop_on_error`, no frame starts after one has failed.
+ScheduleResult run_frames(int count, int threads, bool stop_on_error, const FrameJob& job);
+
+}  // namespace defocus

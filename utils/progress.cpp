@@ -1,0 +1,115 @@
+#include "progress.h"
+
+#include <algorithm>
+#include <cstdio>
+
+#include <OpenImageIO/strutil.h>
+#include <OpenImageIO/sysutil.h>
+
+namespace defocus {
+
+using OIIO::Strutil::fmt::format;
+
+namespace {
+
+/// The terminal's width, or 80 where it does not say.
+size_t line_width()
+{
+    const int columns = OIIO::Sysutil::terminal_columns();
+    return size_t(columns >= 40 ? columns - 1 : 79);
+}
+
+}  // namespace
+
+Progress::Progress(ProgressMode mode, int frames)
+    : m_mode(mode)
+    , m_frames(frames)
+{
+}
+
+void Progress::stage(const std::string& frame, const char* stage)
+{
+    if (m_mode != ProgressMode::Bar)
+        return;
+    std::lock_guard<std::mutex> lock(m_mutex);
+    m_current = frame.empty() ? std::string(stage) : frame + ": " + stage;
+    draw_bar();
+}
+
+void Progress::written(const std::string& frame, const std::string& file, double seconds)
+{
+    if (m_mode != ProgressMode::Lines)
+        return;
+    std::lock_guard<std::mutex> lock(m_mutex);
+    const std::string done = m_frames > 1 ? format(" ({}/{})", m_over + 1, m_frames) : "";
+    OIIO::Strutil::print("{}{}{}wrote {} in {:.2f} s\n", frame, done,
+                         frame.empty() ? "" : ": ", file, seconds);
+    std::fflush(stdout);
+}
+
+void Progress::text(const std::string& text)
+{
+    if (m_mode == ProgressMode::Quiet)
+        return;
+    std::lock_guard<std::mutex> lock(m_mutex);
+    clear_bar();
+    OIIO::Strutil::print("{}", text);
+    std::fflush(stdout);
+    draw_bar();
+}
+
+void Progress::error(const std::string& message)
+{
+    std::lock_guard<std::mutex> lock(m_mutex);
+    clear_bar();
+    OIIO::Strutil::print(stderr, "defocus: {}\n", message);
+    std::fflush(stderr);
+    draw_bar();
+}
+
+void Progress::frame_over()
+{
+    std::lock_guard<std::mutex> lock(m_mutex);
+    ++m_over;
+    draw_bar();
+}
+
+void Progress::finish()
+{
+    std::lock_guard<std::mutex> lock(m_mutex);
+    clear_bar();
+    m_current.clear();
+}
+
+void Progress::clear_bar()
+{
+    if (!m_bar_drawn)
+        return;
+    OIIO::Strutil::print("\r{:{}}\r", "", line_width());
+    m_bar_drawn = false;
+}
+
+void Progress::draw_bar()
+{
+    if (m_mode != ProgressMode::Bar || m_current.empty())
+        return;
+    const int width   = 24;
+    const int filled  = m_frames > 0 ? width * m_over / m_frames : 0;
+    const double time = m_timer();
+    std::string eta   = "--:--";
+    if (m_over > 0) {
+        const int left = int(time / m_over * (m_frames - m_over) + 0.5);
+        eta = format("{}:{:02}", left / 60, left % 60);
+    }
+    std::string line = format("[{}{}] {}/{}  {}  ETA {}", std::string(filled, '#'),
+                              std::string(width - filled, '.'), m_over, m_frames,
+                              m_current, eta);
+    const size_t columns = line_width();
+    if (line.size() > columns)
+        line.resize(columns);
+    OIIO::Strutil::print("\r{:<{}}", line, columns);
+    std::fflush(stdout);
+    m_bar_drawn = true;
+}
+
+}  // namespace defocus

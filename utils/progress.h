@@ -1,0 +1,48 @@
+// What the defocus command tells the user while it works: a progress bar
+// on a terminal, plain lines when stdout is not one, nothing when quiet.
+// Errors always go to stderr. Safe to call from several frame workers.
+#pragma once
+
+#include <mutex>
+#include <string>
+
+#include <OpenImageIO/timer.h>
+
+namespace defocus {
+
+enum class ProgressMode {
+    Bar,    ///< one redrawn line: frames done, the current stage, the ETA
+    Lines,  ///< a line per frame written
+    Quiet,  ///< errors only
+};
+
+class Progress {
+public:
+    Progress(ProgressMode mode, int frames);
+
+    /// A frame worker started `stage` ("read", "render", ...) of `frame`.
+    void stage(const std::string& frame, const char* stage);
+    /// A frame was written (one line in Lines mode).
+    void written(const std::string& frame, const std::string& file, double seconds);
+    /// A block of text for stdout (the -v report), whole.
+    void text(const std::string& text);
+    /// A one-line error, on stderr.
+    void error(const std::string& message);
+    /// A frame is over, written or not.
+    void frame_over();
+    /// Clears the bar.
+    void finish();
+
+private:
+    void clear_bar();
+    void draw_bar();
+
+    std::mutex m_mutex;
+    ProgressMode m_mode;
+    int m_frames, m_over = 0;
+    std::string m_current;  ///< "frame 1004: render"
+    OIIO::Timer m_timer;
+    bool m_bar_drawn = false;
+};
+
+}  // namespace defocus
