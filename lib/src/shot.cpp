@@ -1,6 +1,7 @@
 #include <defocus/shot.h>
 
 #include <functional>
+#include <type_traits>
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/strutil.h>
@@ -25,26 +26,18 @@ struct SettingRule {
     Getter get;
 };
 
+/// A number setting; whole numbers for an int member.
 template<typename Member>
 SettingRule number(ShotSetting s, Member member, double lo, double hi)
 {
     return { s,
              [=](Shot& shot, const std::string& label, const std::string& value,
                  std::string& error) {
-                 return parse_number(label, value, lo, hi, member(shot), error);
-             },
-             [=](const Shot& shot) {
-                 return format("{}", member(shot));
-             } };
-}
-
-template<typename Member>
-SettingRule whole_number(ShotSetting s, Member member, double lo, double hi)
-{
-    return { s,
-             [=](Shot& shot, const std::string& label, const std::string& value,
-                 std::string& error) {
-                 return parse_whole_number(label, value, lo, hi, member(shot), error);
+                 auto& target = member(shot);
+                 if constexpr (std::is_same_v<decltype(target), int&>)
+                     return parse_whole_number(label, value, lo, hi, target, error);
+                 else
+                     return parse_number(label, value, lo, hi, target, error);
              },
              [=](const Shot& shot) { return format("{}", member(shot)); } };
 }
@@ -85,7 +78,7 @@ const std::vector<SettingRule>& rules()
         text({ "frames", "scene", "frames", K::Text }, [](auto& s) -> auto& { return s.frames; }),
         text({ "view", "scene", "view", K::Text }, [](auto& s) -> auto& { return s.read.view; }),
         text({ "layer", "scene", "layer", K::Text }, [](auto& s) -> auto& { return s.read.layer; }),
-        whole_number({ "layers", "scene", "layers", K::Number },
+        number({ "layers", "scene", "layers", K::Number },
                      [](auto& s) -> auto& { return s.layering.layers; }, 0, 256),
 
         keyframes({ "focus", "camera", "focus", K::Keyframes }, &Shot::focus, 1, 1e-6,
@@ -127,7 +120,7 @@ const std::vector<SettingRule>& rules()
           } },
         text({ "aperture-mask", "aperture", "mask", K::Path },
              [](auto& s) -> auto& { return s.aperture.mask_file; }),
-        whole_number({ "blades", "aperture", "blades", K::Number },
+        number({ "blades", "aperture", "blades", K::Number },
                      [](auto& s) -> auto& { return s.aperture.blades; }, 3, 16),
         number({ "rotation", "aperture", "rotation", K::Number },
                [](auto& s) -> auto& { return s.aperture.rotation_deg; }, -3600, 3600),
