@@ -1,5 +1,7 @@
 #include <defocus/color.h>
 
+#include <dlfcn.h>
+
 #include <cstdlib>
 
 #include <OpenColorIO/OpenColorIO.h>
@@ -16,6 +18,21 @@ namespace defocus {
 
 using namespace OIIO;
 using Strutil::fmt::format;
+
+namespace {
+
+/// The file this code was loaded from: the program that links the library,
+/// or the OpenImageIO plugin. Both sit one folder below the prefix (bin/,
+/// lib/), in the build tree as once installed.
+std::string this_module_path()
+{
+    Dl_info info {};
+    if (dladdr(reinterpret_cast<const void*>(&this_module_path), &info) && info.dli_fname)
+        return info.dli_fname;
+    return Sysutil::this_program_path();
+}
+
+}  // namespace
 
 struct ColorManagement::Impl {
     OCIO::ConstConfigRcPtr ocio;  ///< for queries
@@ -37,8 +54,7 @@ bool ColorManagement::load(const std::string& explicit_file, std::string& error)
         m_path = env;
         m_origin = "$OCIO";
     } else {
-        const std::string bin = Filesystem::parent_path(Sysutil::this_program_path());
-        m_path = bin + "/../share/defocus/config.ocio";
+        m_path   = Filesystem::parent_path(this_module_path()) + "/../share/defocus/config.ocio";
         m_origin = "shipped";
     }
     if (!Filesystem::exists(m_path)) {

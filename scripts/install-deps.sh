@@ -5,6 +5,7 @@ set -euo pipefail
 packages=(
     cmake g++ make pkg-config
     libopenimageio-dev openimageio-tools   # image I/O, ImageBuf, ArgParse, threads
+    python3-openimageio                    # tests: Python opens .dof scenes via the plugin
     libopenexr-dev openexr                 # multi-part and deep EXR, file checks
     libopencolorio-dev opencolorio-tools   # colour management, ociocheck
     nlohmann-json3-dev                     # .dof scene files (JSON)

@@ -341,8 +341,7 @@ int main(int argc, const char* argv[])
             Timer write_timer;
             if (!previews.empty() && !write_preview(frame, cl, previews[i], error))
                 return false;
-            if (!write_image_atomic(frame.image, outputs[i], frame.pixel_type,
-                                    frame.compression, error))
+            if (!write_image_atomic(frame.image, outputs[i], frame.pixel_type, "", error))
                 return false;
             frame.timings.emplace_back("write", write_timer());
             return true;

@@ -1,5 +1,7 @@
 #include <defocus/render_frame.h>
 
+#include <cmath>
+
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/timer.h>
 
@@ -22,8 +24,18 @@ TypeDesc input_color_type(const ImageSpec& spec)
     return r >= 0 ? spec.channelformat(r) : spec.format;
 }
 
-void record_settings(ImageSpec& spec, const Shot& shot, const Camera& camera, int frame)
+/// The metadata of a result: the input's (less what describes one part),
+/// its colour space, and the settings used.
+void describe_output(ImageSpec& spec, const ImageSpec& input, const Shot& shot,
+                     const Camera& camera, const ColorPlan& color, int frame)
 {
+    spec.extra_attribs = input.extra_attribs;
+    erase_part_attributes(spec);
+    // A focus map is false colour: it has no colour space.
+    if (color.loaded && shot.output == OutputKind::Image)
+        spec.attribute("oiio:ColorSpace", color.output);
+    if (!shot.compression.empty())
+        spec.attribute("compression", shot.compression);
     record_camera(spec, camera);
     const Aperture& aperture = shot.aperture;
     spec.attribute("defocus:aperture", aperture_shape_name(aperture.shape));
@@ -95,8 +107,6 @@ bool render(const Shot& shot, int frame, FrameResult& out, std::string& error,
             error = scene.source + ": " + image.geterror();
             return false;
         }
-        image.specmod().extra_attribs = scene.spec.extra_attribs;
-        erase_part_attributes(image.specmod());
         lap("focus map");
     } else {
         RenderSettings settings;
@@ -118,22 +128,59 @@ bool render(const Shot& shot, int frame, FrameResult& out, std::string& error,
         out.timings.emplace_back("spread", timings.spread);
         out.timings.emplace_back("composite", timings.composite);
         timer.lap();
-        // A focus map is false colour: it has no colour space to convert.
-        if (color.loaded) {
-            if (!color.config.convert(image, color.working, color.output, error, nthreads))
-                return false;
-            image.specmod().attribute("oiio:ColorSpace", color.output);
-        }
+        if (color.loaded
+            && !color.config.convert(image, color.working, color.output, error, nthreads))
+            return false;
         lap("colour out");
     }
-    record_settings(image.specmod(), shot, out.camera, frame);
+    describe_output(image.specmod(), scene.spec, shot, out.camera, color, frame);
     out.pixel_type = shot.pixel_type != TypeUnknown ? shot.pixel_type
                                                     : input_color_type(scene.spec);
-    out.compression = shot.compression;
     return true;
 }
 
 }  // namespace
+
+bool frame_spec(const Shot& shot, int frame, ImageSpec& spec, std::string& error)
+{
+    std::vector<std::string> files;
+    for (const std::string& input : shot.inputs)
+        files.push_back(frame_path(input, frame));
+    ImageSpec input;
+    ColorPlan color;
+    if (!read_scene_spec(files, shot.read, input, error)
+        || !plan_color(color, shot.color_config, shot.input_space, shot.output_space, input,
+                       error))
+        return false;
+    const ROI display(input.full_x, input.full_x + input.full_width, input.full_y,
+                      input.full_y + input.full_height, 0, 1, 0, 4);
+    ROI window = display;
+    if (shot.output == OutputKind::Image && shot.window != OutputWindow::Display) {
+        window = input.roi();
+        if (shot.window == OutputWindow::Grown) {
+            // The largest blur there can be: a footprint reaches one pixel
+            // beyond its radius for the fractional edge.
+            const int reach = int(std::ceil(0.5 * shot.max_blur_px)) + 2;
+            window = ROI(window.xbegin - reach, window.xend + reach, window.ybegin - reach,
+                         window.yend + reach);
+        }
+    }
+    const TypeDesc type = shot.pixel_type != TypeUnknown ? shot.pixel_type
+                                                         : input_color_type(input);
+    spec = ImageSpec(window, type);
+    spec.nchannels     = 4;
+    spec.channelnames  = { "R", "G", "B", "A" };
+    spec.alpha_channel = 3;
+    spec.full_x        = display.xbegin;
+    spec.full_y        = display.ybegin;
+    spec.full_width    = display.width();
+    spec.full_height   = display.height();
+    describe_output(spec, input, shot, camera_at(shot, frame), color, frame);
+    // Focusing at a pixel measures the focus from the pixels.
+    if (!shot.focus_at.empty())
+        spec.erase_attribute("defocus:focusDistance");
+    return true;
+}
 
 bool render_frame(const Shot& shot, int frame, FrameResult& result, std::string& error,
                   const StageCallback& on_stage, int nthreads)

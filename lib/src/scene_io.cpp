@@ -1,6 +1,7 @@
 #include <defocus/scene_io.h>
 
 #include <cstdio>
+#include <memory>
 #include <set>
 
 #include <OpenEXR/ImfCheckFile.h>
@@ -202,26 +203,38 @@ bool read_deep(ImageInput& in, const Part& part, DeepImage& image,
     return true;
 }
 
-/// Reads one file into `scene`: its layers, flat renders and deep images.
-bool read_file(const std::string& filename, const ReadOptions& options,
-               Scene& scene, std::string& error)
+/// What one file holds for the scene, chosen from its headers alone.
+struct FileLayout {
+    std::vector<Part> parts;      ///< of the chosen view, and of no view
+    std::vector<size_t> complete; ///< parts with colour and depth: layers or one flat render
+    int joined_color = -1;        ///< else a beauty part ...
+    int joined_depth = -1;        ///< ... and a depth part: one flat render
+    ImageSpec first;              ///< the first part's header: display window, metadata
+    ROI data_window;              ///< the union of what is read
+
+    const Part& part(size_t i) const { return parts[i]; }
+};
+
+/// Opens a file as OIIO reads it. EXRs are vetted first with OpenEXR's
+/// own checker (the code behind exrcheck) when `vet`: OpenImageIO 2.4
+/// crashes or hangs on some corrupt EXRs that it survives.
+std::unique_ptr<ImageInput> open_file(const std::string& filename, bool vet,
+                                      std::string& error)
 {
     if (!Filesystem::exists(filename)) {
         error = filename + ": no such file";
-        return false;
+        return nullptr;
     }
     if (Filesystem::is_directory(filename)) {
         error = filename + ": is a directory, not an image";
-        return false;
+        return nullptr;
     }
-    // OpenImageIO 2.4 crashes or hangs on some corrupt EXRs; OpenEXR's own
-    // checker (the code behind exrcheck) survives them, so it vets every
-    // EXR before OIIO reads it. It returns true when it finds a problem.
-    if (is_openexr(filename)
+    // checkOpenEXRFile returns true when it finds a problem.
+    if (vet && is_openexr(filename)
         && Imf::checkOpenEXRFile(filename.c_str(), /*reduceMemory=*/true,
                                  /*reduceTime=*/true, /*enableCoreCheck=*/true)) {
         error = filename + ": corrupt or truncated OpenEXR file";
-        return false;
+        return nullptr;
     }
     auto in = ImageInput::open(filename);
     if (!in) {
@@ -229,15 +242,20 @@ bool read_file(const std::string& filename, const ReadOptions& options,
         if (why.empty())
             why = "not an image file OpenImageIO can read";
         error = format("{}: {}", filename, Strutil::replace(why, "\n", " ", true));
-        return false;
     }
+    return in;
+}
 
+/// Chooses the parts of one file that make the scene, from their headers.
+bool choose_parts(ImageInput& in, const std::string& filename, const ReadOptions& options,
+                  FileLayout& layout, std::string& error)
+{
     // The parts of the chosen view, and those that belong to no view.
-    std::vector<Part> parts;
+    std::vector<Part>& parts = layout.parts;
     std::vector<std::string> views;
     std::string view = options.view;
-    for (int s = 0; in->seek_subimage(s, 0); ++s) {
-        ImageSpec spec = in->spec(s, 0);
+    for (int s = 0; in.seek_subimage(s, 0); ++s) {
+        ImageSpec spec = in.spec(s, 0);
         const std::string part_view = spec.get_string_attribute("view");
         if (!part_view.empty() && std::find(views.begin(), views.end(), part_view) == views.end())
             views.push_back(part_view);
@@ -257,9 +275,14 @@ bool read_file(const std::string& filename, const ReadOptions& options,
                              Strutil::join(views, ", "));
         return false;
     }
+    if (parts.empty()) {
+        error = filename + ": has no image parts";
+        return false;
+    }
 
-    std::vector<const Part*> complete, color_only, depth_only;
-    for (Part& part : parts) {
+    std::vector<size_t> color_only, depth_only;
+    for (size_t i = 0; i < parts.size(); ++i) {
+        Part& part = parts[i];
         std::string ambiguity;
         part.channels = find_channels(part.spec, options.layer, ambiguity);
         if (!ambiguity.empty()) {
@@ -272,67 +295,92 @@ bool read_file(const std::string& filename, const ReadOptions& options,
         }
         const Channels& c = part.channels;
         if (c.has_color() && c.has_depth())
-            complete.push_back(&part);
+            layout.complete.push_back(i);
         else if (c.has_color())
-            color_only.push_back(&part);
+            color_only.push_back(i);
         else if (c.has_depth() && !part.spec.deep)
-            depth_only.push_back(&part);
+            depth_only.push_back(i);
     }
+    for (size_t i : layout.complete)
+        layout.data_window = roi_union(layout.data_window, parts[i].spec.roi());
 
-    for (const Part* part : complete) {
-        if (part->spec.deep) {
-            DeepImage image;
-            if (!read_deep(*in, *part, image, filename, error))
-                return false;
-            scene.deep.push_back(std::move(image));
-            continue;
-        }
-        ImageBuf pixels;
-        if (!read_pixels(*in, *part, pixels, filename, error))
-            return false;
-        const Channels& c = part->channels;
-        const std::string name = part->spec.get_string_attribute(
-            "name", format("layer{}", part->subimage));
-        (complete.size() > 1 ? scene.layers : scene.flat)
-            .push_back(make_layer(name, pixels, c.color, pixels, c.depth));
-    }
-
-    if (complete.empty()) {
+    if (layout.complete.empty()) {
         // A beauty part and a depth part of the same view: one flat render.
-        if (color_only.size() == 1 && depth_only.size() == 1 && !color_only[0]->spec.deep) {
-            ImageBuf color, depth;
-            if (!read_pixels(*in, *color_only[0], color, filename, error)
-                || !read_pixels(*in, *depth_only[0], depth, filename, error))
-                return false;
-            scene.flat.push_back(make_layer(
-                color_only[0]->spec.get_string_attribute("name", "beauty"), color,
-                color_only[0]->channels.color, depth, depth_only[0]->channels.depth));
+        if (color_only.size() == 1 && depth_only.size() == 1 && !parts[color_only[0]].spec.deep) {
+            layout.joined_color = int(color_only[0]);
+            layout.joined_depth = int(depth_only[0]);
+            layout.data_window  = parts[color_only[0]].spec.roi();
         } else if (color_only.size() > 1 && depth_only.size() == 1) {
             error = format("{}: several colour parts share one depth part: choose a view "
                            "with --view", filename);
             return false;
         } else {
-            const Part& first = color_only.empty() ? parts.front() : *color_only.front();
+            const Part& first = color_only.empty() ? parts.front() : parts[color_only.front()];
             error = format("{}: {} has no {} channel (channels: {})", filename, first.label,
                            missing_channel(first.spec, options.layer),
                            Strutil::join(first.spec.channelnames, ","));
             return false;
         }
     }
-
-    const ImageSpec& first = parts.front().spec;
-    if (scene.spec.nchannels == 0 || scene.spec.full_width == 0) {
-        scene.spec = first;
-    } else if (first.full_x != scene.spec.full_x || first.full_y != scene.spec.full_y
-               || first.full_width != scene.spec.full_width
-               || first.full_height != scene.spec.full_height) {
-        error = format("{}: display window {}x{}{:+d}{:+d} differs from the first input's {}x{}{:+d}{:+d}",
-                       filename, first.full_width, first.full_height, first.full_x,
-                       first.full_y, scene.spec.full_width, scene.spec.full_height,
-                       scene.spec.full_x, scene.spec.full_y);
-        return false;
-    }
+    layout.first = parts.front().spec;
     return true;
+}
+
+/// Checks that a file shares the display window of the scene's first.
+bool same_display_window(const ImageSpec& first, const ImageSpec& scene,
+                         const std::string& filename, std::string& error)
+{
+    if (first.full_x == scene.full_x && first.full_y == scene.full_y
+        && first.full_width == scene.full_width && first.full_height == scene.full_height)
+        return true;
+    error = format("{}: display window {}x{}{:+d}{:+d} differs from the first input's {}x{}{:+d}{:+d}",
+                   filename, first.full_width, first.full_height, first.full_x, first.full_y,
+                   scene.full_width, scene.full_height, scene.full_x, scene.full_y);
+    return false;
+}
+
+/// Reads one file into `scene`: its layers, flat renders and deep images.
+bool read_file(const std::string& filename, const ReadOptions& options,
+               Scene& scene, std::string& error)
+{
+    auto in = open_file(filename, /*vet=*/true, error);
+    FileLayout layout;
+    if (!in || !choose_parts(*in, filename, options, layout, error))
+        return false;
+    for (size_t i : layout.complete) {
+        const Part& part = layout.part(i);
+        if (part.spec.deep) {
+            DeepImage image;
+            if (!read_deep(*in, part, image, filename, error))
+                return false;
+            scene.deep.push_back(std::move(image));
+            continue;
+        }
+        ImageBuf pixels;
+        if (!read_pixels(*in, part, pixels, filename, error))
+            return false;
+        const Channels& c = part.channels;
+        const std::string name = part.spec.get_string_attribute(
+            "name", format("layer{}", part.subimage));
+        (layout.complete.size() > 1 ? scene.layers : scene.flat)
+            .push_back(make_layer(name, pixels, c.color, pixels, c.depth));
+    }
+    if (layout.joined_color >= 0) {
+        const Part& color_part = layout.part(layout.joined_color);
+        const Part& depth_part = layout.part(layout.joined_depth);
+        ImageBuf color, depth;
+        if (!read_pixels(*in, color_part, color, filename, error)
+            || !read_pixels(*in, depth_part, depth, filename, error))
+            return false;
+        scene.flat.push_back(make_layer(color_part.spec.get_string_attribute("name", "beauty"),
+                                        color, color_part.channels.color, depth,
+                                        depth_part.channels.depth));
+    }
+    if (scene.spec.nchannels == 0 || scene.spec.full_width == 0) {
+        scene.spec = layout.first;
+        return true;
+    }
+    return same_display_window(layout.first, scene.spec, filename, error);
 }
 
 /// Deep images of one scene merged into one: every pixel's samples from all
@@ -374,6 +422,29 @@ void erase_part_attributes(ImageSpec& spec)
     for (const char* part_only : { "name", "view", "oiio:subimages", "oiio:subimagename",
                                    "openexr:chunkCount" })
         spec.erase_attribute(part_only);
+}
+
+bool read_scene_spec(const std::vector<std::string>& filenames, const ReadOptions& options,
+                     ImageSpec& spec, std::string& error)
+{
+    if (filenames.empty()) {
+        error = "no input file";
+        return false;
+    }
+    ROI data_window;
+    for (size_t f = 0; f < filenames.size(); ++f) {
+        auto in = open_file(filenames[f], /*vet=*/false, error);
+        FileLayout layout;
+        if (!in || !choose_parts(*in, filenames[f], options, layout, error))
+            return false;
+        if (f == 0)
+            spec = layout.first;
+        else if (!same_display_window(layout.first, spec, filenames[f], error))
+            return false;
+        data_window = roi_union(data_window, layout.data_window);
+    }
+    spec.set_roi(data_window);
+    return true;
 }
 
 bool read_scene(const std::vector<std::string>& filenames, const ReadOptions& options,

@@ -1,6 +1,7 @@
 #include <defocus/shot_file.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include <nlohmann/json.hpp>
@@ -116,10 +117,18 @@ bool to_text(const json& value, ShotValueKind kind, std::string& text, std::stri
     return false;
 }
 
+/// Whole numbers as JSON integers ("blades": 6, not 6.0).
+json number_json(double value)
+{
+    if (value == std::floor(value) && std::abs(value) < 1e15)
+        return json(int64_t(value));
+    return json(value);
+}
+
 json to_json(const std::string& text, ShotValueKind kind)
 {
     switch (kind) {
-    case ShotValueKind::Number: return std::stod(text);
+    case ShotValueKind::Number: return number_json(std::stod(text));
     case ShotValueKind::Text:
     case ShotValueKind::Path: return text;
     case ShotValueKind::Keyframes:
@@ -130,7 +139,8 @@ json to_json(const std::string& text, ShotValueKind kind)
     std::string error;
     Keyframes::parse("", text, arity, -1e300, 1e300, keys, error);
     auto value = [&](const Keyframes::Key& key) {
-        return arity == 1 ? json(key.value[0]) : json::array({ key.value[0], key.value[1] });
+        return arity == 1 ? number_json(key.value[0])
+                          : json::array({ number_json(key.value[0]), number_json(key.value[1]) });
     };
     if (!keys.animated())
         return value(keys.keys().front());

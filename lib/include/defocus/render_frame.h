@@ -25,10 +25,9 @@ struct FrameResult {
     Camera camera;       ///< as used; the focus measured when focusing at a pixel
     ColorPlan color;
     /// The result in the output colour space, with the input's metadata
-    /// and the settings used (defocus:*, oiio:ColorSpace).
+    /// and the settings used (defocus:*, oiio:ColorSpace, compression).
     OIIO::ImageBuf image;
     OIIO::TypeDesc pixel_type;  ///< to write it as
-    std::string compression;    ///< to write it with ("" = the format's default)
     PixelCounts fixed;
     std::string slicing;  ///< how flat or deep input was cut into layers ("" = not)
     std::vector<LayerReport> layers;
@@ -40,6 +39,14 @@ struct FrameResult {
 /// Called as each stage of a frame starts ("read", "colour", "slice",
 /// "render"), for progress display.
 using StageCallback = std::function<void(const char* stage)>;
+
+/// The spec of `frame` of a shot as render_frame() gives it, from the
+/// inputs' headers alone, without reading pixels or rendering: display and
+/// data windows, channels R,G,B,A, the pixel type to write, metadata. With
+/// OutputWindow::Grown the data window is the largest the blur can make;
+/// when the shot focuses at a pixel the focus distance is not known yet and
+/// defocus:focusDistance is left out.
+bool frame_spec(const Shot& shot, int frame, OIIO::ImageSpec& spec, std::string& error);
 
 /// Renders `frame` of a shot (the inputs' frame patterns and the keyframes
 /// are taken at it). False with `error` a one-line message naming the file

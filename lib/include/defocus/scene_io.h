@@ -2,6 +2,8 @@
 #pragma once
 
 #include <string>
+
+#include <OpenImageIO/imageio.h>
 #include <vector>
 
 #include <defocus/scene.h>
@@ -39,5 +41,11 @@ struct ReadOptions {
 /// problem.
 bool read_scene(const std::vector<std::string>& filenames,
                 const ReadOptions& options, Scene& scene, std::string& error);
+
+/// The spec read_scene() would give the scene (display window, metadata,
+/// the union of the data windows read), from the files' headers alone,
+/// without reading or vetting pixels.
+bool read_scene_spec(const std::vector<std::string>& filenames, const ReadOptions& options,
+                     OIIO::ImageSpec& spec, std::string& error);
 
 }  // namespace defocus

@@ -23,8 +23,9 @@ public:
     ColorManagement& operator=(ColorManagement&&) noexcept;
 
     /// Loads the first of: `explicit_file` (when not empty), $OCIO, the
-    /// config shipped with defocus, found relative to the running program
-    /// (<bin>/../share/defocus/config.ocio, in the build tree and installed).
+    /// config shipped with defocus, found relative to the program or plugin
+    /// the library is part of (<bin or lib>/../share/defocus/config.ocio, in
+    /// the build tree and installed).
     /// False with `error` saying which file failed and why.
     bool load(const std::string& explicit_file, std::string& error);
 

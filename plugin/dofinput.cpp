@@ -1,0 +1,193 @@
+// An OpenImageIO format plugin: any OIIO program opens a .dof scene file as
+// the defocused image it describes. open() reports the spec from the
+// inputs' headers; the first read of pixels renders the frame, through the
+// same library call as the defocus command, and later reads reuse it.
+#include <algorithm>
+#include <cstring>
+#include <mutex>
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/imageio.h>
+#include <OpenImageIO/strutil.h>
+
+#include <defocus/frames.h>
+#include <defocus/option_value.h>
+#include <defocus/render_frame.h>
+#include <defocus/shot_file.h>
+
+OIIO_PLUGIN_NAMESPACE_BEGIN
+
+namespace {
+
+using defocus::Shot;
+
+class DofInput final : public ImageInput {
+public:
+    const char* format_name() const override { return "dof"; }
+    bool valid_file(const std::string& filename) const override;
+    bool open(const std::string& name, ImageSpec& newspec) override
+    {
+        return open(name, newspec, ImageSpec());
+    }
+    bool open(const std::string& name, ImageSpec& newspec, const ImageSpec& config) override;
+    bool close() override;
+    bool read_native_scanline(int subimage, int miplevel, int y, int z, void* data) override
+    {
+        return read_native_scanlines(subimage, miplevel, y, y + 1, z, data);
+    }
+    bool read_native_scanlines(int subimage, int miplevel, int ybegin, int yend, int z,
+                               void* data) override;
+
+private:
+    bool apply_hints(const ImageSpec& config, std::string& error);
+    bool render_once();
+
+    std::string m_filename;
+    Shot m_shot;
+    int m_frame = 1;
+    std::mutex m_render_mutex;
+    bool m_rendered = false;
+    std::string m_render_error;
+    ImageBuf m_pixels;  ///< the frame, in the spec's window and pixel type
+};
+
+bool DofInput::valid_file(const std::string& filename) const
+{
+    Shot shot;
+    std::string error;
+    return Strutil::iends_with(filename, ".dof") && defocus::load_shot(filename, shot, error);
+}
+
+/// Configuration hints "dof:NAME" (or "dof:NAME_WITH_UNDERSCORES") override
+/// the scene's settings of that name; "dof:frame" picks the frame.
+bool DofInput::apply_hints(const ImageSpec& config, std::string& error)
+{
+    for (const ParamValue& hint : config.extra_attribs) {
+        std::string name = hint.name().string();
+        if (!Strutil::istarts_with(name, "dof:"))
+            continue;
+        name = Strutil::replace(name.substr(4), "_", "-", true);
+        const std::string value = hint.get_string();
+        const std::string label = m_filename + ": dof:" + name;
+        if (name == "frame") {
+            if (!defocus::parse_whole_number(label, value, -1e9, 1e9, m_frame, error))
+                return false;
+        } else if (!defocus::set_shot_setting(m_shot, name, value, error, label)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+bool DofInput::open(const std::string& name, ImageSpec& newspec, const ImageSpec& config)
+{
+    close();
+    m_filename = name;
+    std::string error;
+    auto fail = [&](const std::string& message) {
+        errorfmt("{}", Strutil::starts_with(message, name) ? message : name + ": " + message);
+        return false;
+    };
+    try {
+        if (!defocus::load_shot(name, m_shot, error))
+            return fail(error);
+        std::vector<int> frames;
+        const bool frame_hint = config.extra_attribs.contains("dof:frame");
+        if (!apply_hints(config, error))
+            return fail(error);
+        error = defocus::validate(m_shot);
+        if (!error.empty())
+            return fail(error);
+        if (!frame_hint) {
+            if (!defocus::shot_frames(m_shot, frames, error))
+                return fail(error);
+            m_frame = frames.front();
+        }
+        if (!defocus::frame_spec(m_shot, m_frame, m_spec, error))
+            return fail(error);
+    } catch (const std::exception& e) {
+        return fail(e.what());
+    }
+    newspec = m_spec;
+    return true;
+}
+
+bool DofInput::close()
+{
+    std::lock_guard<std::mutex> lock(m_render_mutex);
+    m_shot = Shot();
+    m_frame = 1;
+    m_rendered = false;
+    m_render_error.clear();
+    m_pixels.reset();
+    return true;
+}
+
+bool DofInput::render_once()
+{
+    std::lock_guard<std::mutex> lock(m_render_mutex);
+    if (!m_rendered) {
+        m_rendered = true;
+        try {
+            defocus::FrameResult frame;
+            if (!defocus::render_frame(m_shot, m_frame, frame, m_render_error)) {
+                // keep the error for every later read
+            } else {
+                // The spec promised this window and type; the grown window
+                // of the spec is the largest the blur could make.
+                ImageBuf framed;
+                ROI window = m_spec.roi();
+                if (!ImageBufAlgo::crop(framed, frame.image, window)) {
+                    m_render_error = framed.geterror();
+                } else {
+                    m_pixels.reset(m_spec);
+                    if (!m_pixels.copy_pixels(framed))
+                        m_render_error = m_pixels.geterror();
+                }
+            }
+        } catch (const std::exception& e) {
+            m_render_error = m_filename + ": " + e.what();
+        }
+    }
+    if (!m_render_error.empty()) {
+        errorfmt("{}", m_render_error);
+        return false;
+    }
+    return true;
+}
+
+bool DofInput::read_native_scanlines(int subimage, int miplevel, int ybegin, int yend,
+                                     int /*z*/, void* data)
+{
+    if (subimage != 0 || miplevel != 0) {
+        errorfmt("{}: a .dof scene has one image", m_filename);
+        return false;
+    }
+    if (!render_once())
+        return false;
+    const ROI rows(m_spec.x, m_spec.x + m_spec.width, ybegin, yend, 0, 1, 0, m_spec.nchannels);
+    return m_pixels.get_pixels(rows, m_spec.format, data);
+}
+
+}  // namespace
+
+OIIO_PLUGIN_EXPORTS_BEGIN
+
+OIIO_EXPORT int dof_imageio_version = OIIO_PLUGIN_VERSION;
+
+OIIO_EXPORT const char* dof_imageio_library_version()
+{
+    return "defocus " DEFOCUS_VERSION;
+}
+
+OIIO_EXPORT ImageInput* dof_input_imageio_create()
+{
+    return new DofInput;
+}
+
+OIIO_EXPORT const char* dof_input_extensions[] = { "dof", nullptr };
+
+OIIO_PLUGIN_EXPORTS_END
+
+OIIO_PLUGIN_NAMESPACE_END

@@ -1,0 +1,221 @@
+// The OpenImageIO plugin, through the real programs: oiiotool and Python's
+// OpenImageIO open a .dof scene as the image defocus renders from it.
+#define CATCH_CONFIG_RUNNER
+#include <catch2/catch.hpp>
+
+#include <chrono>
+#include <thread>
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/imagecache.h>
+#include <OpenImageIO/strutil.h>
+
+#include "test_support.h"
+
+using namespace defocus_test;
+using namespace OIIO;
+using Strutil::fmt::format;
+
+namespace {
+
+const std::string with_plugin = "OIIO_LIBRARY_PATH=" PLUGIN_DIR " ";
+
+/// A .dof of the garden scene (85 mm f/1.4, focus 3 m) from ../shared, or
+/// of a generated scene when that is absent.
+std::string scene_dof()
+{
+    static std::string dof;
+    if (!dof.empty())
+        return dof;
+    const std::string dir = scratch_dir("plugin_scene");
+    std::string scene = shared_data().empty() ? "" : shared_data() + "/scenes/garden/layers.exr";
+    std::string log;
+    if (scene.empty()) {
+        WARN("no shared data: the plugin is tested on a generated scene");
+        scene = dir + "/scene.exr";
+        REQUIRE(run(format("{} {} --width 320 --height 180", MAKE_EXAMPLE_SCENE_BIN, scene), log) == 0);
+    }
+    dof = dir + "/garden.dof";
+    REQUIRE(run(format("{} {} --focal 85 --fstop 1.4 --focus 3 --save-scene {}", DEFOCUS_BIN,
+                       scene, dof),
+                log) == 0);
+    return dof;
+}
+
+/// The defocus command's own render of a .dof, with extra options.
+std::string cli_render(const std::string& dof, const std::string& options = "")
+{
+    static const std::string dir = scratch_dir("plugin_cli");
+    static int count = 0;
+    const std::string out = format("{}/cli{}.exr", dir, ++count);
+    std::string log;
+    INFO(log);
+    REQUIRE(run(format("{} {} -o {} -q {}", DEFOCUS_BIN, dof, out, options), log) == 0);
+    return out;
+}
+
+/// Equal windows, pixel type and pixels, to the bit.
+void require_identical(const std::string& a, const std::string& b)
+{
+    ImageBuf x(a), y(b);
+    REQUIRE(x.read());
+    REQUIRE(y.read());
+    CHECK(x.spec().roi() == y.spec().roi());
+    CHECK(x.spec().full_x == y.spec().full_x);
+    CHECK(x.spec().full_width == y.spec().full_width);
+    CHECK(x.spec().full_height == y.spec().full_height);
+    CHECK(x.spec().format == y.spec().format);
+    const auto diff = ImageBufAlgo::compare(x, y, 0.0f, 0.0f);
+    CHECK(diff.nfail == 0);
+    CHECK(diff.maxerror == 0.0);
+}
+
+double seconds_to_run(const std::string& command, std::string& log)
+{
+    const auto start = std::chrono::steady_clock::now();
+    INFO(command);
+    REQUIRE(run(command, log) == 0);
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+TEST_CASE("oiiotool opens a .dof as the image the defocus command renders from it")
+{
+    const std::string dof = scene_dof();
+    const std::string out = scratch_dir("plugin_oiiotool") + "/a.exr";
+    std::string log;
+    REQUIRE(run(with_plugin + OIIOTOOL_BIN + " " + dof + " -o " + out, log) == 0);
+    require_identical(out, cli_render(dof));
+
+    // A configuration hint overrides the scene's value, as the flag does.
+    // (OIIO 2.4's oiiotool passes hints with --iconfig; it ignores unknown
+    // -i: modifiers.)
+    const std::string hinted = scratch_dir("plugin_oiiotool") + "/b.exr";
+    REQUIRE(run(with_plugin + OIIOTOOL_BIN + " --iconfig dof:focus 1.25 --iconfig dof:fstop 2 "
+                    + dof + " -o " + hinted,
+                log) == 0);
+    require_identical(hinted, cli_render(dof, "--focus 1.25 --fstop 2"));
+}
+
+TEST_CASE("oiiotool --info reports the spec without rendering")
+{
+    // Pixels that cannot be read: open() must not need them.
+    const std::string dir = scratch_dir("plugin_info");
+    const std::string scene = dir + "/scene.exr", truncated = dir + "/truncated.exr";
+    std::string log;
+    REQUIRE(run(format("{} {} --width 320 --height 180", MAKE_EXAMPLE_SCENE_BIN, scene), log) == 0);
+    std::string bytes;
+    REQUIRE(Filesystem::read_text_file(scene, bytes));
+    Filesystem::write_text_file(truncated, bytes.substr(0, bytes.size() / 8));
+    REQUIRE(run(format("{} {} --focal 50 --fstop 2 --focus 4 -d float --save-scene {}/t.dof",
+                       DEFOCUS_BIN, truncated, dir),
+                log) == 0);
+    REQUIRE(run(with_plugin + OIIOTOOL_BIN + " --info -v " + dir + "/t.dof", log) == 0);
+    CHECK(Strutil::contains(log, "352 x  212, 4 channel, float dof"));  // 16 px overscan
+    CHECK(Strutil::contains(log, "channel list: R, G, B, A"));
+    CHECK(Strutil::contains(log, "pixel data origin: x=-16, y=-16"));
+    CHECK(Strutil::contains(log, "full/display size: 320 x 180"));
+    CHECK(Strutil::contains(log, "defocus:focusDistance: 4"));
+    CHECK(Strutil::contains(log, "defocus:exampleCamera"));  // the input's metadata
+    // Reading the pixels renders, and that fails here, as an error.
+    CHECK(run(with_plugin + OIIOTOOL_BIN + " " + dir + "/t.dof -o " + dir + "/x.exr", log) == 1);
+    CHECK(Strutil::contains(log, "truncated.exr: corrupt or truncated OpenEXR file"));
+
+    // A scene that takes seconds to render opens in a fraction of that.
+    const std::string big = dir + "/big.exr";
+    REQUIRE(run(format("{} {} --width 2560 --height 1440", MAKE_EXAMPLE_SCENE_BIN, big), log) == 0);
+    REQUIRE(run(format("{} {} --focal 50 --fstop 1.4 --focus 4 --save-scene {}/big.dof",
+                       DEFOCUS_BIN, big, dir),
+                log) == 0);
+    const double render = seconds_to_run(
+        format("{} {}/big.dof -o {}/big_out.exr -q", DEFOCUS_BIN, dir, dir), log);
+    const double info = seconds_to_run(with_plugin + OIIOTOOL_BIN + " --info -v " + dir + "/big.dof", log);
+    WARN("render " << render << " s, oiiotool --info " << info << " s");
+    CHECK(Strutil::contains(log, "full/display size: 2560 x 1440"));
+    CHECK(info < 0.25 * render);
+}
+
+TEST_CASE("Python's ImageBuf opens a .dof with the same pixels, and takes hints")
+{
+    const std::string dof = scene_dof();
+    const std::string plain = cli_render(dof), hinted = cli_render(dof, "--focus 1.25");
+    const std::string script = format(
+        "import OpenImageIO as oiio\n"
+        "def same(a, b):\n"
+        "    r = oiio.ImageBufAlgo.compare(a, oiio.ImageBuf(b), 0.0, 0.0)\n"
+        "    return r.nfail == 0 and r.maxerror == 0.0 and a.roi == oiio.ImageBuf(b).roi\n"
+        "config = oiio.ImageSpec()\n"
+        "config.attribute('dof:focus', 1.25)\n"
+        "print('plain', same(oiio.ImageBuf('{}'), '{}'))\n"
+        "print('hinted', same(oiio.ImageBuf('{}', 0, 0, config), '{}'))\n",
+        dof, plain, dof, hinted);
+    const std::string path = scratch_dir("plugin_python") + "/check.py";
+    Filesystem::write_text_file(path, script);
+    std::string log;
+    REQUIRE(run(with_plugin + PYTHON_BIN + " " + path, log) == 0);
+    INFO(log);
+    CHECK(Strutil::contains(log, "plain True"));
+    CHECK(Strutil::contains(log, "hinted True"));
+}
+
+TEST_CASE("a broken .dof is an error line from oiiotool, never a crash")
+{
+    const std::string dir = scratch_dir("plugin_errors");
+    Filesystem::write_text_file(dir + "/bad_json.dof", "{\"version\": 1, \"inputs\": [");
+    Filesystem::write_text_file(dir + "/missing.dof",
+                                "{\"version\": 1, \"inputs\": [\"gone.exr\"], \"camera\": {\"focus\": 3}}");
+    Filesystem::write_text_file(dir + "/bad_space.dof",
+                                "{\"version\": 1, \"inputs\": [\"bad_json.dof\"], \"camera\": "
+                                "{\"focus\": 3}, \"color\": {\"input\": \"nospace\"}}");
+    const std::pair<const char*, const char*> cases[] = {
+        { "bad_json.dof", "bad_json.dof: not valid JSON: parse error at line 1" },
+        { "missing.dof", "missing.dof: inputs: " },
+        { "bad_space.dof", "bad_space.dof" },
+    };
+    for (const auto& [file, message] : cases) {
+        INFO(file);
+        std::string log;
+        CHECK(run(with_plugin + OIIOTOOL_BIN + " " + dir + "/" + file + " -o " + dir + "/out.exr",
+                  log) == 1);
+        CHECK(Strutil::contains(log, "oiiotool ERROR"));
+        CHECK(Strutil::contains(log, message));
+        CHECK_FALSE(Filesystem::exists(dir + "/out.exr"));
+    }
+}
+
+TEST_CASE("four threads reading one .dof through an ImageCache get identical pixels")
+{
+    const std::string dof = scene_dof();
+    ImageBuf expected(cli_render(dof));
+    REQUIRE(expected.read(0, 0, true, TypeFloat));
+    const ROI roi = expected.roi();
+    auto cache = ImageCache::create(/*shared=*/false);
+    std::vector<std::vector<float>> pixels(4, std::vector<float>(roi.npixels() * 4));
+    std::vector<int> ok(4, 0);
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 4; ++t)
+        threads.emplace_back([&, t] {
+            ok[t] = cache->get_pixels(ustring(dof), 0, 0, roi.xbegin, roi.xend, roi.ybegin,
+                                      roi.yend, 0, 1, TypeFloat, pixels[t].data());
+        });
+    for (std::thread& t : threads)
+        t.join();
+    std::vector<float> reference(roi.npixels() * 4);
+    REQUIRE(expected.get_pixels(roi, TypeFloat, reference.data()));
+    for (int t = 0; t < 4; ++t) {
+        INFO("thread " << t << ": " << cache->geterror());
+        REQUIRE(ok[t]);
+        CHECK(pixels[t] == reference);
+    }
+    ImageCache::destroy(cache);
+}
+
+int main(int argc, char* argv[])
+{
+    // In this process the plugin is found through the searchpath attribute.
+    OIIO::attribute("plugin_searchpath", PLUGIN_DIR);
+    return Catch::Session().run(argc, argv);
+}
