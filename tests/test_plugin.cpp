@@ -213,6 +213,34 @@ TEST_CASE("four threads reading one .dof through an ImageCache get identical pix
     ImageCache::destroy(cache);
 }
 
+TEST_CASE("every damaged EXR behind a .dof is an error, never a crash of the host")
+{
+    if (shared_data().empty()) {
+        WARN("skipped: no shared data (the Damaged corpus)");
+        return;
+    }
+    const std::string damaged = shared_data() + "/openexr-images/Damaged";
+    std::vector<std::string> files;
+    Filesystem::get_directory_entries(damaged, files);
+    REQUIRE(files.size() >= 180);
+    const std::string dof = scratch_dir("plugin_damaged") + "/damaged.dof";
+    for (const std::string& file : files) {
+        INFO(file);
+        Filesystem::write_text_file(
+            dof, format("{{\"version\": 1, \"inputs\": [\"{}\"], \"camera\": {{\"focus\": 3}}}}",
+                        file));
+        // Opened afresh each time: no cache between the files.
+        auto in = ImageInput::open(dof);
+        if (!in) {
+            CHECK(Strutil::contains(OIIO::geterror(), Filesystem::filename(file)));
+            continue;
+        }
+        std::vector<float> pixels(size_t(in->spec().image_pixels()) * in->spec().nchannels);
+        CHECK_FALSE(in->read_image(0, 0, 0, in->spec().nchannels, TypeFloat, pixels.data()));
+        CHECK(Strutil::contains(in->geterror(), Filesystem::filename(file)));
+    }
+}
+
 int main(int argc, char* argv[])
 {
     // In this process the plugin is found through the searchpath attribute.
