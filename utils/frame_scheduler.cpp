@@ -43,7 +43,6 @@ ScheduleResult run_frames(int count, int threads, bool stop_on_error, const Fram
     const size_t budget    = OIIO::Sysutil::physical_memory() / 2;
     const int workers = int(std::clamp<size_t>(budget / per_frame, 1,
                                                size_t(std::min(cores, count - 1))));
-    const int threads_each = std::max(1, cores / std::max(workers, 1));
 
     std::atomic<int> next { 1 };
     std::atomic<bool> stop { false };
@@ -55,7 +54,7 @@ ScheduleResult run_frames(int count, int threads, bool stop_on_error, const Fram
             const int i = next++;
             if (i >= count)
                 return;
-            const bool ok = job(i, threads_each);
+            const bool ok = job(i, cores);
             std::lock_guard<std::mutex> lock(mutex);
             ++result.run;
             if (!ok) {

@@ -15,11 +15,12 @@ struct ScheduleResult {
     int run = 0;              ///< frames attempted
 };
 
-/// Runs frames 0..count-1 in order of starting. The first runs alone with
-/// all `threads`; its peak memory then sets how many frames may run at once
-/// (at most half the machine's memory in all), each with an equal share of
-/// the threads: one frame alone rarely fills the cores (reading, checking
-/// and writing EXR are largely serial), frames side by side do. With
+/// Runs frames 0..count-1 in order of starting. The first runs alone; its
+/// peak memory then sets how many frames may run at once (up to one per
+/// core, within half the machine's memory in all). One frame alone rarely
+/// fills the cores (checking, reading and writing EXR are largely serial);
+/// frames side by side do. Every frame is given all `threads` of the shared
+/// pool, so that no core idles while the last frames finish. With
 /// `stop_on_error`, no frame starts after one has failed.
 ScheduleResult run_frames(int count, int threads, bool stop_on_error, const FrameJob& job);
 
