@@ -207,6 +207,16 @@ TEST_CASE(".dof files: every setting round-trips, paths relative to the file")
     REQUIRE(load_shot(dir + "/shot.dof", loaded, error));
     CHECK(settings_of(loaded) == settings_of(shot));
 
+    // Focusing at a pixel, keyframed: points in JSON.
+    REQUIRE(set_shot_setting(shot, "focus-at", "1:10,20,24:30.5,40", error));
+    const std::string with_points = shot_to_json(shot, dir);
+    CHECK(contains(with_points, "\"focus_at\": {"));
+    CHECK(contains(with_points, "30.5,"));
+    Shot pointed;
+    REQUIRE(parse_shot(with_points, dir, "shot.dof", pointed, error));
+    CHECK(settings_of(pointed) == settings_of(shot));
+    CHECK(pointed.focus.empty());
+
     // Loading from elsewhere resolves paths against the file's folder.
     Shot again;
     REQUIRE(parse_shot(text, dir, "shot.dof", again, error));
