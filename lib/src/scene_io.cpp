@@ -9,6 +9,7 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
+#include <OpenImageIO/parallel.h>
 #include <OpenImageIO/strutil.h>
 
 namespace defocus {
@@ -149,21 +150,50 @@ bool read_pixels(ImageInput& in, const Part& part, ImageBuf& pixels,
 }
 
 /// A layer from the colour channels of one part and the depth channel of
-/// another (or the same) part. Depth outside the depth part's data window
-/// is 0, which sanitize() treats as missing.
+/// another (or the same) part, over the colour part's data window, in one
+/// pass. Depth outside the depth part's data window is 0, which sanitize()
+/// treats as missing.
 Layer make_layer(const std::string& name, const ImageBuf& color_part,
                  const int color[4], const ImageBuf& depth_part, int depth)
 {
-    static const std::string rgba[4] = { "R", "G", "B", "A" }, z[1] = { "Z" };
+    const ImageSpec& from = color_part.spec();
+    const ROI window      = color_part.roi();
+    auto layer_spec = [&](int nchannels) {
+        ImageSpec spec(window, TypeFloat);
+        spec.nchannels   = nchannels;
+        spec.full_x      = from.full_x;
+        spec.full_y      = from.full_y;
+        spec.full_width  = from.full_width;
+        spec.full_height = from.full_height;
+        return spec;
+    };
+    ImageSpec color_spec = layer_spec(4), depth_spec = layer_spec(1);
+    color_spec.channelnames  = { "R", "G", "B", "A" };
+    color_spec.alpha_channel = 3;
+    depth_spec.channelnames  = { "Z" };
+    depth_spec.z_channel     = 0;
     Layer layer;
     layer.name = name;
-    ImageBufAlgo::channels(layer.color, color_part, 4, cspan<int>(color, 4), {}, rgba);
-    layer.color.specmod().alpha_channel = 3;
-    ImageBuf depth_only;
-    ImageBufAlgo::channels(depth_only, depth_part, 1, cspan<int>(&depth, 1), {}, z);
-    ROI window = layer.color.roi();
-    window.chend = 1;
-    ImageBufAlgo::crop(layer.depth, depth_only, window);
+    layer.color.reset(color_spec);
+    layer.depth.reset(depth_spec);
+    const ROI depth_window = depth_part.roi();
+    const bool same_part   = &depth_part == &color_part;
+    parallel_for(window.ybegin, window.yend, [&](int y) {
+        float* rgba = static_cast<float*>(layer.color.pixeladdr(window.xbegin, y));
+        float* z    = static_cast<float*>(layer.depth.pixeladdr(window.xbegin, y));
+        const float* src = static_cast<const float*>(color_part.pixeladdr(window.xbegin, y));
+        const int n      = from.nchannels;
+        for (int x = window.xbegin; x < window.xend; ++x, rgba += 4, ++z, src += n) {
+            for (int c = 0; c < 4; ++c)
+                rgba[c] = src[color[c]];
+            if (same_part)
+                *z = src[depth];
+            else
+                *z = depth_window.contains(x, y)
+                         ? static_cast<const float*>(depth_part.pixeladdr(x, y))[depth]
+                         : 0.0f;
+        }
+    });
     return layer;
 }
 
