@@ -36,6 +36,14 @@ std::string frame_path(const std::string& path, int frame)
     return names.front();
 }
 
+std::vector<std::string> frame_inputs(const Shot& shot, int frame)
+{
+    std::vector<std::string> files;
+    for (const std::string& input : shot.inputs)
+        files.push_back(frame_path(input, frame));
+    return files;
+}
+
 bool is_sequence(const Shot& shot)
 {
     if (!shot.frames.empty())

@@ -18,10 +18,13 @@ using Strutil::fmt::format;
 
 namespace {
 
-TypeDesc input_color_type(const ImageSpec& spec)
+/// The pixel type to write: the shot's, else that of the input's colour.
+TypeDesc output_pixel_type(const Shot& shot, const ImageSpec& input)
 {
-    const int r = spec.channelindex("R");
-    return r >= 0 ? spec.channelformat(r) : spec.format;
+    if (shot.pixel_type != TypeUnknown)
+        return shot.pixel_type;
+    const int r = input.channelindex("R");
+    return r >= 0 ? input.channelformat(r) : input.format;
 }
 
 /// The metadata of a result: the input's (less what describes one part),
@@ -63,11 +66,8 @@ bool render(const Shot& shot, int frame, FrameResult& out, std::string& error,
     auto lap = [&](const char* name) { out.timings.emplace_back(name, timer.lap()); };
 
     stage("read");
-    std::vector<std::string> files;
-    for (const std::string& input : shot.inputs)
-        files.push_back(frame_path(input, frame));
     Scene scene;
-    if (!read_scene(files, shot.read, scene, error))
+    if (!read_scene(frame_inputs(shot, frame), shot.read, scene, error))
         return false;
     out.source = scene.source;
     out.fixed  = sanitize(scene, nthreads);
@@ -134,8 +134,7 @@ bool render(const Shot& shot, int frame, FrameResult& out, std::string& error,
         lap("colour out");
     }
     describe_output(image.specmod(), scene.spec, shot, out.camera, color, frame);
-    out.pixel_type = shot.pixel_type != TypeUnknown ? shot.pixel_type
-                                                    : input_color_type(scene.spec);
+    out.pixel_type = output_pixel_type(shot, scene.spec);
     return true;
 }
 
@@ -143,12 +142,9 @@ bool render(const Shot& shot, int frame, FrameResult& out, std::string& error,
 
 bool frame_spec(const Shot& shot, int frame, ImageSpec& spec, std::string& error)
 {
-    std::vector<std::string> files;
-    for (const std::string& input : shot.inputs)
-        files.push_back(frame_path(input, frame));
     ImageSpec input;
     ColorPlan color;
-    if (!read_scene_spec(files, shot.read, input, error)
+    if (!read_scene_spec(frame_inputs(shot, frame), shot.read, input, error)
         || !plan_color(color, shot.color_config, shot.input_space, shot.output_space, input,
                        error))
         return false;
@@ -165,9 +161,7 @@ bool frame_spec(const Shot& shot, int frame, ImageSpec& spec, std::string& error
                          window.yend + reach);
         }
     }
-    const TypeDesc type = shot.pixel_type != TypeUnknown ? shot.pixel_type
-                                                         : input_color_type(input);
-    spec = ImageSpec(window, type);
+    spec = ImageSpec(window, output_pixel_type(shot, input));
     spec.nchannels     = 4;
     spec.channelnames  = { "R", "G", "B", "A" };
     spec.alpha_channel = 3;

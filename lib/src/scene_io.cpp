@@ -239,10 +239,10 @@ struct FileLayout {
     std::vector<size_t> complete; ///< parts with colour and depth: layers or one flat render
     int joined_color = -1;        ///< else a beauty part ...
     int joined_depth = -1;        ///< ... and a depth part: one flat render
-    ImageSpec first;              ///< the first part's header: display window, metadata
     ROI data_window;              ///< the union of what is read
 
-    const Part& part(size_t i) const { return parts[i]; }
+    /// The first part's header: display window, metadata.
+    const ImageSpec& first() const { return parts.front().spec; }
 };
 
 /// Opens a file as OIIO reads it. EXRs are vetted first with OpenEXR's
@@ -352,7 +352,6 @@ bool choose_parts(ImageInput& in, const std::string& filename, const ReadOptions
             return false;
         }
     }
-    layout.first = parts.front().spec;
     return true;
 }
 
@@ -378,7 +377,7 @@ bool read_file(const std::string& filename, const ReadOptions& options,
     if (!in || !choose_parts(*in, filename, options, layout, error))
         return false;
     for (size_t i : layout.complete) {
-        const Part& part = layout.part(i);
+        const Part& part = layout.parts[i];
         if (part.spec.deep) {
             DeepImage image;
             if (!read_deep(*in, part, image, filename, error))
@@ -396,8 +395,8 @@ bool read_file(const std::string& filename, const ReadOptions& options,
             .push_back(make_layer(name, pixels, c.color, pixels, c.depth));
     }
     if (layout.joined_color >= 0) {
-        const Part& color_part = layout.part(layout.joined_color);
-        const Part& depth_part = layout.part(layout.joined_depth);
+        const Part& color_part = layout.parts[layout.joined_color];
+        const Part& depth_part = layout.parts[layout.joined_depth];
         ImageBuf color, depth;
         if (!read_pixels(*in, color_part, color, filename, error)
             || !read_pixels(*in, depth_part, depth, filename, error))
@@ -407,10 +406,10 @@ bool read_file(const std::string& filename, const ReadOptions& options,
                                         depth_part.channels.depth));
     }
     if (scene.spec.nchannels == 0 || scene.spec.full_width == 0) {
-        scene.spec = layout.first;
+        scene.spec = layout.first();
         return true;
     }
-    return same_display_window(layout.first, scene.spec, filename, error);
+    return same_display_window(layout.first(), scene.spec, filename, error);
 }
 
 /// Deep images of one scene merged into one: every pixel's samples from all
@@ -468,8 +467,8 @@ bool read_scene_spec(const std::vector<std::string>& filenames, const ReadOption
         if (!in || !choose_parts(*in, filenames[f], options, layout, error))
             return false;
         if (f == 0)
-            spec = layout.first;
-        else if (!same_display_window(layout.first, spec, filenames[f], error))
+            spec = layout.first();
+        else if (!same_display_window(layout.first(), spec, filenames[f], error))
             return false;
         data_window = roi_union(data_window, layout.data_window);
     }

@@ -40,11 +40,6 @@ std::string relative_to(const std::string& path, const std::string& directory)
     return relative.string();
 }
 
-const char* json_type(const json& value)
-{
-    return value.type_name();
-}
-
 std::string number_text(const json& value)
 {
     return format("{}", value.get<double>());
@@ -113,7 +108,7 @@ bool to_text(const json& value, ShotValueKind kind, std::string& text, std::stri
         "a number", "a number or keyframes {\"frame\": number, ...}",
         "[x, y] or keyframes {\"frame\": [x, y], ...}", "a string", "a file name",
     };
-    error = format("expected {}, not {}", expected[int(kind)], json_type(value));
+    error = format("expected {}, not {}", expected[int(kind)], value.type_name());
     return false;
 }
 
@@ -170,13 +165,13 @@ bool read_inputs(const json& value, const std::string& directory, Shot& shot,
                  std::string& error)
 {
     if (!value.is_array() || value.empty()) {
-        error = format("inputs: expected a list of file names, not {}", json_type(value));
+        error = format("inputs: expected a list of file names, not {}", value.type_name());
         return false;
     }
     std::vector<std::string> inputs;
     for (const json& item : value) {
         if (!item.is_string()) {
-            error = format("inputs: expected file names, not {}", json_type(item));
+            error = format("inputs: expected file names, not {}", item.type_name());
             return false;
         }
         const std::string path = resolve(item.get<std::string>(), directory);
@@ -194,7 +189,7 @@ bool read_document(const json& doc, const std::string& directory, Shot& shot,
                    std::string& error)
 {
     if (!doc.is_object()) {
-        error = format("expected a JSON object, not {}", json_type(doc));
+        error = format("expected a JSON object, not {}", doc.type_name());
         return false;
     }
     if (!doc.contains("version")) {
@@ -225,7 +220,7 @@ bool read_document(const json& doc, const std::string& directory, Shot& shot,
             return false;
         }
         if (!body.is_object()) {
-            error = format("{}: expected an object, not {}", section, json_type(body));
+            error = format("{}: expected an object, not {}", section, body.type_name());
             return false;
         }
         if (section == "camera" && body.contains("focus") && body.contains("focus_at")) {

@@ -18,6 +18,10 @@ bool is_frame_pattern(const std::string& path);
 /// pattern.
 std::string frame_path(const std::string& path, int frame);
 
+/// The files a shot reads for `frame`: its inputs with their patterns
+/// filled in.
+std::vector<std::string> frame_inputs(const Shot& shot, int frame);
+
 /// True when a shot is a sequence: it has a frame list or a frame pattern
 /// among its inputs.
 bool is_sequence(const Shot& shot);

@@ -42,7 +42,6 @@ public:
     bool empty() const { return m_keys.empty(); }
     /// True when the keys give more than one frame.
     bool animated() const { return !m_constant && !m_keys.empty(); }
-    int arity() const { return m_arity; }
     const std::vector<Key>& keys() const { return m_keys; }
 
     /// The value at `frame`; must not be empty.
