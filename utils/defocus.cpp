@@ -327,7 +327,7 @@ int main(int argc, const char* argv[])
                               : isatty(STDOUT_FILENO) ? ProgressMode::Bar
                                                       : ProgressMode::Lines;
     Progress progress(mode, int(frames.size()));
-    auto render_one = [&](int i, int nthreads) {
+    auto render_one = [&](int i) {
         const std::string label = sequence ? format("frame {}", frames[i]) : "";
         Timer timer;
         FrameResult frame;
@@ -335,7 +335,7 @@ int main(int argc, const char* argv[])
         const bool ok = [&] {
             if (!render_frame(shot, frames[i], frame, error,
                               [&](const char* stage) { progress.stage(label, stage); },
-                              nthreads))
+                              cl.threads))
                 return false;
             progress.stage(label, "write");
             Timer write_timer;

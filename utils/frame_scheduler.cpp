@@ -31,7 +31,7 @@ ScheduleResult run_frames(int count, int threads, bool stop_on_error, const Fram
 
     const size_t before = OIIO::Sysutil::memory_used(true);
     result.run = 1;
-    if (!job(0, cores)) {
+    if (!job(0)) {
         result.failed.push_back(0);
         if (stop_on_error)
             return result;
@@ -54,7 +54,7 @@ ScheduleResult run_frames(int count, int threads, bool stop_on_error, const Fram
             const int i = next++;
             if (i >= count)
                 return;
-            const bool ok = job(i, cores);
+            const bool ok = job(i);
             std::lock_guard<std::mutex> lock(mutex);
             ++result.run;
             if (!ok) {

@@ -6,9 +6,8 @@
 
 namespace defocus {
 
-/// Renders one frame (by index) with `nthreads` threads; false when it
-/// failed.
-using FrameJob = std::function<bool(int index, int nthreads)>;
+/// Renders one frame (by index); false when it failed.
+using FrameJob = std::function<bool(int index)>;
 
 struct ScheduleResult {
     std::vector<int> failed;  ///< indices, in order
@@ -19,8 +18,8 @@ struct ScheduleResult {
 /// peak memory then sets how many frames may run at once (up to one per
 /// core, within half the machine's memory in all). One frame alone rarely
 /// fills the cores (checking, reading and writing EXR are largely serial);
-/// frames side by side do. Every frame is given all `threads` of the shared
-/// pool, so that no core idles while the last frames finish. With
+/// frames side by side do. Every frame uses all of the shared thread pool,
+/// so that no core idles while the last frames finish. With
 /// `stop_on_error`, no frame starts after one has failed.
 ScheduleResult run_frames(int count, int threads, bool stop_on_error, const FrameJob& job);
 
