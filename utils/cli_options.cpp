@@ -1,11 +1,30 @@
 #include "cli_options.h"
 
+#include <sys/stat.h>
+
+#include <set>
+
 #include <defocus/option_value.h>
 
 namespace defocus {
 
 using OIIO::ArgParse;
 using OIIO::cspan;
+
+std::string overwritten_input(const std::vector<std::string>& read,
+                              const std::vector<std::string>& written)
+{
+    std::set<std::pair<dev_t, ino_t>> inputs;
+    struct stat st {};
+    for (const std::string& file : read)
+        if (::stat(file.c_str(), &st) == 0)
+            inputs.emplace(st.st_dev, st.st_ino);
+    for (const std::string& file : written)
+        if (!file.empty() && ::stat(file.c_str(), &st) == 0
+            && inputs.count({ st.st_dev, st.st_ino }))
+            return file;
+    return "";
+}
 
 std::function<void(cspan<const char*>)> store_into(std::string& into)
 {

@@ -17,6 +17,12 @@ namespace defocus {
 /// An ArgParse action that stores an option's value into `into`.
 std::function<void(OIIO::cspan<const char*>)> store_into(std::string& into);
 
+/// The first of `written` that is the same file as one of `read` (by device
+/// and inode, so links count), or "" when none would overwrite an input.
+/// Empty names and files that do not exist yet are skipped.
+std::string overwritten_input(const std::vector<std::string>& read,
+                              const std::vector<std::string>& written);
+
 class ShotArguments {
 public:
     /// Adds option `spec` (e.g. "--focus DIST") setting shot setting

@@ -4,7 +4,6 @@
 #include <unistd.h>
 
 #include <cstdlib>
-#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -302,16 +301,15 @@ int main(int argc, const char* argv[])
         return fail(error);
     // Nothing an input names may be overwritten: not by an image, a
     // preview or the scene file.
-    std::vector<std::string> written = outputs;
+    std::vector<std::string> read, written = outputs;
+    for (int frame : frames)
+        for (const std::string& file : frame_inputs(shot, frame))
+            read.push_back(file);
     written.insert(written.end(), previews.begin(), previews.end());
     written.push_back(cl.save_scene);
-    for (const std::string& input : shot.inputs)
-        for (int frame : frames)
-            for (const std::string& file : written) {
-                std::error_code ec;
-                if (!file.empty() && std::filesystem::equivalent(frame_path(input, frame), file, ec))
-                    return fail(file + ": the output would overwrite the input");
-            }
+    const std::string overwritten = overwritten_input(read, written);
+    if (!overwritten.empty())
+        return fail(overwritten + ": the output would overwrite the input");
     if (!cl.save_scene.empty()) {
         if (!save_shot(shot, cl.save_scene, error))
             return fail(error);

@@ -4,7 +4,6 @@
 //   read -> sanitize -> layers -> write
 #include <algorithm>
 #include <cstdlib>
-#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -89,11 +88,8 @@ int main(int argc, const char* argv[])
         return fail("layerize renders no frames: give the camera without keyframes");
     if (info == !output.empty())
         return fail("give either -o OUTPUT.exr or --info");
-    for (const std::string& input : inputs) {
-        std::error_code ec;
-        if (std::filesystem::equivalent(input, output, ec))
-            return fail("{}: the output would overwrite the input", output);
-    }
+    if (!overwritten_input(inputs, { output }).empty())
+        return fail("{}: the output would overwrite the input", output);
     OIIO::attribute("threads", threads);
 
     Scene scene;
