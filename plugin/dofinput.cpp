@@ -7,7 +7,6 @@
 #include <mutex>
 
 #include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 
@@ -40,7 +39,8 @@ public:
                                void* data) override;
 
 private:
-    bool apply_hints(const ImageSpec& config, std::string& error);
+    bool apply_hints(const ImageSpec& config, bool& frame_given, std::string& error);
+    std::string render();
     bool render_once();
 
     std::string m_filename;
@@ -61,8 +61,9 @@ bool DofInput::valid_file(const std::string& filename) const
 
 /// Configuration hints "dof:NAME" (or "dof:NAME_WITH_UNDERSCORES") override
 /// the scene's settings of that name; "dof:frame" picks the frame.
-bool DofInput::apply_hints(const ImageSpec& config, std::string& error)
+bool DofInput::apply_hints(const ImageSpec& config, bool& frame_given, std::string& error)
 {
+    frame_given = false;
     for (const ParamValue& hint : config.extra_attribs) {
         std::string name = hint.name().string();
         if (!Strutil::istarts_with(name, "dof:"))
@@ -71,6 +72,7 @@ bool DofInput::apply_hints(const ImageSpec& config, std::string& error)
         const std::string value = hint.get_string();
         const std::string label = m_filename + ": dof:" + name;
         if (name == "frame") {
+            frame_given = true;
             if (!defocus::parse_whole_number(label, value, -1e9, 1e9, m_frame, error))
                 return false;
         } else if (!defocus::set_shot_setting(m_shot, name, value, error, label)) {
@@ -92,14 +94,14 @@ bool DofInput::open(const std::string& name, ImageSpec& newspec, const ImageSpec
     try {
         if (!defocus::load_shot(name, m_shot, error))
             return fail(error);
-        std::vector<int> frames;
-        const bool frame_hint = config.extra_attribs.contains("dof:frame");
-        if (!apply_hints(config, error))
+        bool frame_given = false;
+        if (!apply_hints(config, frame_given, error))
             return fail(error);
         error = defocus::validate(m_shot);
         if (!error.empty())
             return fail(error);
-        if (!frame_hint) {
+        if (!frame_given) {
+            std::vector<int> frames;
             if (!defocus::shot_frames(m_shot, frames, error))
                 return fail(error);
             m_frame = frames.front();
@@ -124,31 +126,30 @@ bool DofInput::close()
     return true;
 }
 
+/// Renders the frame into m_pixels; the error, or "".
+std::string DofInput::render()
+{
+    try {
+        defocus::FrameResult frame;
+        std::string error;
+        if (!defocus::render_frame(m_shot, m_frame, frame, error))
+            return error;
+        // In the spec's window and pixel type, as open() promised: where the
+        // spec's window is larger (a grown window is the largest the blur
+        // could make), the rest is zero.
+        m_pixels.reset(m_spec);
+        return m_pixels.copy_pixels(frame.image) ? "" : m_pixels.geterror();
+    } catch (const std::exception& e) {
+        return m_filename + ": " + e.what();
+    }
+}
+
 bool DofInput::render_once()
 {
     std::lock_guard<std::mutex> lock(m_render_mutex);
     if (!m_rendered) {
-        m_rendered = true;
-        try {
-            defocus::FrameResult frame;
-            if (!defocus::render_frame(m_shot, m_frame, frame, m_render_error)) {
-                // keep the error for every later read
-            } else {
-                // The spec promised this window and type; the grown window
-                // of the spec is the largest the blur could make.
-                ImageBuf framed;
-                ROI window = m_spec.roi();
-                if (!ImageBufAlgo::crop(framed, frame.image, window)) {
-                    m_render_error = framed.geterror();
-                } else {
-                    m_pixels.reset(m_spec);
-                    if (!m_pixels.copy_pixels(framed))
-                        m_render_error = m_pixels.geterror();
-                }
-            }
-        } catch (const std::exception& e) {
-            m_render_error = m_filename + ": " + e.what();
-        }
+        m_rendered     = true;
+        m_render_error = render();  // kept for every later read
     }
     if (!m_render_error.empty()) {
         errorfmt("{}", m_render_error);
