@@ -61,7 +61,7 @@ void BM_box(benchmark::State& state)
 /// Scanline spreading of an aperture on the same 4096x2160 layer.
 void scanline(benchmark::State& state, const defocus::Aperture& aperture)
 {
-    const defocus::ApertureProfile profile(aperture, double(state.range(0)));
+    const defocus::ApertureProfile profile(aperture);
     measure(state, 4096, 2160, [&](ImageBuf& out, const Layer& l) {
         defocus::spread_scanline(out, l.color, l.radius, profile);
     });

@@ -44,7 +44,7 @@ TEST_CASE("scanline spreading equals the direct reference for discs and polygons
 {
     const ROI roi(-5, 45, 2, 40);
     for (const Aperture& shape : { Aperture(), polygon(6), polygon(5, 17.0, 0.3, 0.6) }) {
-        auto profile = std::make_shared<ApertureProfile>(shape, 12.0);
+        auto profile = std::make_shared<ApertureProfile>(shape);
         for (auto [rmin, rmax] : { std::pair { 0.0, 0.0 }, { 3.0, 3.0 }, { 4.6, 4.6 },
                                    { 0.0, 11.5 } }) {
             INFO(aperture_shape_name(shape.shape) << " radii " << rmin << ".." << rmax);
@@ -74,12 +74,12 @@ TEST_CASE("an impulse lights the analytic shape: disc pi r^2, hexagon 3 sqrt(3)/
     const double r = 20.0;
     const ImageBuf one = impulse();
     ImageBuf disc, hexagon;
-    const ApertureProfile disc_profile(Aperture(), r);
+    const ApertureProfile disc_profile{Aperture()};
     REQUIRE(spread_scanline(disc, one, constant_radius(one.roi(), float(r)), disc_profile));
     CHECK(lit_area(disc) == Approx(M_PI * r * r).epsilon(0.01));
     CHECK(channel_sum(disc, 0) == Approx(1.0).epsilon(1e-6));
     // A hexagon of the disc's area has circumradius R with (3√3/2)R² = πr².
-    const ApertureProfile hex_profile(polygon(6), r);
+    const ApertureProfile hex_profile(polygon(6));
     REQUIRE(spread_scanline(hexagon, one, constant_radius(one.roi(), float(r)), hex_profile));
     const double R = std::sqrt(2.0 * M_PI * r * r / (3.0 * std::sqrt(3.0)));
     CHECK(lit_area(hexagon) == Approx(3.0 * std::sqrt(3.0) / 2.0 * R * R).epsilon(0.01));
@@ -100,7 +100,7 @@ TEST_CASE("anamorphic squeeze narrows the bokeh horizontally")
     ImageBuf squeezed;
     Aperture a;
     a.aspect = 0.5;
-    REQUIRE(spread_scanline(squeezed, one, constant_radius(one.roi(), 16.0f), ApertureProfile(a, 16.0)));
+    REQUIRE(spread_scanline(squeezed, one, constant_radius(one.roi(), 16.0f), ApertureProfile(a)));
     float p[4];
     squeezed.getpixel(14, 0, p);  // beyond 16·√0.5 = 11.3 horizontally
     CHECK(p[0] == 0.0f);
@@ -110,7 +110,7 @@ TEST_CASE("anamorphic squeeze narrows the bokeh horizontally")
 
 TEST_CASE("a disc footprint changes continuously with the radius")
 {
-    const ApertureProfile profile(Aperture(), 5.0);
+    const ApertureProfile profile{Aperture()};
     const double largest_step = largest_footprint_step([&](float r) {
         ImageBuf out;
         REQUIRE(spread_scanline(out, impulse(), constant_radius(ROI(0, 1, 0, 1), r), profile));
@@ -124,7 +124,7 @@ TEST_CASE("an in-focus pixel stays itself under a disc")
 {
     const ImageBuf one = impulse();
     ImageBuf out;
-    REQUIRE(spread_scanline(out, one, constant_radius(one.roi(), 0.0f), ApertureProfile(Aperture(), 1.0)));
+    REQUIRE(spread_scanline(out, one, constant_radius(one.roi(), 0.0f), ApertureProfile(Aperture())));
     float p[4];
     out.getpixel(0, 0, p);
     CHECK(p[0] == Approx(1.0f).epsilon(1e-6));
@@ -153,7 +153,7 @@ std::shared_ptr<MaskProfile> load_mask(const std::string& path, double max_radiu
     auto mask = std::make_shared<MaskProfile>();
     std::string error;
     INFO(error);
-    REQUIRE(mask->load(path, 1.0, max_radius, error));
+    REQUIRE(mask->load(path, 1.0, error));
     return mask;
 }
 

@@ -6,12 +6,13 @@
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/strutil.h>
 
+#include "footprint_program.h"
+
 namespace defocus {
 
 namespace {
 
 constexpr double pi = 3.14159265358979323846;
-constexpr int steps_per_pixel = 16;  // radius steps of the row tables
 constexpr double min_radius = 0.5;   // a disc inside its own pixel
 
 /// The unit outline: counterclockwise as seen in the image (y down), area π.
@@ -76,106 +77,93 @@ bool outline_chord(const std::vector<double>& xs, const std::vector<double>& ys,
 
 }  // namespace
 
-ApertureProfile::ApertureProfile(const Aperture& aperture, double max_radius)
-    : m_max_radius(std::max(min_radius, max_radius))
+ApertureProfile::ApertureProfile(const Aperture& aperture)
 {
     std::vector<double> xs, ys;
     unit_outline(aperture, xs, ys);
-    double extent = 0.0;
     m_ymin = INFINITY;
-    double ymax = -INFINITY;
+    m_ymax = -INFINITY;
+    m_extent = 0.0;
     for (size_t i = 0; i < xs.size(); ++i) {
-        extent = std::max({ extent, std::abs(xs[i]), std::abs(ys[i]) });
+        m_extent = std::max({ m_extent, std::abs(xs[i]), std::abs(ys[i]) });
         m_ymin = std::min(m_ymin, ys[i]);
-        ymax = std::max(ymax, ys[i]);
+        m_ymax = std::max(m_ymax, ys[i]);
     }
-    // The unit chord, finely sampled in y, so that building a row costs a
-    // table lookup rather than a pass over the outline.
+    // The unit chord, finely sampled in y and linear between samples, and
+    // its area and first moment in x integrated from the bottom up, so
+    // that a row's area and centre cost two table lookups.
     const int samples = 4096;
-    m_ystep = (ymax - m_ymin) / (samples - 1);
-    for (int i = 0; i < samples; ++i) {
-        double left, right;
-        if (!outline_chord(xs, ys, m_ymin + i * m_ystep, left, right))
-            left = right = 0.0;  // a vertex: an empty chord
-        m_left.push_back(left);
-        m_right.push_back(right);
+    m_ystep = (m_ymax - m_ymin) / (samples - 1);
+    m_left.assign(samples, 0.0);
+    m_right.assign(samples, 0.0);
+    for (int i = 0; i < samples; ++i)
+        if (!outline_chord(xs, ys, m_ymin + i * m_ystep, m_left[i], m_right[i]))
+            m_left[i] = m_right[i] = 0.0;  // a vertex: an empty chord
+    m_area.assign(samples, 0.0);
+    m_moment.assign(samples, 0.0);
+    for (int i = 1; i < samples; ++i) {
+        m_area[i] = m_area[i - 1] + segment_area(i - 1, 1.0);
+        m_moment[i] = m_moment[i - 1] + segment_moment(i - 1, 1.0);
     }
-    m_reach = int(std::ceil(m_max_radius * extent)) + 2;
-    const int last = int(std::ceil(m_max_radius * steps_per_pixel)) + 1;
-    for (int k = 0; k <= last; ++k)
-        m_tables.push_back(build(std::max(min_radius, double(k) / steps_per_pixel)));
 }
 
-bool ApertureProfile::chord(double y, double& left, double& right) const
+double ApertureProfile::segment_area(int i, double f) const
 {
-    const double u = (y - m_ymin) / m_ystep;
-    if (!(u >= 0.0 && u <= double(m_left.size() - 1)))
-        return false;
-    const size_t i = std::min(size_t(u), m_left.size() - 2);
-    const double f = u - i;
-    left = (1.0 - f) * m_left[i] + f * m_left[i + 1];
-    right = (1.0 - f) * m_right[i] + f * m_right[i + 1];
-    return right > left;
+    // The chord is linear over the segment: the trapezoid rule is exact.
+    const double l0 = m_right[i] - m_left[i];
+    const double l1 = l0 + f * ((m_right[i + 1] - m_left[i + 1]) - l0);
+    return 0.5 * f * m_ystep * (l0 + l1);
 }
 
-ApertureProfile::Table ApertureProfile::build(double r) const
+double ApertureProfile::segment_moment(int i, double f) const
+{
+    // The integrand (right² − left²)/2 is quadratic: Simpson's rule is exact.
+    auto at = [&](double t) {
+        const double l = m_left[i] + t * (m_left[i + 1] - m_left[i]);
+        const double r = m_right[i] + t * (m_right[i + 1] - m_right[i]);
+        return 0.5 * (r * r - l * l);
+    };
+    return f * m_ystep / 6.0 * (at(0.0) + 4.0 * at(0.5 * f) + at(f));
+}
+
+void ApertureProfile::integrals(double y, double& area, double& moment) const
+{
+    const double u = std::clamp((y - m_ymin) / m_ystep, 0.0, double(m_area.size() - 1));
+    const size_t i = std::min(size_t(u), m_area.size() - 2);
+    const double f = u - double(i);
+    area = m_area[i] + segment_area(int(i), f);
+    moment = m_moment[i] + segment_moment(int(i), f);
+}
+
+double ApertureProfile::rows(double r, double centre, std::vector<RowSpan>& spans) const
 {
     // Each row [j - 1/2, j + 1/2] gets one interval whose length is the
-    // outline's area in that row (16 sub-rows), centred on the area's
-    // centre, so a row's energy is exact whatever its shape.
-    const double ymin = m_ymin * r, ymax = (m_ymin + m_ystep * (m_left.size() - 1)) * r;
-    Table t;
-    t.first_row = int(std::floor(ymin + 0.5));
-    const int last_row = int(std::floor(ymax + 0.5));
-    const int sub = 16;
-    for (int j = t.first_row; j <= last_row; ++j) {
-        double length = 0.0, moment = 0.0;
-        for (int s = 0; s < sub; ++s) {
-            const double y = j - 0.5 + (s + 0.5) / sub;
-            double left, right;
-            if (!chord(y / r, left, right))
-                continue;
-            const double l = (right - left) * r / sub;
-            length += l;
-            moment += l * 0.5 * (left + right) * r;
-        }
-        t.length.push_back(length);
-        t.centre.push_back(length > 0.0 ? moment / length : 0.0);
-    }
-    return t;
-}
-
-double ApertureProfile::rows(double r, std::vector<RowSpan>& spans) const
-{
+    // outline's area in that row, centred on the area's centre, so a row's
+    // energy is exact whatever its shape.
+    r = std::max(min_radius, r);
     spans.clear();
-    const double x = std::clamp(r, min_radius, m_max_radius) * steps_per_pixel;
-    const int k = std::min(int(x), int(m_tables.size()) - 2);
-    const double t = x - k;
-    const Table& a = m_tables[k];
-    const Table& b = m_tables[k + 1];
-    const int first = std::min(a.first_row, b.first_row);
-    const int last = std::max(a.first_row + int(a.length.size()),
-                              b.first_row + int(b.length.size()));
+    const int first = int(std::floor(centre + m_ymin * r + 0.5));
+    const int last = int(std::floor(centre + m_ymax * r + 0.5));
     double area = 0.0;
-    for (int j = first; j < last; ++j) {
-        auto at = [j](const Table& tab, const std::vector<double>& v) {
-            const int i = j - tab.first_row;
-            return i >= 0 && i < int(v.size()) ? v[i] : 0.0;
-        };
-        const double la = at(a, a.length), lb = at(b, b.length);
-        const double length = (1.0 - t) * la + t * lb;
+    double below_area, below_moment;
+    integrals((first - 0.5 - centre) / r, below_area, below_moment);
+    for (int j = first; j <= last; ++j) {
+        double above_area, above_moment;
+        integrals((j + 0.5 - centre) / r, above_area, above_moment);
+        const double length = (above_area - below_area) * r * r;
+        const double moment = (above_moment - below_moment) * r * r * r;
+        below_area = above_area;
+        below_moment = above_moment;
         if (length <= 0.0)
             continue;
-        const double centre = ((1.0 - t) * la * at(a, a.centre) + t * lb * at(b, b.centre))
-                              / length;
-        spans.push_back({ j, centre - 0.5 * length, centre + 0.5 * length });
+        const double mid = moment / length;
+        spans.push_back({ j, mid - 0.5 * length, mid + 0.5 * length });
         area += length;
     }
     return area;
 }
 
-bool MaskProfile::load(const std::string& filename, double aspect, double max_radius,
-                       std::string& error)
+bool MaskProfile::load(const std::string& filename, double aspect, std::string& error)
 {
     OIIO::ImageBuf image(filename);
     if (!image.read(0, 0, true, OIIO::TypeFloat)) {
@@ -221,76 +209,46 @@ bool MaskProfile::load(const std::string& filename, double aspect, double max_ra
     const double unit = std::sqrt(pi / count);
     m_sx = unit * std::sqrt(aspect);
     m_sy = unit / std::sqrt(aspect);
-    m_max_radius = std::max(min_radius, max_radius);
     double extent = 0.0;
     for (int y = 0; y < roi.height(); ++y)
         for (const Run& run : m_runs[y])
             extent = std::max({ extent, std::abs(run.begin - m_cx) * m_sx,
                                 std::abs(run.end - m_cx) * m_sx, std::abs(y - m_cy) * m_sy,
                                 std::abs(y + 1 - m_cy) * m_sy });
-    m_reach = int(std::ceil(m_max_radius * extent)) + 2;
+    m_extent = extent;
     return true;
 }
 
-void MaskProfile::spans_at(double r, double weight, std::vector<RowSpan>& spans) const
+double MaskProfile::rows(double r, double centre, std::vector<RowSpan>& spans) const
 {
-    const int sub = 4;
-    const int rows = int(m_runs.size());
-    const int reach = int(std::ceil(r * (rows * m_sy))) + 1;
+    r = std::max(min_radius, r);
+    spans.clear();
+    const int sub = 8;
+    const int mask_rows = int(m_runs.size());
+    const int reach = int(std::ceil(r * m_extent + centre)) + 1;
+    double area = 0.0;
     for (int j = -reach; j <= reach; ++j)
         for (int s = 0; s < sub; ++s) {
             // The sub-row's centre, in mask pixels.
-            const double y = (j - 0.5 + (s + 0.5) / sub) / (r * m_sy) + m_cy;
+            const double y = (j - 0.5 + (s + 0.5) / sub - centre) / (r * m_sy) + m_cy;
             const int my = int(std::floor(y));
-            if (my < 0 || my >= rows)
+            if (my < 0 || my >= mask_rows)
                 continue;
-            for (const Run& run : m_runs[my])
+            for (const Run& run : m_runs[my]) {
                 spans.push_back({ j, (run.begin - m_cx) * m_sx * r, (run.end - m_cx) * m_sx * r,
-                                  weight / sub });
+                                  1.0 / sub });
+                area += (run.end - run.begin) * m_sx * r / sub;
+            }
         }
-}
-
-double MaskProfile::rows(double r, std::vector<RowSpan>& spans) const
-{
-    spans.clear();
-    const double x = std::clamp(r, min_radius, m_max_radius) * steps_per_pixel;
-    const double k = std::floor(x), t = x - k;
-    spans_at(k / steps_per_pixel, 1.0 - t, spans);
-    if (t > 0.0)
-        spans_at((k + 1) / steps_per_pixel, t, spans);
-    double area = 0.0;
-    for (const RowSpan& s : spans)
-        area += s.weight * (s.right - s.left);
     return area;
 }
 
 Psf aperture_psf(std::shared_ptr<const RowProfile> profile)
 {
     return [profile](double r) {
-        std::vector<RowSpan> spans;
-        const double area = profile->rows(r, spans);
-        int x0 = 0, x1 = 0, y0 = 0, y1 = 0;
-        for (const RowSpan& s : spans) {
-            x0 = std::min(x0, int(std::floor(s.left + 0.5)));
-            x1 = std::max(x1, int(std::floor(s.right + 0.5)));
-            y0 = std::min(y0, s.row);
-            y1 = std::max(y1, s.row);
-        }
-        Footprint fp;
-        fp.x0 = x0;
-        fp.y0 = y0;
-        fp.width = x1 - x0 + 1;
-        fp.height = y1 - y0 + 1;
-        fp.weights.assign(size_t(fp.width) * fp.height, 0.0);
-        for (const RowSpan& s : spans)
-            for (int i = 0; i < fp.width; ++i) {
-                // Pixel x0 + i covers [x0 + i - 1/2, x0 + i + 1/2].
-                const double lo = std::max(s.left, x0 + i - 0.5);
-                const double hi = std::min(s.right, x0 + i + 0.5);
-                if (hi > lo)
-                    fp.weights[size_t(s.row - fp.y0) * fp.width + i] += s.weight * (hi - lo) / area;
-            }
-        return fp;
+        const ProgramFamily family(profile, 0.0, 1.0 / radius_bins_per_pixel, r);
+        const ProgramBlend blend = family.pick(r);
+        return family.program(blend.k).footprint(blend.t);
     };
 }
 

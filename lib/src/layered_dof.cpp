@@ -95,7 +95,7 @@ bool spread_layer(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
         case ApertureShape::Box: return spread_box(out, in, radius, {}, nthreads);
         case ApertureShape::Tent: return spread_smooth(out, in, radius, 2, {}, nthreads);
         case ApertureShape::Smooth: return spread_smooth(out, in, radius, 3, {}, nthreads);
-        default: return spread_scanline(out, in, radius, *profile, {}, nthreads);
+        default: return spread_aperture(out, in, radius, *profile, exact_highlight_threshold, {}, nthreads);
         }
     };
     if (!settings.psf_image)
@@ -155,11 +155,11 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
         max_radius = std::max({ max_radius, 0.5 * std::abs(d.coc_min), 0.5 * std::abs(d.coc_max) });
     const Aperture& aperture = settings.aperture;
     if (aperture.shape == ApertureShape::Disc || aperture.shape == ApertureShape::Polygon) {
-        profile = std::make_unique<ApertureProfile>(aperture, max_radius);
+        profile = std::make_unique<ApertureProfile>(aperture);
     } else if (aperture.shape == ApertureShape::Mask) {
         auto mask = std::make_unique<MaskProfile>();
         std::string error;
-        if (!mask->load(aperture.mask_file, aperture.aspect, max_radius, error)) {
+        if (!mask->load(aperture.mask_file, aperture.aspect, error)) {
             dst.errorfmt("{}", error);
             return false;
         }

@@ -229,7 +229,7 @@ std::string validate(const Shot& shot)
     std::string error;
     if (shot.aperture.shape == ApertureShape::Mask) {
         MaskProfile probe;
-        if (!probe.load(shot.aperture.mask_file, 1.0, 1.0, error))
+        if (!probe.load(shot.aperture.mask_file, 1.0, error))
             return "--aperture: " + error;
     }
     PsfImage psf;

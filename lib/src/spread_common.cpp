@@ -1,10 +1,13 @@
 #include "spread_common.h"
 
+#include <defocus/hybrid.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <vector>
 
+#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/parallel.h>
 
 namespace defocus {
@@ -84,6 +87,82 @@ ImageSpec output_spec(const OIIO::ImageBuf& src, const ROI& window)
     spec.full_width = src.spec().full_width;
     spec.full_height = src.spec().full_height;
     return spec;
+}
+
+namespace {
+
+/// Writes spread rows into a float image of `nchannels`.
+class StoreRows final : public RowSink {
+public:
+    StoreRows(OIIO::ImageBuf& dst, int nchannels) : m_dst(dst), m_nchannels(nchannels) {}
+    void row(int y, int x_begin, int x_end, const double* rgba) override
+    {
+        float* out = static_cast<float*>(m_dst.pixeladdr(x_begin, y));
+        for (int x = x_begin; x < x_end; ++x, rgba += 4, out += m_nchannels)
+            for (int c = 0; c < m_nchannels; ++c)
+                out[c] = float(rgba[c]);
+    }
+
+private:
+    OIIO::ImageBuf& m_dst;
+    int m_nchannels;
+};
+
+/// A non-owning handle: the profile outlives the filter call.
+std::shared_ptr<const RowProfile> borrow(const RowProfile& profile)
+{
+    return std::shared_ptr<const RowProfile>(std::shared_ptr<const RowProfile>(), &profile);
+}
+
+}  // namespace
+
+bool spread_image(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const OIIO::ImageBuf& radius,
+                  ROI roi, int nthreads, SpreadMethod method, const RowProfile* shape,
+                  double visible_threshold)
+{
+    const SpreadInputs in = prepare_spread(dst, src, radius, roi, nthreads);
+    if (!in.valid)
+        return false;
+    const int nc = in.nchannels;
+    if (nc > 4) {
+        dst.errorfmt("spread: {} channels; at most 4 are spread at once", nc);
+        return false;
+    }
+    roi = in.roi;
+    // The engine reads RGBA: fewer channels are padded with zeros.
+    std::vector<float> padded;
+    const float* color = in.pixels(roi.xbegin, roi.ybegin);
+    if (nc < 4) {
+        padded.assign(size_t(roi.npixels()) * 4, 0.0f);
+        for (size_t i = 0; i < size_t(roi.npixels()); ++i)
+            std::copy(color + i * nc, color + i * nc + nc, &padded[i * 4]);
+        color = padded.data();
+    }
+    SpreadSource source;
+    source.roi = roi;
+    source.color = color;
+    source.radius = in.radii(roi.xbegin, roi.ybegin);
+    std::vector<uint8_t> visible;
+    if (visible_threshold > 0.0) {
+        auto view = [&](int nchannels, const float* pixels) {
+            ImageSpec spec(roi.width(), roi.height(), nchannels, OIIO::TypeFloat);
+            spec.x = roi.xbegin;
+            spec.y = roi.ybegin;
+            return OIIO::ImageBuf(spec, const_cast<float*>(pixels));
+        };
+        visible = visible_bokeh(view(4, color), view(1, source.radius), visible_threshold,
+                                nthreads);
+        source.keep_exact = visible.data();
+    }
+    std::unique_ptr<ShapePrograms> programs;
+    if (shape)
+        programs = std::make_unique<ShapePrograms>(borrow(*shape), in.max_radius);
+    const SpreadEngine engine(source, method, programs.get(), nthreads);
+    dst.reset(output_spec(src, engine.extent()));
+    OIIO::ImageBufAlgo::zero(dst, {}, nthreads);
+    StoreRows rows(dst, nc);
+    engine.run(engine.extent(), rows, nthreads);
+    return true;
 }
 
 }  // namespace defocus

@@ -4,6 +4,7 @@
 #include <OpenImageIO/imagebuf.h>
 
 #include "float_pixels.h"
+#include "spread_engine.h"
 
 namespace defocus {
 
@@ -36,5 +37,13 @@ SpreadInputs prepare_spread(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
 
 /// A float spec over `window` with src's channel names and alpha channel.
 ImageSpec output_spec(const OIIO::ImageBuf& src, const OIIO::ROI& window);
+
+/// Spreads src (at most 4 channels) into dst, a float image over every
+/// pixel the spread lights, with the engine `method`; `shape` for the
+/// shape methods. With a `visible_threshold`, the pixels visible_bokeh()
+/// selects are never merged into blocks.
+bool spread_image(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const OIIO::ImageBuf& radius,
+                  OIIO::ROI roi, int nthreads, SpreadMethod method,
+                  const RowProfile* shape = nullptr, double visible_threshold = 0.0);
 
 }  // namespace defocus

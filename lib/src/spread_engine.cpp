@@ -1,0 +1,788 @@
+#include "spread_engine.h"
+
+// The 4-double vector helpers below are inlined into each clone of the
+// kernels, so the ABI of passing them by value never applies.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <mutex>
+
+#include <OpenImageIO/parallel.h>
+
+#include <defocus/footprint.h>
+
+namespace defocus {
+
+using OIIO::ROI;
+
+namespace {
+
+constexpr double block_ratio = 8.0;        ///< a block is at most r / 8 pixels across
+constexpr int max_level = 5;               ///< blocks of up to 32 x 32 pixels
+constexpr double transition = 1.0 / 16.0;  ///< relative radius range spread at two sizes
+/// The largest radius a bounded spread takes on the dense path: below
+/// 2 * block_ratio, where blocks of 2 pixels take over.
+constexpr float dense_limit = float(2.0 * block_ratio);
+/// The kernels are inlined into each target_clones clone of their callers,
+/// so that they are compiled for that clone's instruction set.
+#define DEFOCUS_KERNEL inline __attribute__((always_inline))
+
+/// The output rows and columns one task accumulates: a tile of deltas
+/// that stays in the second-level cache while every source row within
+/// reach adds to it.
+constexpr int tile_rows = 64, tile_columns = 256;
+
+using d4 = double __attribute__((vector_size(32)));
+using f4 = float __attribute__((vector_size(16)));
+
+DEFOCUS_KERNEL d4 load4(const double* p)
+{
+    d4 v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+}
+
+DEFOCUS_KERNEL void store4(double* p, d4 v)
+{
+    std::memcpy(p, &v, sizeof v);
+}
+
+DEFOCUS_KERNEL d4 load4(const float* p)
+{
+    f4 v;
+    std::memcpy(&v, p, sizeof v);
+    return __builtin_convertvector(v, d4);
+}
+
+DEFOCUS_KERNEL d4 splat(double w)
+{
+    return d4 { w, w, w, w };
+}
+
+inline bool is_zero(const float* v)
+{
+    return v[0] == 0.0f && v[1] == 0.0f && v[2] == 0.0f && v[3] == 0.0f;
+}
+
+/// a / 2^shift, rounded down (GCC shifts negative numbers arithmetically).
+DEFOCUS_KERNEL int floor_shift(int a, int shift)
+{
+    return a >> shift;
+}
+
+int floor_div(int a, int b)  // b > 0
+{
+    return a >= 0 ? a / b : -((-a + b - 1) / b);
+}
+
+/// Level 0 is a single pixel; level L > 0 a block of 2^L pixels.
+struct Component {
+    int level;
+    float weight;
+};
+
+/// The levels a pixel is spread at, and their shares. Level L > 0 takes
+/// radii from block_ratio * 2^L; just below that, radii are shared between
+/// levels L - 1 and L, so that footprints change continuously.
+int components(SpreadMethod method, float r, bool keep_exact, Component out[2])
+{
+    const double start = 2.0 * block_ratio * (1.0 - transition);  // of level 1
+    if (method != SpreadMethod::Bounded || !(r >= start) || keep_exact) {
+        out[0] = { 0, 1.0f };
+        return 1;
+    }
+    int level = 1;
+    while (level < max_level && r >= block_ratio * (2 << level) * (1.0 - transition))
+        ++level;
+    const double u = (r / (block_ratio * (1 << level)) - (1.0 - transition)) / transition;
+    if (u < 1.0) {
+        out[0] = { level - 1, float(1.0 - u) };
+        out[1] = { level, float(u) };
+        return 2;
+    }
+    out[0] = { level, 1.0f };
+    return 1;
+}
+
+/// How far footprints' deltas reach: rows and columns relative to their
+/// anchor pixel.
+struct Reach {
+    int first_row, last_row, first_column, last_column;
+};
+
+/// Consecutive pixels or blocks (a block's width apart) that share a
+/// footprint program: n of them from anchor column x, their colours from
+/// index `at` of a colour array. When they all blend the program's two
+/// sizes alike (one radius: a plane, a sky), the run keeps that blend `t`
+/// and 4 values per item; otherwise 4 values per item on the smaller size
+/// and then 4 per item on the larger one.
+struct ProgramRun {
+    int x, n, k, at;
+    float t;
+    bool blended;
+};
+
+Reach box_reach(float max_radius)
+{
+    const BoxEdges e = box_edges(box_half_width(max_radius));
+    return { e.first, e.last + 1, e.first, e.last + 1 };
+}
+
+Reach program_reach(const FootprintProgram& p)
+{
+    return { p.first_row(), p.last_row(), p.first_column(), p.last_column() };
+}
+
+}  // namespace
+
+ShapePrograms::ShapePrograms(std::shared_ptr<const RowProfile> profile, double max_radius)
+{
+    m_families.push_back(
+        std::make_unique<ProgramFamily>(profile, 0.0, 1.0 / radius_bins_per_pixel, max_radius));
+    for (int level = 1; level <= max_level; ++level)
+        m_families.push_back(std::make_unique<ProgramFamily>(
+            profile, 0.5, (1 << level) / radius_bins_per_pixel, max_radius));
+}
+
+/// One row of pixels or blocks to spread, as runs.
+struct ItemRow {
+    std::vector<ProgramRun> runs;  ///< by first column
+    std::vector<double> color;
+    int longest = 0;               ///< items in the longest run
+
+    /// Appends a run of n items of program k that all blend its sizes by t.
+    void add_folded(int x, int n, int k, float t, const double* color)
+    {
+        longest = std::max(longest, n);
+        runs.push_back({ x, n, k, int(this->color.size()), t, false });
+        this->color.insert(this->color.end(), color, color + size_t(n) * 4);
+    }
+    /// Appends a run of n items of program k: their colours on its smaller
+    /// and on its larger size.
+    void add_blended(int x, int n, int k, const double* smaller, const double* larger)
+    {
+        longest = std::max(longest, n);
+        runs.push_back({ x, n, k, int(color.size()), 0.0f, true });
+        color.insert(color.end(), smaller, smaller + size_t(n) * 4);
+        color.insert(color.end(), larger, larger + size_t(n) * 4);
+    }
+};
+
+/// The pixels or blocks of one level that take the sparse path.
+struct SpreadEngine::Sparse {
+    using Row = ItemRow;
+    int block = 1;  ///< pixels across a block: 2^shift
+    int shift = 0;
+    const ProgramFamily* family = nullptr;
+    int first_block_row = 0;
+    std::vector<Row> rows;          ///< per block row
+    Reach reach { 0, -1, 0, -1 };  ///< of its programs, from the anchor
+
+    int anchor(int index) const { return block == 1 ? index : index * block + block / 2 - 1; }
+};
+
+namespace {
+
+/// One tile: output rows [y_begin, y_end) and columns [x_begin, x_end),
+/// accumulated as deltas in cells 1.. of `cells()`-wide rows. Cell 0
+/// collects the deltas left of the tile when it is the first of its band
+/// (`first`); later tiles take them from the row carry.
+struct Tile {
+    int y_begin, y_end, x_begin, x_end;
+    bool first;
+    int cells() const { return x_end - x_begin + 1; }
+    /// The cell of column x, or -1 when the tile does not own it.
+    int cell(int x) const
+    {
+        if (x >= x_end)
+            return -1;
+        if (x < x_begin)
+            return first ? 0 : -1;
+        return x - x_begin + 1;
+    }
+};
+
+/// What a band's thread keeps between tiles (and layers): reused, so that
+/// its memory is touched once rather than once per layer.
+struct Workspace {
+    std::vector<ItemRow> dense;        ///< the band's dense source rows, prepared
+    std::vector<double> color, larger;  ///< scratch for preparing them
+    std::vector<float> blend;
+    std::vector<double> rows;          ///< the tile's delta rows
+    std::vector<double> column_carry;  ///< the box's deltas integrated down the columns
+    std::vector<double> row_carry;     ///< per band row, the sum left of the tile
+};
+
+/// A run's colours as a cluster's taps see them: one colour per item with
+/// the taps' weights blended once (Folded), or each item's share of the
+/// program's two sizes with each size's weights (Blended).
+struct Folded {
+    const double* color;
+    d4 weight[4];
+    DEFOCUS_KERNEL d4 tap(int t, ptrdiff_t item) const
+    {
+        return weight[t] * load4(color + item * 4);
+    }
+};
+
+struct Blended {
+    const double* smaller;  ///< colours times (1 - t)
+    const double* larger;   ///< colours times t
+    d4 weight[4][2];
+    DEFOCUS_KERNEL d4 tap(int t, ptrdiff_t item) const
+    {
+        return weight[t][0] * load4(smaller + item * 4) + weight[t][1] * load4(larger + item * 4);
+    }
+};
+
+/// What the taps of one cluster (m <= 4) put on cell q of a run of items
+/// one column apart, items [lo, hi), item i's first tap at cell i.
+template<typename Colors>
+DEFOCUS_KERNEL d4 cluster_value(const Colors& c, int m, int q, int lo, int hi)
+{
+    d4 sum = splat(0.0);
+    for (int t = std::max(0, q - hi + 1); t <= std::min(m - 1, q - lo); ++t)
+        sum += c.tap(t, q - t);
+    return sum;
+}
+
+/// cells[i] += the taps' sum over items q - M + 1 .. q, q = q0 + i, for
+/// i < n, all of them items of the run.
+template<int M, typename Colors>
+DEFOCUS_KERNEL void cluster_body(double* cells, const Colors& c, int q0, int n)
+{
+    for (int i = 0; i < n; ++i) {
+        d4 sum = load4(cells + size_t(i) * 4);
+        for (int t = 0; t < M; ++t)
+            sum += c.tap(t, ptrdiff_t(q0 + i) - t);
+        store4(cells + size_t(i) * 4, sum);
+    }
+}
+
+/// Adds one cluster of m <= 4 taps for items [lo, hi) of a run whose items
+/// are 2^shift columns apart, item 0's first tap at cell cb. Along a run of
+/// pixels one column apart, which share cells, each cell is written once;
+/// blocks further apart are written item by item.
+template<typename Colors>
+DEFOCUS_KERNEL void add_cluster(double* row, const Colors& c, int m, int cb, int shift, int lo,
+                                int hi, const Tile& tile)
+{
+    const int last_cell = tile.cells() - 1;
+    if (shift > 0) {
+        // Items whose taps all lie left of the tile, those that touch it
+        // at its edges (tap by tap), and those wholly inside.
+        const int stride = 1 << shift;
+        const int touch_lo = std::max(lo, -floor_shift(cb + m - 2, shift));
+        const int touch_hi = std::min(hi, floor_shift(last_cell - cb, shift) + 1);
+        const int inside_lo = std::max(touch_lo, -floor_shift(cb - 1, shift));
+        const int inside_hi =
+            std::max(inside_lo, std::min(touch_hi, floor_shift(last_cell - m + 1 - cb, shift) + 1));
+        if (tile.first && lo < touch_lo) {
+            d4 sum = splat(0.0);
+            for (int i = lo; i < std::min(hi, touch_lo); ++i)
+                for (int t = 0; t < m; ++t)
+                    sum += c.tap(t, i);
+            store4(row, load4(row) + sum);
+        }
+        auto add_item = [&](int i) {
+            for (int t = 0; t < m; ++t) {
+                const int cell = tile.cell(tile.x_begin - 1 + cb + stride * i + t);
+                if (cell >= 0)
+                    store4(row + size_t(cell) * 4, load4(row + size_t(cell) * 4) + c.tap(t, i));
+            }
+        };
+        for (int i = touch_lo; i < std::min(touch_hi, inside_lo); ++i)
+            add_item(i);
+        for (int i = inside_lo; i < inside_hi; ++i) {
+            double* px = row + size_t(cb + stride * i) * 4;
+            for (int t = 0; t < m; ++t)
+                store4(px + t * 4, load4(px + t * 4) + c.tap(t, i));
+        }
+        for (int i = inside_hi; i < touch_hi; ++i)
+            add_item(i);
+        return;
+    }
+    // Cells q of the run: cell cb + q for q in [lo, hi + m - 2].
+    const int q_last = hi + m - 2;
+    if (tile.first && lo < 1 - cb) {  // left of the tile: into cell 0
+        d4 sum = splat(0.0);
+        for (int q = lo; q <= std::min(q_last, -cb); ++q)
+            sum += cluster_value(c, m, q, lo, hi);
+        store4(row, load4(row) + sum);
+    }
+    const int in_lo = std::max(lo, 1 - cb), in_hi = std::min(q_last, last_cell - cb);
+    // Cells with all of their taps on items of the run, and the ends.
+    const int body_lo = std::max(in_lo, lo + m - 1), body_hi = std::min(in_hi, hi - 1);
+    const int head_hi = std::min(in_hi, body_lo - 1);
+    const int tail_lo = std::max(body_lo, body_hi + 1);
+    auto add_value = [&](int q) {
+        double* px = row + size_t(cb + q) * 4;
+        store4(px, load4(px) + cluster_value(c, m, q, lo, hi));
+    };
+    for (int q = in_lo; q <= head_hi; ++q)
+        add_value(q);
+    if (body_lo <= body_hi) {
+        double* cells = row + size_t(cb + body_lo) * 4;
+        const int n = body_hi - body_lo + 1;
+        switch (m) {
+        case 1: cluster_body<1>(cells, c, body_lo, n); break;
+        case 2: cluster_body<2>(cells, c, body_lo, n); break;
+        case 3: cluster_body<3>(cells, c, body_lo, n); break;
+        default: cluster_body<4>(cells, c, body_lo, n); break;
+        }
+    }
+    for (int q = tail_lo; q <= in_hi; ++q)
+        add_value(q);
+}
+
+/// Adds row `o` of a run's program for its items [lo, hi), which are
+/// 2^shift columns apart, item 0 at cell c0 (before the program's own
+/// columns).
+DEFOCUS_KERNEL void add_run(double* row, const FootprintProgram& p, int o, const ProgramRun& run,
+                            const double* color, int c0, int shift, int lo, int hi,
+                            const Tile& tile)
+{
+    const double* w0 = p.smaller();
+    const double* w1 = p.larger();
+    // Clusters wider than 4 taps (a mask's rows) go 4 taps at a time.
+    for (const DeltaCluster* c = p.begin(o); c != p.end(o); ++c)
+        for (int first = 0; first < c->taps; first += 4) {
+            const int m = std::min(4, c->taps - first);
+            const int at = c->at + first;
+            if (run.blended) {
+                Blended b;
+                b.smaller = color;
+                b.larger = color + size_t(run.n) * 4;
+                for (int t = 0; t < m; ++t) {
+                    b.weight[t][0] = splat(w0[at + t]);
+                    b.weight[t][1] = splat(w1[at + t]);
+                }
+                add_cluster(row, b, m, c0 + c->column + first, shift, lo, hi, tile);
+            } else {
+                Folded f;
+                f.color = color;
+                for (int t = 0; t < m; ++t)
+                    f.weight[t] = splat(w0[at + t] + run.t * (w1[at + t] - w0[at + t]));
+                add_cluster(row, f, m, c0 + c->column + first, shift, lo, hi, tile);
+            }
+        }
+}
+
+/// Appends a run of n pixels of program k, colours `color` (4 each),
+/// blending its sizes by `t` each: folded when they all blend alike.
+/// `larger` is scratch.
+void add_run_colors(ItemRow& row, int x, int n, int k, double* color, const float* t,
+                    std::vector<double>& larger)
+{
+    if (std::all_of(t, t + n, [&](float ti) { return ti == t[0]; })) {
+        row.add_folded(x, n, k, t[0], color);
+        return;
+    }
+    larger.resize(size_t(n) * 4);
+    for (int i = 0; i < n; ++i)
+        for (int ch = 0; ch < 4; ++ch) {
+            larger[size_t(i) * 4 + ch] = t[i] * color[size_t(i) * 4 + ch];
+            color[size_t(i) * 4 + ch] -= larger[size_t(i) * 4 + ch];
+        }
+    row.add_blended(x, n, k, color, larger.data());
+}
+
+/// The dense pixels of source row `sy` within [x0, x1), as runs of
+/// consecutive pixels on one program.
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+void prepare_dense_row(const SpreadSource& src, SpreadMethod method, const ProgramFamily& family,
+                       int sy, int x0, int x1, ItemRow& row, std::vector<double>& color,
+                       std::vector<float>& blend, std::vector<double>& larger)
+{
+    const size_t base = size_t(sy - src.roi.ybegin) * src.roi.width() - src.roi.xbegin;
+    row.runs.clear();
+    row.color.clear();
+    row.longest = 0;
+    color.resize(size_t(std::max(0, x1 - x0)) * 4);
+    blend.resize(size_t(std::max(0, x1 - x0)));
+    float cached_radius = -1.0f;
+    ProgramBlend b { 0, 0.0f };
+    int run_x = 0, n = 0, k = -1;
+    for (int x = x0; x <= x1; ++x) {
+        const float* v = x < x1 ? src.color + (base + x) * 4 : nullptr;
+        Component c[2];
+        int count = 0;
+        float r = 0.0f;
+        if (v && !is_zero(v)) {
+            r = src.radius[base + x];
+            count = components(method, r, src.keep_exact && src.keep_exact[base + x], c);
+        }
+        const bool dense = count > 0 && c[0].level == 0 && r <= dense_limit;
+        if (dense && r != cached_radius) {
+            cached_radius = r;
+            b = family.pick(r);
+        }
+        if (n > 0 && (!dense || b.k != k || run_x + n != x)) {
+            add_run_colors(row, run_x, n, k, color.data(), blend.data(), larger);
+            n = 0;
+        }
+        if (!dense)
+            continue;
+        if (n == 0) {
+            run_x = x;
+            k = b.k;
+        }
+        store4(&color[size_t(n) * 4], load4(v) * splat(count == 2 ? c[0].weight : 1.0));
+        blend[n++] = b.t;
+    }
+}
+
+/// The box's 16 corner deltas (Kosloff, Tao & Barsky 2009, sec. 3, with
+/// fractional edges), to be integrated down the columns and then along
+/// the rows. Deltas above the tile go straight into the column carry.
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+void scatter_box_row(const SpreadSource& src, int sy, int x0, int x1, double* rows,
+                     double* column_carry, const Tile& tile)
+{
+    const size_t base = size_t(sy - src.roi.ybegin) * src.roi.width() - src.roi.xbegin;
+    const size_t row_size = size_t(tile.cells()) * 4;
+    for (int x = x0; x < x1; ++x) {
+        const float* v = src.color + (base + x) * 4;
+        if (is_zero(v))
+            continue;
+        const double h = box_half_width(src.radius[base + x]);
+        const BoxEdges e = box_edges(h);
+        const int at[4] = { e.first, e.first + 1, e.last, e.last + 1 };
+        const double step[4] = { e.first_cover, 1.0 - e.first_cover, e.last_cover - 1.0,
+                                 -e.last_cover };
+        const d4 value = load4(v) * splat(1.0 / (4.0 * h * h));
+        int cell[4];
+        for (int i = 0; i < 4; ++i)
+            cell[i] = tile.cell(x + at[i]);
+        for (int j = 0; j < 4; ++j) {
+            const int y = sy + at[j];
+            if (y >= tile.y_end)
+                continue;
+            double* row = y < tile.y_begin ? column_carry : rows + (y - tile.y_begin) * row_size;
+            const d4 vy = value * splat(step[j]);
+            for (int i = 0; i < 4; ++i)
+                if (cell[i] >= 0) {
+                    double* p = row + size_t(cell[i]) * 4;
+                    store4(p, load4(p) + vy * splat(step[i]));
+                }
+        }
+    }
+}
+
+/// Adds the footprints of one row of items (pixels or blocks 2^shift
+/// columns apart, anchored on row `anchor`) to the tile's delta rows: the
+/// items' reach is `reach` (of the largest of `family`'s programs they
+/// use).
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+void scatter_items(const ProgramFamily& family, int shift, const Reach& reach,
+                   const ItemRow& items, int anchor, double* rows, const Tile& tile)
+{
+    const size_t row_size = size_t(tile.cells()) * 4;
+    // Anchors whose footprints can touch the tile's columns, from the
+    // first run that can reach them.
+    const int x_lo = tile.x_begin - reach.last_column;
+    const int x_hi = tile.x_end - reach.first_column;
+    auto first = std::lower_bound(items.runs.begin(), items.runs.end(),
+                                  x_lo - ((items.longest - 1) << shift),
+                                  [](const ProgramRun& r, int x) { return r.x < x; });
+    for (auto it = first; it != items.runs.end() && it->x < x_hi; ++it) {
+        const ProgramRun& run = *it;
+        const int i0 = std::max(0, -floor_shift(run.x - x_lo, shift));
+        const int i1 = std::min(run.n, -floor_shift(run.x - x_hi, shift));
+        if (i0 >= i1)
+            continue;
+        const FootprintProgram& p = family.program(run.k);
+        const int o_lo = std::max(p.first_row(), tile.y_begin - anchor);
+        const int o_hi = std::min(p.last_row(), tile.y_end - 1 - anchor);
+        const double* color = &items.color[run.at];
+        const int c0 = run.x - tile.x_begin + 1;
+        for (int o = o_lo; o <= o_hi; ++o)
+            add_run(rows + (anchor + o - tile.y_begin) * row_size, p, o, run, color, c0, shift, i0,
+                    i1, tile);
+    }
+}
+
+/// Integrates a tile row along x in place (after adding it to the column
+/// carry, for the box), starting from the row carry, which it updates.
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+void finish_row(double* row, double* column_carry, double* row_carry, int cells)
+{
+    d4 sum = load4(row_carry);
+    if (column_carry) {
+        for (int i = 0; i < cells; ++i) {
+            const d4 down = load4(column_carry + size_t(i) * 4) + load4(row + size_t(i) * 4);
+            store4(column_carry + size_t(i) * 4, down);
+            sum += down;
+            store4(row + size_t(i) * 4, sum);
+        }
+    } else {
+        for (int i = 0; i < cells; ++i) {
+            sum += load4(row + size_t(i) * 4);
+            store4(row + size_t(i) * 4, sum);
+        }
+    }
+    store4(row_carry, sum);
+}
+
+/// One block row's pixels of one sparse level, summed per block and
+/// program, as runs.
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+SpreadEngine::Sparse::Row block_row(const SpreadSource& source, SpreadMethod method,
+                                    const SpreadEngine::Sparse& level, int level_index, int by)
+{
+    struct Entry {
+        int bx, k;
+        float t;       ///< the blend of its pixels, when they all share one
+        bool blended;  ///< when they do not
+        double smaller[4], larger[4];
+    };
+    const ROI& roi = source.roi;
+    const int s = level.block;
+    const int y0 = std::max(roi.ybegin, by * s), y1 = std::min(roi.yend, by * s + s);
+    std::vector<Entry> entries;
+    float cached_radius = -1.0f;
+    ProgramBlend b { 0, 0.0f };
+    Component c[2];
+    int n = 0;
+    for (int bx = floor_div(roi.xbegin, s); bx * s < roi.xend; ++bx) {
+        const size_t block_begin = entries.size();
+        const int x0 = std::max(roi.xbegin, bx * s), x1 = std::min(roi.xend, bx * s + s);
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x) {
+                const size_t p = size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin);
+                const float* v = source.color + p * 4;
+                if (is_zero(v))
+                    continue;
+                const float r = source.radius[p];
+                const bool exact = source.keep_exact && source.keep_exact[p];
+                if (r != cached_radius || exact) {
+                    cached_radius = exact ? -1.0f : r;
+                    n = components(method, r, exact, c);
+                    b = level.family->pick(r);
+                }
+                for (int i = 0; i < n; ++i) {
+                    if (c[i].level != level_index || (level_index == 0 && r <= dense_limit))
+                        continue;
+                    Entry* same = entries.size() > block_begin && entries.back().k == b.k
+                                      ? &entries.back()
+                                      : nullptr;
+                    for (size_t e = block_begin; !same && e < entries.size(); ++e)
+                        if (entries[e].k == b.k)
+                            same = &entries[e];
+                    if (!same) {
+                        entries.push_back({ bx, b.k, b.t, false, { 0, 0, 0, 0 }, { 0, 0, 0, 0 } });
+                        same = &entries.back();
+                    }
+                    same->blended |= same->t != b.t;
+                    const d4 value = load4(v) * splat(c[i].weight);
+                    store4(same->smaller, load4(same->smaller) + value * splat(1.0 - b.t));
+                    store4(same->larger, load4(same->larger) + value * splat(b.t));
+                }
+            }
+    }
+    std::stable_sort(entries.begin(), entries.end(),
+                     [](const Entry& a, const Entry& e) { return a.k < e.k; });
+    // Runs of consecutive blocks on one program, folded when all of their
+    // pixels blend its sizes alike.
+    SpreadEngine::Sparse::Row row;
+    std::vector<double> smaller, larger;
+    for (size_t i = 0; i < entries.size();) {
+        size_t j = i + 1;
+        while (j < entries.size() && entries[j].k == entries[i].k
+               && entries[j].bx == entries[j - 1].bx + 1)
+            ++j;
+        const bool folded = std::all_of(entries.begin() + i, entries.begin() + j, [&](const Entry& e) {
+            return !e.blended && e.t == entries[i].t;
+        });
+        smaller.clear();
+        larger.clear();
+        for (size_t e = i; e < j; ++e)
+            for (int ch = 0; ch < 4; ++ch) {
+                smaller.push_back(folded ? entries[e].smaller[ch] + entries[e].larger[ch]
+                                         : entries[e].smaller[ch]);
+                larger.push_back(entries[e].larger[ch]);
+            }
+        const int x = level.anchor(entries[i].bx), count = int(j - i);
+        if (folded)
+            row.add_folded(x, count, entries[i].k, entries[i].t, smaller.data());
+        else
+            row.add_blended(x, count, entries[i].k, smaller.data(), larger.data());
+        i = j;
+    }
+    std::sort(row.runs.begin(), row.runs.end(),
+              [](const ProgramRun& a, const ProgramRun& b) { return a.x < b.x; });
+    return row;
+}
+
+}  // namespace
+
+SpreadEngine::SpreadEngine(const SpreadSource& source, SpreadMethod method,
+                           const ShapePrograms* shape, int nthreads)
+    : m_source(source)
+    , m_method(method)
+    , m_shape(shape)
+{
+    const ROI& roi = source.roi;
+    // Which paths and levels the layer's pixels take, and their largest
+    // radius on each.
+    const int levels = max_level + 1;
+    std::vector<float> sparse_max(levels, -1.0f);
+    std::mutex merge;
+    OIIO::parallel_for_chunked(roi.ybegin, roi.yend, 0, [&](int64_t y0, int64_t y1) {
+        float dense = -1.0f;
+        std::vector<float> sparse(levels, -1.0f);
+        for (int64_t y = y0; y < y1; ++y) {
+            const size_t row = size_t(y - roi.ybegin) * roi.width();
+            for (int x = 0; x < roi.width(); ++x) {
+                if (is_zero(source.color + (row + x) * 4))
+                    continue;
+                const float r = source.radius[row + x];
+                Component c[2];
+                const int n = components(method, r, source.keep_exact && source.keep_exact[row + x],
+                                         c);
+                for (int i = 0; i < n; ++i) {
+                    if (method == SpreadMethod::Box || (c[i].level == 0 && r <= dense_limit))
+                        dense = std::max(dense, r);
+                    else
+                        sparse[c[i].level] = std::max(sparse[c[i].level], r);
+                }
+            }
+        }
+        std::lock_guard<std::mutex> lock(merge);
+        m_dense.max_radius = std::max(m_dense.max_radius, dense);
+        for (int l = 0; l < levels; ++l)
+            sparse_max[l] = std::max(sparse_max[l], sparse[l]);
+    }, OIIO::paropt(nthreads));
+
+    // The last column of a footprint's deltas (and for the box the last
+    // row) only ends it: the pixels it lights stop one before.
+    auto grow = [&](const ROI& anchors, const Reach& reach, bool box) {
+        const ROI lit(anchors.xbegin + reach.first_column, anchors.xend + reach.last_column - 1,
+                      anchors.ybegin + reach.first_row, anchors.yend + reach.last_row - box, 0, 1,
+                      0, 4);
+        m_extent = m_extent.defined() ? OIIO::roi_union(m_extent, lit) : lit;
+    };
+    if (m_dense.max_radius >= 0.0f) {
+        const Reach reach = method == SpreadMethod::Box
+                                ? box_reach(m_dense.max_radius)
+                                : program_reach(shape->pixels().program(
+                                    shape->pixels().pick(m_dense.max_radius).k));
+        m_dense.first_row = reach.first_row;
+        m_dense.last_row = reach.last_row;
+        m_dense.first_column = reach.first_column;
+        m_dense.last_column = reach.last_column;
+        grow(roi, reach, method == SpreadMethod::Box);
+    }
+
+    for (int l = 0; l < levels; ++l) {
+        if (sparse_max[l] < 0.0f)
+            continue;
+        auto level = std::make_unique<Sparse>();
+        level->block = 1 << l;
+        level->shift = l;
+        level->family = l == 0 ? &shape->pixels() : &shape->blocks(l);
+        // Programs of larger radii reach at least as far.
+        level->reach = program_reach(level->family->program(level->family->pick(sparse_max[l]).k));
+        const int s = level->block;
+        level->first_block_row = floor_div(roi.ybegin, s);
+        level->rows.resize(floor_div(roi.yend - 1, s) - level->first_block_row + 1);
+        OIIO::parallel_for(int64_t(0), int64_t(level->rows.size()), [&](int64_t i) {
+            level->rows[i] = block_row(source, method, *level, l, level->first_block_row + int(i));
+        }, OIIO::paropt(nthreads));
+        const int first = level->first_block_row, last = first + int(level->rows.size()) - 1;
+        const ROI anchors(level->anchor(floor_div(roi.xbegin, s)),
+                          level->anchor(floor_div(roi.xend - 1, s)) + 1, level->anchor(first),
+                          level->anchor(last) + 1);
+        grow(anchors, level->reach, false);
+        m_sparse.push_back(std::move(level));
+    }
+    if (!m_extent.defined()) {  // nothing carries light: the region itself, dark
+        m_extent = roi;
+        m_extent.chbegin = 0;
+        m_extent.chend = 4;
+    }
+}
+
+SpreadEngine::~SpreadEngine() = default;
+
+void SpreadEngine::run(const ROI& window_in, RowSink& sink, int nthreads) const
+{
+    const ROI window = OIIO::roi_intersection(window_in, m_extent);
+    if (window.width() <= 0 || window.height() <= 0)
+        return;
+    const bool dense = m_dense.max_radius >= 0.0f;
+    const bool box = m_method == SpreadMethod::Box;
+    const ROI& roi = m_source.roi;
+    const Reach dense_reach { m_dense.first_row, m_dense.last_row, m_dense.first_column,
+                              m_dense.last_column };
+    const int bands = (window.height() + tile_rows - 1) / tile_rows;
+    OIIO::parallel_for(int64_t(0), int64_t(bands), [&](int64_t band) {
+        thread_local Workspace ws;
+        const int y_begin = window.ybegin + int(band) * tile_rows;
+        const int y_end = std::min(window.yend, y_begin + tile_rows);
+        ws.row_carry.assign(size_t(y_end - y_begin) * 4, 0.0);
+        // Source rows and columns whose deltas can land in the band.
+        const int sy0 = std::max(roi.ybegin, y_begin - m_dense.last_row);
+        const int sy1 = std::min(roi.yend, y_end - m_dense.first_row);
+        const int sx0 = std::max(roi.xbegin, window.xbegin - m_dense.last_column);
+        const int sx1 = std::min(roi.xend, window.xend - m_dense.first_column);
+        if (dense && !box) {
+            if (ws.dense.size() < size_t(std::max(0, sy1 - sy0)))
+                ws.dense.resize(sy1 - sy0);
+            for (int sy = sy0; sy < sy1; ++sy)
+                prepare_dense_row(m_source, m_method, m_shape->pixels(), sy, sx0, sx1,
+                                  ws.dense[sy - sy0], ws.color, ws.blend, ws.larger);
+        }
+        for (int x_begin = window.xbegin; x_begin < window.xend; x_begin += tile_columns) {
+            const Tile tile { y_begin, y_end, x_begin, std::min(window.xend, x_begin + tile_columns),
+                              x_begin == window.xbegin };
+            const size_t row_size = size_t(tile.cells()) * 4;
+            if (box) {
+                // The box's deltas, integrated down the columns: scattered
+                // into the whole tile first.
+                ws.rows.assign(size_t(y_end - y_begin) * row_size, 0.0);
+                ws.column_carry.assign(row_size, 0.0);
+                const int x0 = std::max(roi.xbegin, tile.x_begin - m_dense.last_column);
+                const int x1 = std::min(roi.xend, tile.x_end - m_dense.first_column);
+                for (int sy = sy0; sy < sy1 && dense && x0 < x1; ++sy)
+                    scatter_box_row(m_source, sy, x0, x1, ws.rows.data(), ws.column_carry.data(),
+                                    tile);
+                for (int y = y_begin; y < y_end; ++y) {
+                    double* row = ws.rows.data() + (y - y_begin) * row_size;
+                    finish_row(row, ws.column_carry.data(),
+                               ws.row_carry.data() + size_t(y - y_begin) * 4, tile.cells());
+                    sink.row(y, tile.x_begin, tile.x_end, row + 4);
+                }
+                continue;
+            }
+            // Shapes: every source row and block row within reach adds its
+            // footprints' rows to the tile, a run at a time.
+            ws.rows.assign(size_t(y_end - y_begin) * row_size, 0.0);
+            double* rows = ws.rows.data();
+            if (dense)
+                for (int sy = sy0; sy < sy1; ++sy)
+                    scatter_items(m_shape->pixels(), 0, dense_reach, ws.dense[sy - sy0], sy, rows,
+                                  tile);
+            for (const std::unique_ptr<Sparse>& level : m_sparse) {
+                const int s = level->block, half = s == 1 ? 0 : s / 2 - 1;
+                const int first = level->first_block_row;
+                const int lo = std::max(first, -floor_div(-(y_begin - level->reach.last_row - half), s));
+                const int hi = std::min(first + int(level->rows.size()) - 1,
+                                        floor_div(y_end - 1 - level->reach.first_row - half, s));
+                for (int b = lo; b <= hi; ++b)
+                    scatter_items(*level->family, level->shift, level->reach,
+                                  level->rows[b - first], level->anchor(b), rows, tile);
+            }
+            for (int y = y_begin; y < y_end; ++y) {
+                double* row = rows + (y - y_begin) * row_size;
+                finish_row(row, nullptr, ws.row_carry.data() + size_t(y - y_begin) * 4,
+                           tile.cells());
+                sink.row(y, tile.x_begin, tile.x_end, row + 4);
+            }
+        }
+    }, OIIO::paropt(nthreads));
+}
+
+}  // namespace defocus
