@@ -105,6 +105,10 @@ std::string parse_command_line(int argc, const char* argv[], CommandLine& cl,
                   "Polygon: 0 = straight blades, 1 = a disc (default: 0)");
     shot_args.add(ap, "--aspect A", "aspect",
                   "Anamorphic squeeze: < 1 narrows the bokeh horizontally (default: 1)");
+    shot_args.add(ap, "--spread METHOD", "spread",
+                  "Disc, polygon and mask: bounded (default: constant time, large "
+                  "footprints merged in blocks of at most r/8 pixels, highlights exact) or "
+                  "exact (every pixel on its own: time grows with the blur)");
     shot_args.add(ap, "--psf-image FILE", "psf-image",
                   "The hybrid method: pixels whose bokeh is visible (bright highlights) are "
                   "spread with this PSF image, scaled to their CoC; all others with the "

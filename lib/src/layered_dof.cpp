@@ -12,6 +12,9 @@
 
 #include <defocus/spread.h>
 
+#include "float_pixels.h"
+#include "spread_engine.h"
+
 namespace defocus {
 
 using namespace OIIO;
@@ -84,9 +87,36 @@ LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc, int
 
 namespace {
 
-/// One layer through the aperture's fast filter, or through the hybrid
-/// method when a PSF image is set.
-bool spread_layer(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
+/// Composites spread rows over the frame, back to front ("over" on the
+/// spread alpha). Within one layer, pixels of different blur overlap
+/// additively, so where their coverage adds up past 1 the layer is scaled
+/// back to full coverage there (the overlapping parts average instead of
+/// adding), keeping alpha within [0, 1]; rounding residue of the prefix
+/// sums below 0 is cleared.
+class Over final : public RowSink {
+public:
+    explicit Over(ImageBuf& frame) : m_frame(frame) {}
+    void row(int y, int x_begin, int x_end, const double* rgba) override
+    {
+        float* out = static_cast<float*>(m_frame.pixeladdr(x_begin, y));
+        for (int x = x_begin; x < x_end; ++x, rgba += 4, out += 4) {
+            const double a = rgba[3];
+            const double scale = a > 1.0 ? 1.0 / a : 1.0;
+            const double alpha = a > 1.0 ? 1.0 : std::max(0.0, a);
+            for (int c = 0; c < 3; ++c)
+                out[c] = float(rgba[c] * scale + (1.0 - alpha) * out[c]);
+            out[3] = float(alpha + (1.0 - alpha) * out[3]);
+        }
+    }
+
+private:
+    ImageBuf& m_frame;
+};
+
+/// A layer spread on its own, as an image: the hybrid method (highlights
+/// with the PSF image, the rest with the aperture's filter) or the smooth
+/// filters.
+bool spread_apart(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
                   const RenderSettings& settings, const RowProfile* profile,
                   int64_t& psf_pixels, int nthreads)
 {
@@ -95,7 +125,11 @@ bool spread_layer(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
         case ApertureShape::Box: return spread_box(out, in, radius, {}, nthreads);
         case ApertureShape::Tent: return spread_smooth(out, in, radius, 2, {}, nthreads);
         case ApertureShape::Smooth: return spread_smooth(out, in, radius, 3, {}, nthreads);
-        default: return spread_aperture(out, in, radius, *profile, exact_highlight_threshold, {}, nthreads);
+        default:
+            return settings.exact_shape
+                       ? spread_scanline(out, in, radius, *profile, {}, nthreads)
+                       : spread_aperture(out, in, radius, *profile, exact_highlight_threshold,
+                                         {}, nthreads);
         }
     };
     if (!settings.psf_image)
@@ -130,6 +164,39 @@ bool spread_layer(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
     return ImageBufAlgo::add(dst, fast_spread, slow_spread, {}, nthreads);
 }
 
+/// Composites a layer spread apart over the frame, within the frame's window.
+void composite_image(ImageBuf& frame, const ImageBuf& layer, int nthreads)
+{
+    const ROI both = roi_intersection(frame.roi(), layer.roi());
+    Over over(frame);
+    parallel_for(both.ybegin, both.yend, [&](int y) {
+        std::vector<double> row(size_t(std::max(0, both.width())) * 4);
+        for (int x = both.xbegin; x < both.xend; ++x)
+            for (int c = 0; c < 4; ++c)
+                row[size_t(x - both.xbegin) * 4 + c]
+                    = static_cast<const float*>(layer.pixeladdr(x, y))[c];
+        if (both.width() > 0)
+            over.row(y, both.xbegin, both.xend, row.data());
+    }, paropt(nthreads));
+}
+
+/// Whether a layer goes through the spreading engine, composited as it is
+/// spread, rather than spread apart.
+bool spread_in_engine(const RenderSettings& settings)
+{
+    return !settings.psf_image && settings.aperture.shape != ApertureShape::Tent
+           && settings.aperture.shape != ApertureShape::Smooth;
+}
+
+/// One layer ready for the engine: its radii, float pixels and
+/// highlights, which the engine reads while it lives.
+struct EngineLayer {
+    ImageBuf radius;
+    FloatPixels color_pixels, radius_pixels;
+    std::vector<uint8_t> highlights;
+    std::unique_ptr<SpreadEngine> engine;
+};
+
 bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& settings,
                    std::vector<LayerReport>* report, RenderTimings& timings, int nthreads)
 {
@@ -138,6 +205,7 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
                      "(decompose_layers)");
         return false;
     }
+    Timer spread_timer;
     const CircleOfConfusion coc(settings.camera, scene.spec.full_width);
     std::vector<LayerReport> depths;
     for (const Layer& layer : scene.layers)
@@ -148,16 +216,17 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
         return depths[a].mean_inverse_depth < depths[b].mean_inverse_depth;
     });
 
-    // Scanline apertures share one profile, sized to the largest blur.
-    std::unique_ptr<RowProfile> profile;
+    // Shape apertures share one profile and its footprints, sized to the
+    // largest blur.
+    std::shared_ptr<RowProfile> profile;
     double max_radius = 0.0;
     for (const LayerReport& d : depths)
         max_radius = std::max({ max_radius, 0.5 * std::abs(d.coc_min), 0.5 * std::abs(d.coc_max) });
     const Aperture& aperture = settings.aperture;
     if (aperture.shape == ApertureShape::Disc || aperture.shape == ApertureShape::Polygon) {
-        profile = std::make_unique<ApertureProfile>(aperture);
+        profile = std::make_shared<ApertureProfile>(aperture);
     } else if (aperture.shape == ApertureShape::Mask) {
-        auto mask = std::make_unique<MaskProfile>();
+        auto mask = std::make_shared<MaskProfile>();
         std::string error;
         if (!mask->load(aperture.mask_file, aperture.aspect, error)) {
             dst.errorfmt("{}", error);
@@ -165,66 +234,83 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
         }
         profile = std::move(mask);
     }
-    ImageBuf result;
+    const std::unique_ptr<ShapePrograms> programs =
+        profile ? std::make_unique<ShapePrograms>(profile, max_radius) : nullptr;
+    const SpreadMethod method = aperture.shape == ApertureShape::Box ? SpreadMethod::Box
+                                : settings.exact_shape               ? SpreadMethod::Exact
+                                                                     : SpreadMethod::Bounded;
+
+    // Every layer's radii, and its spread (set up in the engine, or done
+    // apart), so that the frame's window is known before it is made.
+    const ROI display(scene.spec.full_x, scene.spec.full_x + scene.spec.full_width,
+                      scene.spec.full_y, scene.spec.full_y + scene.spec.full_height, 0, 1, 0, 4);
+    ROI grown = display;
+    std::vector<EngineLayer> engines(scene.layers.size());
+    std::vector<ImageBuf> apart(scene.layers.size());
     for (size_t i : order) {
         const Layer& layer = scene.layers[i];
-        if (depths[i].pixels == 0) {
-            if (report)
-                report->push_back(depths[i]);
+        if (depths[i].pixels == 0)
             continue;
-        }
-        Timer spread_timer;
-        ImageBuf radius, spread;
-        if (!coc_radius(radius, layer.depth, coc, {}, nthreads)
-            || !spread_layer(spread, layer.color, radius, settings, profile.get(),
-                             depths[i].psf_pixels, nthreads)) {
-            dst.errorfmt("layer '{}': {}", layer.name,
-                         radius.has_error() ? radius.geterror() : spread.geterror());
+        EngineLayer& e = engines[i];
+        if (!coc_radius(e.radius, layer.depth, coc, {}, nthreads)) {
+            dst.errorfmt("layer '{}': {}", layer.name, e.radius.geterror());
             return false;
         }
-        if (report)
-            report->push_back(depths[i]);
-        timings.spread += spread_timer();
-        Timer composite_timer;
-        normalize_coverage(spread, nthreads);
-        if (!result.initialized()) {
-            result = std::move(spread);
-        } else {
-            ImageBuf composite;
-            if (!ImageBufAlgo::over(composite, spread, result, {}, nthreads)) {
-                dst.errorfmt("layer '{}': {}", layer.name, composite.geterror());
+        if (!spread_in_engine(settings)) {
+            if (!spread_apart(apart[i], layer.color, e.radius, settings, profile.get(),
+                              depths[i].psf_pixels, nthreads)) {
+                dst.errorfmt("layer '{}': {}", layer.name, apart[i].geterror());
                 return false;
             }
-            result = std::move(composite);
+            e.radius.reset();
+            grown = roi_union(grown, apart[i].roi());
+            continue;
         }
-        timings.composite += composite_timer();
+        const ROI roi = layer.color.roi();
+        e.color_pixels = FloatPixels(layer.color, roi);
+        e.radius_pixels = FloatPixels(e.radius, roi);
+        SpreadSource source;
+        source.roi = roi;
+        source.color = e.color_pixels(roi.xbegin, roi.ybegin);
+        source.radius = e.radius_pixels(roi.xbegin, roi.ybegin);
+        if (method == SpreadMethod::Bounded) {
+            e.highlights = visible_bokeh(layer.color, e.radius, exact_highlight_threshold,
+                                         nthreads);
+            source.keep_exact = e.highlights.data();
+        }
+        e.engine = std::make_unique<SpreadEngine>(source, method, programs.get(), nthreads);
+        grown = roi_union(grown, e.engine->extent());
     }
 
-    const ROI display(scene.spec.full_x, scene.spec.full_x + scene.spec.full_width,
-                      scene.spec.full_y, scene.spec.full_y + scene.spec.full_height,
-                      0, 1, 0, 4);
-    if (!result.initialized()) {  // nothing is covered: a transparent frame
-        ImageSpec empty(display, TypeFloat);
-        empty.channelnames = { "R", "G", "B", "A" };
-        empty.alpha_channel = 3;
-        result.reset(empty);
-        ImageBufAlgo::zero(result);
-    }
-    if (settings.window != OutputWindow::Grown) {
-        ROI window = settings.window == OutputWindow::Display ? display : scene.spec.roi();
-        window.chend = 4;
-        ImageBuf cropped;
-        ImageBufAlgo::crop(cropped, result, window, nthreads);
-        result = std::move(cropped);
-    }
-    ImageSpec& spec   = result.specmod();
-    spec.full_x       = display.xbegin;
-    spec.full_y       = display.ybegin;
-    spec.full_width   = display.width();
-    spec.full_height  = display.height();
+    ROI window = settings.window == OutputWindow::Display ? display
+                 : settings.window == OutputWindow::Grown ? grown
+                                                          : scene.spec.roi();
+    window.chbegin = 0;
+    window.chend = 4;
+    ImageSpec spec(window, TypeFloat);
+    spec.channelnames = { "R", "G", "B", "A" };
+    spec.alpha_channel = 3;
+    spec.full_x = display.xbegin;
+    spec.full_y = display.ybegin;
+    spec.full_width = display.width();
+    spec.full_height = display.height();
     spec.extra_attribs = scene.spec.extra_attribs;
     erase_part_attributes(spec);
-    dst = std::move(result);
+    ImageBuf frame(spec);
+    ImageBufAlgo::zero(frame, {}, nthreads);
+
+    Over over(frame);
+    for (size_t i : order) {
+        if (report)
+            report->push_back(depths[i]);
+        if (engines[i].engine)
+            engines[i].engine->run(window, over, nthreads);
+        else if (apart[i].initialized())
+            composite_image(frame, apart[i], nthreads);
+        engines[i] = EngineLayer();
+    }
+    timings.spread += spread_timer();
+    dst = std::move(frame);
     return true;
 }
 
@@ -248,23 +334,6 @@ const char* output_window_name(OutputWindow window)
     case OutputWindow::Grown: return "grown";
     }
     return "?";
-}
-
-void normalize_coverage(ImageBuf& layer, int nthreads)
-{
-    const ROI roi = layer.roi();
-    parallel_for(roi.ybegin, roi.yend, [&](int y) {
-        for (int x = roi.xbegin; x < roi.xend; ++x) {
-            float* p = static_cast<float*>(layer.pixeladdr(x, y));
-            if (p[3] > 1.0f) {
-                const float scale = 1.0f / p[3];
-                for (int c = 0; c < 4; ++c)
-                    p[c] *= scale;
-            } else if (p[3] < 0.0f) {
-                p[3] = 0.0f;
-            }
-        }
-    }, paropt(nthreads));
 }
 
 bool render_layered_dof(ImageBuf& dst, const Scene& scene,

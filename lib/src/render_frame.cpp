@@ -114,6 +114,7 @@ bool render(const Shot& shot, int frame, FrameResult& out, std::string& error,
         settings.aperture = shot.aperture;
         settings.window   = shot.window;
         settings.hybrid_threshold = shot.hybrid_threshold;
+        settings.exact_shape = shot.exact_shape;
         if (!shot.psf_image.empty()) {
             auto psf = std::make_shared<PsfImage>();
             if (!psf->load(shot.psf_image, error))
@@ -125,8 +126,7 @@ bool render(const Shot& shot, int frame, FrameResult& out, std::string& error,
             error = scene.source + ": " + image.geterror();
             return false;
         }
-        out.timings.emplace_back("spread", timings.spread);
-        out.timings.emplace_back("composite", timings.composite);
+        out.timings.emplace_back("spread and composite", timings.spread);
         timer.lap();
         if (color.loaded
             && !color.config.convert(image, color.working, color.output, error, nthreads))

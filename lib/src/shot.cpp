@@ -128,6 +128,16 @@ const std::vector<SettingRule>& rules()
                [](auto& s) -> auto& { return s.aperture.roundness; }, 0, 1),
         number({ "aspect", "aperture", "aspect", K::Number },
                [](auto& s) -> auto& { return s.aperture.aspect; }, 0.05, 20),
+        { { "spread", "aperture", "spread", K::Text },
+          [](Shot& shot, const std::string& label, const std::string& value, std::string& error) {
+              if (value == "bounded" || value == "exact") {
+                  shot.exact_shape = value == "exact";
+                  return true;
+              }
+              error = label + ": unknown method '" + value + "' (choose bounded or exact)";
+              return false;
+          },
+          [](const Shot& shot) { return std::string(shot.exact_shape ? "exact" : "bounded"); } },
         text({ "psf-image", "aperture", "psf_image", K::Path },
              [](auto& s) -> auto& { return s.psf_image; }),
         number({ "hybrid-threshold", "aperture", "hybrid_threshold", K::Number },

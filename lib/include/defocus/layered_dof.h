@@ -22,13 +22,6 @@ bool coc_radius(OIIO::ImageBuf& dst, const OIIO::ImageBuf& depth,
                 const CircleOfConfusion& coc, OIIO::ROI roi = {},
                 int nthreads = 0);
 
-/// Keeps the alpha of a spread RGBA layer within [0, 1]. Within a layer,
-/// pixels of different blur overlap additively, so where their coverage
-/// adds up past 1 the layer is scaled back to full coverage there (the
-/// overlapping parts average instead of adding). Rounding residue of the
-/// prefix sums below 0 is cleared.
-void normalize_coverage(OIIO::ImageBuf& layer, int nthreads = 0);
-
 /// The data window of a result.
 enum class OutputWindow {
     Input,    ///< the input's data window, as oiiotool's filters keep it
@@ -48,6 +41,9 @@ struct RenderSettings {
     /// PSF image, the others with the aperture's fast filter.
     std::shared_ptr<const PsfImage> psf_image;
     double hybrid_threshold = 4.0;
+    /// Shapes (disc, polygon, mask) spread exactly, every pixel on its own
+    /// (spread_scanline), rather than in bounded time (spread_aperture).
+    bool exact_shape = false;
     OutputWindow window = OutputWindow::Input;
 };
 
@@ -67,8 +63,7 @@ LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc,
 
 /// Where render_layered_dof() spends its time, in seconds.
 struct RenderTimings {
-    double spread    = 0.0;  ///< CoC radii and spreading, all layers
-    double composite = 0.0;  ///< coverage normalisation and "over"
+    double spread = 0.0;  ///< CoC radii, spreading and compositing, all layers
 };
 
 /// Renders the defocused, flattened premultiplied RGBA of a sanitized

@@ -40,6 +40,9 @@ struct Shot {
     double max_blur_px     = 512.0;
 
     Aperture aperture;
+    /// Shapes (disc, polygon, mask) spread exactly, every pixel on its own,
+    /// rather than in bounded time with large footprints merged.
+    bool exact_shape = false;
     std::string psf_image;  ///< the hybrid method's PSF image ("" = off)
     double hybrid_threshold = 4.0;
 
