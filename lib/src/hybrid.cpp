@@ -7,6 +7,8 @@
 #include <OpenImageIO/parallel.h>
 #include <OpenImageIO/strutil.h>
 
+#include "float_pixels.h"
+
 namespace defocus {
 
 using namespace OIIO;
@@ -103,27 +105,35 @@ std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius
 {
     const ROI roi = color.roi();
     const int w = roi.width(), h = roi.height();
-    // Summed-area table of luminance, one row and column of zeros in front.
+    const FloatPixels pixels(color, roi);
+    const FloatPixels radii(radius, ROI(roi.xbegin, roi.xend, roi.ybegin, roi.yend, 0, 1, 0, 1));
+    // Summed-area table of luminance, one row and column of zeros in front:
+    // each row's running sums in parallel, then down the columns in bands.
     std::vector<double> sat(size_t(w + 1) * (h + 1), 0.0);
-    for (int y = 0; y < h; ++y) {
-        double row = 0.0;
-        for (int x = 0; x < w; ++x) {
-            row += luminance(static_cast<const float*>(
-                color.pixeladdr(roi.xbegin + x, roi.ybegin + y)));
-            sat[size_t(y + 1) * (w + 1) + x + 1] = sat[size_t(y) * (w + 1) + x + 1] + row;
+    parallel_for(0, h, [&](int y) {
+        double* row = &sat[size_t(y + 1) * (w + 1) + 1];
+        const float* c = pixels(roi.xbegin, roi.ybegin + y);
+        double sum = 0.0;
+        for (int x = 0; x < w; ++x, c += pixels.nchannels())
+            row[x] = sum += luminance(c);
+    }, paropt(nthreads));
+    parallel_for_chunked(0, w + 1, 0, [&](int64_t x0, int64_t x1) {
+        for (int y = 1; y <= h; ++y) {
+            double* row = &sat[size_t(y) * (w + 1)];
+            const double* above = row - (w + 1);
+            for (int64_t x = x0; x < x1; ++x)
+                row[x] += above[x];
         }
-    }
+    }, paropt(nthreads));
     std::vector<uint8_t> selected(size_t(w) * h, 0);
     parallel_for(0, h, [&](int y) {
-        for (int x = 0; x < w; ++x) {
-            const float* c = static_cast<const float*>(
-                color.pixeladdr(roi.xbegin + x, roi.ybegin + y));
-            const double r = *static_cast<const float*>(
-                radius.pixeladdr(roi.xbegin + x, roi.ybegin + y));
+        const float* c = pixels(roi.xbegin, roi.ybegin + y);
+        const float* r = radii(roi.xbegin, roi.ybegin + y);
+        for (int x = 0; x < w; ++x, c += pixels.nchannels()) {
             const double l = luminance(c);
-            if (r < 1.0 || l <= 0.0)
+            if (r[x] < 1.0f || l <= 0.0)
                 continue;
-            const int k = int(std::ceil(r));
+            const int k = int(std::ceil(r[x]));
             const int x0 = std::max(0, x - k), x1 = std::min(w, x + k + 1);
             const int y0 = std::max(0, y - k), y1 = std::min(h, y + k + 1);
             const double sum = sat[size_t(y1) * (w + 1) + x1] - sat[size_t(y0) * (w + 1) + x1]

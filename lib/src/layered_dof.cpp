@@ -24,15 +24,17 @@ bool coc_radius(ImageBuf& dst, const ImageBuf& depth,
 {
     if (!roi.defined())
         roi = depth.roi();
+    roi.chbegin = 0;
+    roi.chend = 1;
     ImageSpec spec(roi, TypeFloat);
-    spec.nchannels = 1;
     spec.channelnames = { "radius" };
     dst.reset(spec);
+    const FloatPixels z(depth, roi);
     parallel_for(roi.ybegin, roi.yend, [&](int y) {
-        for (int x = roi.xbegin; x < roi.xend; ++x) {
-            const float z = *static_cast<const float*>(depth.pixeladdr(x, y));
-            *static_cast<float*>(dst.pixeladdr(x, y)) = float(coc.radius(z));
-        }
+        const float* in = z(roi.xbegin, y);
+        float* out = static_cast<float*>(dst.pixeladdr(roi.xbegin, y));
+        for (int x = 0; x < roi.width(); ++x, in += z.nchannels())
+            out[x] = float(coc.radius(*in));
     }, paropt(nthreads));
     return true;
 }
@@ -51,14 +53,18 @@ struct RowDepth {
 LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc, int nthreads)
 {
     const ROI roi = layer.color.roi();
+    const FloatPixels color(layer.color, roi);
+    const FloatPixels depth(layer.depth, ROI(roi.xbegin, roi.xend, roi.ybegin, roi.yend, 0, 1, 0, 1));
     std::vector<RowDepth> rows(roi.height());
     parallel_for(roi.ybegin, roi.yend, [&](int y) {
         RowDepth& r = rows[y - roi.ybegin];
-        for (int x = roi.xbegin; x < roi.xend; ++x) {
-            const float a = static_cast<const float*>(layer.color.pixeladdr(x, y))[3];
+        const float* c = color(roi.xbegin, y);
+        const float* zs = depth(roi.xbegin, y);
+        for (int x = 0; x < roi.width(); ++x, c += color.nchannels(), zs += depth.nchannels()) {
+            const float a = c[3];
             if (a <= 0.0f)
                 continue;
-            const double z = *static_cast<const float*>(layer.depth.pixeladdr(x, y));
+            const double z = *zs;
             ++r.pixels;
             r.zmin = std::min(r.zmin, z);
             r.zmax = std::max(r.zmax, z);

@@ -629,6 +629,8 @@ SpreadEngine::SpreadEngine(const SpreadSource& source, SpreadMethod method,
     // radius on each.
     const int levels = max_level + 1;
     std::vector<float> sparse_max(levels, -1.0f);
+    // Per source row, a bit per sparse level it has pixels of.
+    std::vector<uint8_t> row_levels(roi.height(), 0);
     std::mutex merge;
     OIIO::parallel_for_chunked(roi.ybegin, roi.yend, 0, [&](int64_t y0, int64_t y1) {
         float dense = -1.0f;
@@ -643,10 +645,12 @@ SpreadEngine::SpreadEngine(const SpreadSource& source, SpreadMethod method,
                 const int n = components(method, r, source.keep_exact && source.keep_exact[row + x],
                                          c);
                 for (int i = 0; i < n; ++i) {
-                    if (method == SpreadMethod::Box || (c[i].level == 0 && r <= dense_limit))
+                    if (method == SpreadMethod::Box || (c[i].level == 0 && r <= dense_limit)) {
                         dense = std::max(dense, r);
-                    else
+                    } else {
                         sparse[c[i].level] = std::max(sparse[c[i].level], r);
+                        row_levels[y - roi.ybegin] |= uint8_t(1u << c[i].level);
+                    }
                 }
             }
         }
@@ -689,7 +693,13 @@ SpreadEngine::SpreadEngine(const SpreadSource& source, SpreadMethod method,
         level->first_block_row = floor_div(roi.ybegin, s);
         level->rows.resize(floor_div(roi.yend - 1, s) - level->first_block_row + 1);
         OIIO::parallel_for(int64_t(0), int64_t(level->rows.size()), [&](int64_t i) {
-            level->rows[i] = block_row(source, method, *level, l, level->first_block_row + int(i));
+            const int by = level->first_block_row + int(i);
+            const int y0 = std::max(roi.ybegin, by * s), y1 = std::min(roi.yend, by * s + s);
+            for (int y = y0; y < y1; ++y)
+                if (row_levels[y - roi.ybegin] & (1u << l)) {
+                    level->rows[i] = block_row(source, method, *level, l, by);
+                    break;
+                }
         }, OIIO::paropt(nthreads));
         const int first = level->first_block_row, last = first + int(level->rows.size()) - 1;
         const ROI anchors(level->anchor(floor_div(roi.xbegin, s)),
