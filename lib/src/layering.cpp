@@ -265,6 +265,8 @@ std::vector<bool> hidden_under_nearer(const Fragments& frags, const Layer& layer
 void slice(const Fragments& frags, const std::string& base, const LayerBounds& bounds,
            std::vector<Layer>& layers, int nthreads)
 {
+    // ImageBuf's move may throw, so a vector that grows copies its layers.
+    layers.reserve(layers.size() + bounds.count());
     for (int k = 0; k < bounds.count(); ++k) {
         Layer layer;
         layer.name = Strutil::fmt::format("{}.{:02d}", base, k);

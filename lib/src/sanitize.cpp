@@ -46,12 +46,13 @@ struct AtomicCounts {
 void sanitize_layer(Layer& layer, AtomicCounts& counts, int nthreads)
 {
     const OIIO::ROI roi = layer.color.roi();
-    OIIO::parallel_for(roi.ybegin, roi.yend, [&](int y) {
+    OIIO::parallel_for_chunked(roi.ybegin, roi.yend, 0, [&](int64_t y0, int64_t y1) {
         PixelCounts n;
-        for (int x = roi.xbegin; x < roi.xend; ++x) {
-            float* c = static_cast<float*>(layer.color.pixeladdr(x, y));
-            float* z = static_cast<float*>(layer.depth.pixeladdr(x, y));
-            sanitize_one(c[0], c[1], c[2], c[3], *z, n);
+        for (int64_t y = y0; y < y1; ++y) {
+            float* c = static_cast<float*>(layer.color.pixeladdr(roi.xbegin, int(y)));
+            float* z = static_cast<float*>(layer.depth.pixeladdr(roi.xbegin, int(y)));
+            for (int x = 0; x < roi.width(); ++x, c += 4, ++z)
+                sanitize_one(c[0], c[1], c[2], c[3], *z, n);
         }
         counts.add(n);
     }, OIIO::paropt(nthreads));
@@ -60,9 +61,9 @@ void sanitize_layer(Layer& layer, AtomicCounts& counts, int nthreads)
 void sanitize_deep(DeepImage& image, AtomicCounts& counts, int nthreads)
 {
     const int64_t npixels = int64_t(image.offsets.size()) - 1;
-    OIIO::parallel_for(int64_t(0), npixels, [&](int64_t p) {
+    OIIO::parallel_for_chunked(int64_t(0), npixels, 0, [&](int64_t p0, int64_t p1) {
         PixelCounts n;
-        for (uint64_t i = image.offsets[p]; i < image.offsets[p + 1]; ++i) {
+        for (uint64_t i = image.offsets[p0]; i < image.offsets[p1]; ++i) {
             DeepSample& s = image.samples[i];
             if (sanitize_one(s.r, s.g, s.b, s.a, s.z, n) && !(s.zback >= s.z))
                 s.zback = s.z;

@@ -4,13 +4,14 @@
 #include <memory>
 #include <set>
 
-#include <OpenEXR/ImfCheckFile.h>
 #include <OpenImageIO/deepdata.h>
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/parallel.h>
 #include <OpenImageIO/strutil.h>
+
+#include "exr_input.h"
 
 namespace defocus {
 
@@ -149,15 +150,18 @@ bool read_pixels(ImageInput& in, const Part& part, ImageBuf& pixels,
     return true;
 }
 
-/// A layer from the colour channels of one part and the depth channel of
-/// another (or the same) part, over the colour part's data window, in one
-/// pass. Depth outside the depth part's data window is 0, which sanitize()
-/// treats as missing.
-Layer make_layer(const std::string& name, const ImageBuf& color_part,
-                 const int color[4], const ImageBuf& depth_part, int depth)
+/// A layer over `window` of a part whose header is `from` (display
+/// window), its pixels not yet set; false with `error` when it would not
+/// fit in memory.
+bool allocate_layer(const std::string& name, const ROI& window, const ImageSpec& from,
+                    Layer& layer, const std::string& filename, std::string& error)
 {
-    const ImageSpec& from = color_part.spec();
-    const ROI window      = color_part.roi();
+    const size_t bytes = size_t(window.npixels()) * 5 * sizeof(float);
+    if (window.npixels() <= 0 || bytes > memory_budget()) {
+        error = format("{}: a data window of {}x{} does not fit in memory", filename,
+                       window.width(), window.height());
+        return false;
+    }
     auto layer_spec = [&](int nchannels) {
         ImageSpec spec(window, TypeFloat);
         spec.nchannels   = nchannels;
@@ -172,17 +176,28 @@ Layer make_layer(const std::string& name, const ImageBuf& color_part,
     color_spec.alpha_channel = 3;
     depth_spec.channelnames  = { "Z" };
     depth_spec.z_channel     = 0;
-    Layer layer;
+    // Every pixel is written next: no need to clear them first.
     layer.name = name;
-    layer.color.reset(color_spec);
-    layer.depth.reset(depth_spec);
+    layer.color.reset(color_spec, InitializePixels::No);
+    layer.depth.reset(depth_spec, InitializePixels::No);
+    return true;
+}
+
+/// A layer from the colour channels of one part and the depth channel of
+/// another (or the same) part, read through OpenImageIO, over the colour
+/// part's data window, in one pass. Depth outside the depth part's data
+/// window is 0, which sanitize() treats as missing.
+void copy_layer(Layer& layer, const ImageBuf& color_part, const int color[4],
+                const ImageBuf& depth_part, int depth)
+{
+    const ROI window       = color_part.roi();
     const ROI depth_window = depth_part.roi();
     const bool same_part   = &depth_part == &color_part;
+    const int n            = color_part.nchannels();
     parallel_for(window.ybegin, window.yend, [&](int y) {
         float* rgba = static_cast<float*>(layer.color.pixeladdr(window.xbegin, y));
         float* z    = static_cast<float*>(layer.depth.pixeladdr(window.xbegin, y));
         const float* src = static_cast<const float*>(color_part.pixeladdr(window.xbegin, y));
-        const int n      = from.nchannels;
         for (int x = window.xbegin; x < window.xend; ++x, rgba += 4, ++z, src += n) {
             for (int c = 0; c < 4; ++c)
                 rgba[c] = src[color[c]];
@@ -194,42 +209,50 @@ Layer make_layer(const std::string& name, const ImageBuf& color_part,
                          : 0.0f;
         }
     });
-    return layer;
 }
 
-bool read_deep(ImageInput& in, const Part& part, DeepImage& image,
-               const std::string& filename, std::string& error)
+/// A layer decoded straight from an EXR: colour from one part, depth from
+/// the same part or another one, over the colour part's data window.
+bool decode_layer(const ExrInput& exr, const std::string& filename, const std::string& name,
+                  const Part& color_part, const Part& depth_part, Layer& layer,
+                  std::string& error)
 {
-    DeepData data;
-    if (!in.read_native_deep_image(part.subimage, 0, data)) {
-        error = format("{}: {}: {}", filename, part.label,
-                       Strutil::replace(in.geterror(), "\n", " ", true));
+    const ROI window = color_part.spec.roi();
+    if (!allocate_layer(name, window, color_part.spec, layer, filename, error))
         return false;
+    const ImageSpec& cs = color_part.spec;
+    const size_t width = size_t(window.width());
+    float* rgba = static_cast<float*>(layer.color.localpixels());
+    float* z = static_cast<float*>(layer.depth.localpixels());
+    std::vector<ChannelTarget> targets;
+    for (int c = 0; c < 4; ++c)
+        targets.push_back({ cs.channelnames[color_part.channels.color[c]], rgba + c, 4, 4 * width });
+    const std::string depth_name = depth_part.spec.channelnames[depth_part.channels.depth];
+    const ROI depth_window = depth_part.spec.roi();
+    if (depth_part.subimage == color_part.subimage || depth_window == window) {
+        ChannelTarget depth { depth_name, z, 1, width };
+        if (depth_part.subimage == color_part.subimage)
+            targets.push_back(depth);
+        else if (!exr.read(depth_part.subimage, { depth }, error, 0))
+            return false;
+        return exr.read(color_part.subimage, targets, error, 0);
     }
-    const Channels& ch = part.channels;
-    const int zback = first_channel(part.spec, { channel_name(ch.prefix, "ZBack"), "ZBack" });
-    image.name = part.spec.get_string_attribute("name", format("deep{}", part.subimage));
-    image.roi  = part.spec.roi();
-    const int64_t npixels = image.roi.npixels();
-    if (data.pixels() != npixels) {
-        error = format("{}: {}: deep data has {} pixels, expected {}", filename,
-                       part.label, data.pixels(), npixels);
+    // A depth part over another window: decoded apart, then laid over the
+    // colour's window; depth it does not cover is 0, which sanitize()
+    // treats as missing.
+    std::vector<float> depth(size_t(depth_window.npixels()));
+    if (!exr.read(depth_part.subimage, { { depth_name, depth.data(), 1, size_t(depth_window.width()) } },
+                  error, 0)
+        || !exr.read(color_part.subimage, targets, error, 0))
         return false;
-    }
-    image.offsets.assign(npixels + 1, 0);
-    for (int64_t p = 0; p < npixels; ++p)
-        image.offsets[p + 1] = image.offsets[p] + data.samples(p);
-    image.samples.resize(image.offsets.back());
-    for (int64_t p = 0; p < npixels; ++p)
-        for (int s = 0, n = data.samples(p); s < n; ++s) {
-            DeepSample& d = image.samples[image.offsets[p] + s];
-            d.r = data.deep_value(p, ch.color[0], s);
-            d.g = data.deep_value(p, ch.color[1], s);
-            d.b = data.deep_value(p, ch.color[2], s);
-            d.a = data.deep_value(p, ch.color[3], s);
-            d.z = data.deep_value(p, ch.depth, s);
-            d.zback = zback >= 0 ? data.deep_value(p, zback, s) : d.z;
-        }
+    parallel_for(window.ybegin, window.yend, [&](int y) {
+        float* row = z + size_t(y - window.ybegin) * width;
+        for (int x = window.xbegin; x < window.xend; ++x)
+            row[x - window.xbegin] = depth_window.contains(x, y)
+                                         ? depth[size_t(y - depth_window.ybegin) * depth_window.width()
+                                                 + (x - depth_window.xbegin)]
+                                         : 0.0f;
+    });
     return true;
 }
 
@@ -245,10 +268,10 @@ struct FileLayout {
     const ImageSpec& first() const { return parts.front().spec; }
 };
 
-/// Opens a file as OIIO reads it. EXRs are vetted first with OpenEXR's
-/// own checker (the code behind exrcheck) when `vet`: OpenImageIO 2.4
-/// crashes or hangs on some corrupt EXRs that it survives.
-std::unique_ptr<ImageInput> open_file(const std::string& filename, bool vet,
+/// Opens a file as OIIO reads it. An EXR's headers are first checked by
+/// OpenEXR's core library, kept in `exr` (when given) to decode its pixels:
+/// OpenImageIO 2.4 crashes or hangs on some corrupt EXRs that it rejects.
+std::unique_ptr<ImageInput> open_file(const std::string& filename, ExrInput* exr,
                                       std::string& error)
 {
     if (!Filesystem::exists(filename)) {
@@ -259,13 +282,9 @@ std::unique_ptr<ImageInput> open_file(const std::string& filename, bool vet,
         error = filename + ": is a directory, not an image";
         return nullptr;
     }
-    // checkOpenEXRFile returns true when it finds a problem.
-    if (vet && is_openexr(filename)
-        && Imf::checkOpenEXRFile(filename.c_str(), /*reduceMemory=*/true,
-                                 /*reduceTime=*/true, /*enableCoreCheck=*/true)) {
-        error = filename + ": corrupt or truncated OpenEXR file";
+    ExrInput headers_only;
+    if (is_openexr(filename) && !(exr ? exr : &headers_only)->open(filename, error))
         return nullptr;
-    }
     auto in = ImageInput::open(filename);
     if (!in) {
         std::string why = OIIO::geterror();
@@ -372,38 +391,66 @@ bool same_display_window(const ImageSpec& first, const ImageSpec& scene,
 bool read_file(const std::string& filename, const ReadOptions& options,
                Scene& scene, std::string& error)
 {
-    auto in = open_file(filename, /*vet=*/true, error);
+    ExrInput exr;
+    auto in = open_file(filename, &exr, error);
     FileLayout layout;
     if (!in || !choose_parts(*in, filename, options, layout, error))
         return false;
+    const bool is_exr = is_openexr(filename);
+    auto layer_name = [](const Part& part, const char* fallback) -> std::string {
+        return part.spec.get_string_attribute("name", format("{}{}", fallback, part.subimage));
+    };
+    // ImageBuf's move may throw, so a vector that grows copies its layers.
+    (layout.complete.size() > 1 ? scene.layers : scene.flat).reserve(layout.complete.size() + 1);
     for (size_t i : layout.complete) {
         const Part& part = layout.parts[i];
+        const Channels& c = part.channels;
         if (part.spec.deep) {
+            DeepChannels names;
+            for (int k = 0; k < 4; ++k)
+                names.color[k] = part.spec.channelnames[c.color[k]];
+            names.depth = part.spec.channelnames[c.depth];
+            const int zback = first_channel(part.spec, { channel_name(c.prefix, "ZBack"), "ZBack" });
+            if (zback >= 0)
+                names.depth_back = part.spec.channelnames[zback];
             DeepImage image;
-            if (!read_deep(*in, part, image, filename, error))
+            image.name = layer_name(part, "deep");
+            if (!read_deep_part(filename, part.subimage, names, image, error))
                 return false;
             scene.deep.push_back(std::move(image));
             continue;
         }
-        ImageBuf pixels;
-        if (!read_pixels(*in, part, pixels, filename, error))
-            return false;
-        const Channels& c = part.channels;
-        const std::string name = part.spec.get_string_attribute(
-            "name", format("layer{}", part.subimage));
-        (layout.complete.size() > 1 ? scene.layers : scene.flat)
-            .push_back(make_layer(name, pixels, c.color, pixels, c.depth));
+        Layer layer;
+        if (is_exr) {
+            if (!decode_layer(exr, filename, layer_name(part, "layer"), part, part, layer, error))
+                return false;
+        } else {
+            ImageBuf pixels;
+            if (!read_pixels(*in, part, pixels, filename, error)
+                || !allocate_layer(layer_name(part, "layer"), pixels.roi(), part.spec, layer,
+                                   filename, error))
+                return false;
+            copy_layer(layer, pixels, c.color, pixels, c.depth);
+        }
+        (layout.complete.size() > 1 ? scene.layers : scene.flat).push_back(std::move(layer));
     }
     if (layout.joined_color >= 0) {
         const Part& color_part = layout.parts[layout.joined_color];
         const Part& depth_part = layout.parts[layout.joined_depth];
-        ImageBuf color, depth;
-        if (!read_pixels(*in, color_part, color, filename, error)
-            || !read_pixels(*in, depth_part, depth, filename, error))
-            return false;
-        scene.flat.push_back(make_layer(color_part.spec.get_string_attribute("name", "beauty"),
-                                        color, color_part.channels.color, depth,
-                                        depth_part.channels.depth));
+        const std::string name = color_part.spec.get_string_attribute("name", "beauty");
+        Layer layer;
+        if (is_exr) {
+            if (!decode_layer(exr, filename, name, color_part, depth_part, layer, error))
+                return false;
+        } else {
+            ImageBuf color, depth;
+            if (!read_pixels(*in, color_part, color, filename, error)
+                || !read_pixels(*in, depth_part, depth, filename, error)
+                || !allocate_layer(name, color.roi(), color_part.spec, layer, filename, error))
+                return false;
+            copy_layer(layer, color, color_part.channels.color, depth, depth_part.channels.depth);
+        }
+        scene.flat.push_back(std::move(layer));
     }
     if (scene.spec.nchannels == 0 || scene.spec.full_width == 0) {
         scene.spec = layout.first();
@@ -462,7 +509,7 @@ bool read_scene_spec(const std::vector<std::string>& filenames, const ReadOption
     }
     ROI data_window;
     for (size_t f = 0; f < filenames.size(); ++f) {
-        auto in = open_file(filenames[f], /*vet=*/false, error);
+        auto in = open_file(filenames[f], nullptr, error);
         FileLayout layout;
         if (!in || !choose_parts(*in, filenames[f], options, layout, error))
             return false;
@@ -492,7 +539,10 @@ bool read_scene(const std::vector<std::string>& filenames, const ReadOptions& op
         if (scene.source.empty())
             scene.spec = part.spec;
         // Several files are the layers of one scene: a flat file is a layer.
+        // (Reserved: ImageBuf's move may throw, so a growing vector copies.)
         auto& as_layers = filenames.size() > 1 ? scene.layers : scene.flat;
+        as_layers.reserve(as_layers.size() + part.flat.size() + part.layers.size());
+        scene.layers.reserve(scene.layers.size() + part.flat.size() + part.layers.size());
         for (Layer& layer : part.flat)
             as_layers.push_back(std::move(layer));
         for (Layer& layer : part.layers)

@@ -1,0 +1,67 @@
+// Internal: OpenEXR pixels read once, straight into the layers' buffers.
+//
+// OpenImageIO 2.4 crashes or hangs on some corrupt EXRs, so every file used
+// to be checked first with OpenEXR's checkOpenEXRFile, which decodes every
+// pixel through several of OpenEXR's interfaces: each input was decoded
+// two or three times. Here the one decode is also the check. Flat parts go
+// through OpenEXR's core library, which validates every header field, offset
+// and chunk it reads (the checker's own core pass: it finds damage the C++
+// interfaces read as valid); deep parts through the C++ interface, with
+// exceptions caught and the checker's memory guards.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <defocus/scene.h>
+
+namespace defocus {
+
+/// Bytes one input may make the reader allocate: half the machine's
+/// memory. A damaged header or sample count table must not take the
+/// machine down.
+size_t memory_budget();
+
+/// Where one channel of a part is decoded to, as float: the address of the
+/// part's data window origin, and the steps to the next pixel and row.
+struct ChannelTarget {
+    std::string channel;
+    float* origin;
+    size_t pixel_stride, row_stride;  ///< in floats
+};
+
+class ExrInput {
+public:
+    ExrInput() = default;
+    ExrInput(const ExrInput&) = delete;
+    ExrInput& operator=(const ExrInput&) = delete;
+    ~ExrInput();
+
+    /// Opens a file and checks its headers; false with `error` ("corrupt or
+    /// truncated OpenEXR file: ...").
+    bool open(const std::string& filename, std::string& error);
+
+    /// Decodes the named channels of flat part `part` (scanline or tiled,
+    /// its full-resolution level) into their targets, chunks in parallel.
+    /// False with `error` when a chunk is damaged.
+    bool read(int part, const std::vector<ChannelTarget>& targets, std::string& error,
+              int nthreads) const;
+
+private:
+    struct Context;
+    Context* m_context = nullptr;
+};
+
+/// The channels of a deep part that make a layer: colour, depth and, when
+/// the part has one, the back of each sample's depth interval.
+struct DeepChannels {
+    std::string color[4], depth, depth_back;
+};
+
+/// Reads deep part `part` (scanline or tiled) of an OpenEXR file, with
+/// every sample's RGBA, Z and ZBack (ZBack = Z without one). False with
+/// `error` when the file is damaged or needs more memory than is sane.
+bool read_deep_part(const std::string& filename, int part, const DeepChannels& channels,
+                    DeepImage& image, std::string& error);
+
+}  // namespace defocus
