@@ -98,19 +98,24 @@ TEST_CASE("box aperture on layers.exr scores against the path-traced truths")
     const double focus125 = score(garden("layers.exr"), 1.25);
     WARN("garden layers.exr, box: " << focus3 << " dB at focus 3, " << focus125
                                     << " dB at focus 1.25");
-    CHECK(focus3 >= 33.0);
-    CHECK(focus125 >= 35.0);
+    CHECK(focus3 >= 33.9);
+    CHECK(focus125 >= 35.9);
 }
 
 TEST_CASE("the disc aperture on layers.exr scores close to exact disc spreading")
 {
-    // Exact slow disc spreading scores 38.4 dB against both truths.
+    // The default, bounded-time disc merges large blurs in blocks; exact
+    // scanline spreading (38.93 / 38.48 dB) is what it must stay close to.
     const double focus3 = score(garden("layers.exr"), 3.0, 0, "disc");
     const double focus125 = score(garden("layers.exr"), 1.25, 0, "disc");
-    WARN("garden layers.exr, disc: " << focus3 << " dB at focus 3, " << focus125
-                                     << " dB at focus 1.25");
-    CHECK(focus3 >= 37.5);
-    CHECK(focus125 >= 37.5);
+    const double exact3 = score(garden("layers.exr") + " --spread exact", 3.0, 0, "disc");
+    const double exact125 = score(garden("layers.exr") + " --spread exact", 1.25, 0, "disc");
+    WARN("garden layers.exr, disc: " << focus3 << " / " << focus125 << " dB at focus 3 / 1.25; "
+                                     << "exact: " << exact3 << " / " << exact125 << " dB");
+    CHECK(focus3 >= 38.9);
+    CHECK(focus125 >= 38.4);
+    CHECK(focus3 >= exact3 - 0.05);
+    CHECK(focus125 >= exact125 - 0.05);
 }
 
 TEST_CASE("the hybrid method beats the box alone, taking few pixels the slow way")

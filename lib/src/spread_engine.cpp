@@ -635,15 +635,24 @@ SpreadEngine::SpreadEngine(const SpreadSource& source, SpreadMethod method,
     OIIO::parallel_for_chunked(roi.ybegin, roi.yend, 0, [&](int64_t y0, int64_t y1) {
         float dense = -1.0f;
         std::vector<float> sparse(levels, -1.0f);
+        // Neighbours mostly share a radius: components() once per change.
+        float cached_radius = NAN;
+        Component cached[2];
+        int cached_count = 0;
         for (int64_t y = y0; y < y1; ++y) {
             const size_t row = size_t(y - roi.ybegin) * roi.width();
             for (int x = 0; x < roi.width(); ++x) {
                 if (is_zero(source.color + (row + x) * 4))
                     continue;
                 const float r = source.radius[row + x];
-                Component c[2];
-                const int n = components(method, r, source.keep_exact && source.keep_exact[row + x],
-                                         c);
+                Component exact[2];
+                const bool keep = source.keep_exact && source.keep_exact[row + x];
+                if (!keep && r != cached_radius) {
+                    cached_radius = r;
+                    cached_count = components(method, r, false, cached);
+                }
+                const Component* c = keep ? exact : cached;
+                const int n = keep ? components(method, r, true, exact) : cached_count;
                 for (int i = 0; i < n; ++i) {
                     if (method == SpreadMethod::Box || (c[i].level == 0 && r <= dense_limit)) {
                         dense = std::max(dense, r);

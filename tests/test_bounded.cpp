@@ -1,0 +1,147 @@
+// Bounded-time spreading of shapes (spread_aperture), the default for the
+// disc, polygon and mask: exact below radius 15, merged in blocks above.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <limits>
+
+#include <OpenImageIO/imagebufalgo.h>
+
+#include <defocus/spread.h>
+
+#include "test_support.h"
+
+using namespace defocus;
+using namespace defocus_test;
+using OIIO::ImageBuf;
+using OIIO::ROI;
+
+namespace {
+
+/// No pixel counts as a highlight: every large footprint is merged.
+constexpr double merge_all = std::numeric_limits<double>::infinity();
+
+/// Random premultiplied RGBA in [0.01, 10) and radii in [rmin, rmax].
+void random_layer(const ROI& roi, double rmin, double rmax, unsigned seed, ImageBuf& color,
+                  ImageBuf& radius)
+{
+    color = zero_image(roi, 4);
+    radius = zero_image(roi, 1);
+    Random rng(seed);
+    for (int y = roi.ybegin; y < roi.yend; ++y)
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            float v[4];
+            for (float& c : v)
+                c = float(0.01 + 10.0 * rng.uniform());
+            color.setpixel(x, y, v);
+            const float r = float(rmin + (rmax - rmin) * rng.uniform());
+            radius.setpixel(x, y, &r);
+        }
+}
+
+Aperture hexagon()
+{
+    Aperture a;
+    a.shape = ApertureShape::Polygon;
+    a.blades = 6;
+    a.rotation_deg = 10.0;
+    return a;
+}
+
+}  // namespace
+
+TEST_CASE("below radius 15 the bounded disc is the exact disc")
+{
+    auto profile = std::make_shared<ApertureProfile>(Aperture());
+    ImageBuf color, radius;
+    random_layer(ROI(-5, 45, 2, 40), 0.0, 14.9, 7, color, radius);
+    ImageBuf bounded, direct;
+    REQUIRE(spread_aperture(bounded, color, radius, *profile, merge_all));
+    REQUIRE(spread_direct(direct, color, radius, aperture_psf(profile)));
+    CHECK(worst_relative_error(bounded, direct, 1e-5, 1e-7) <= 1.0);
+}
+
+TEST_CASE("bounded spreading keeps every channel's energy at every radius and shape")
+{
+    for (const Aperture& shape : { Aperture(), hexagon() }) {
+        const ApertureProfile profile(shape);
+        for (auto [rmin, rmax] : { std::pair { 14.0, 18.0 }, { 0.0, 70.0 }, { 100.0, 300.0 } }) {
+            INFO(aperture_shape_name(shape.shape) << " radii " << rmin << ".." << rmax);
+            ImageBuf color, radius;
+            random_layer(ROI(3, 83, -7, 60), rmin, rmax, unsigned(rmax), color, radius);
+            ImageBuf out;
+            REQUIRE(spread_aperture(out, color, radius, profile, merge_all));
+            for (int c = 0; c < 4; ++c)
+                CHECK(channel_sum(out, c) == Approx(channel_sum(color, c)).epsilon(1e-6));
+        }
+    }
+}
+
+TEST_CASE("merged blocks leave a uniform field uniform")
+{
+    // Blocks of 4 pixels at radius 40: light moves by up to 2 pixels. A
+    // field spread from every block's centre still covers evenly, up to a
+    // ripple of 0.7% where the disc's edges fall between blocks.
+    const ROI roi(0, 300, 0, 300);
+    ImageBuf color = zero_image(roi, 4);
+    OIIO::ImageBufAlgo::fill(color, { 1.0f, 0.5f, 0.25f, 1.0f });
+    ImageBuf out;
+    REQUIRE(spread_aperture(out, color, constant_radius(roi, 40.0f), ApertureProfile(Aperture()),
+                            merge_all));
+    const ROI inside(60, 240, 60, 240, 0, 1, 0, 4);
+    const auto stats = OIIO::ImageBufAlgo::computePixelStats(out, inside);
+    CHECK(stats.min[3] == Approx(1.0).epsilon(0.01));
+    CHECK(stats.max[3] == Approx(1.0).epsilon(0.01));
+    CHECK(stats.min[0] == Approx(1.0).epsilon(0.01));
+    CHECK(stats.max[2] == Approx(0.25).epsilon(0.01));
+}
+
+TEST_CASE("a merged footprint changes continuously where the block size changes")
+{
+    // Blocks of 2 take over from single pixels between radius 15 and 16,
+    // blocks of 4 from blocks of 2 between 30 and 32: an impulse's
+    // footprint must not jump there.
+    const ApertureProfile profile{Aperture()};
+    auto spread_at = [&](float r) {
+        ImageBuf out;
+        REQUIRE(spread_aperture(out, impulse(), constant_radius(ROI(0, 1, 0, 1), r), profile,
+                                merge_all));
+        return out;
+    };
+    // Smoothly, a 0.01 px step moves about 2·0.01/r of the energy; moving
+    // the centre by 1/2 pixel over 1 pixel of radius adds about as much.
+    CHECK(largest_footprint_step(spread_at, 14.8f, 0.01f, 140) < 0.01);
+    CHECK(largest_footprint_step(spread_at, 29.8f, 0.01f, 240) < 0.01);
+}
+
+TEST_CASE("a highlight keeps its exact bokeh among merged pixels")
+{
+    // A bright point on a dim field at radius 40: its outline is what the
+    // eye sees, so it is spread in place, never merged.
+    const ROI roi(0, 200, 0, 200);
+    ImageBuf color, radius;
+    random_layer(roi, 40.0, 40.0, 3, color, radius);
+    OIIO::ImageBufAlgo::mul(color, color, 1e-3f);
+    const float bright[4] = { 1000.0f, 1000.0f, 1000.0f, 1.0f };
+    color.setpixel(101, 97, bright);
+    const ApertureProfile profile{Aperture()};
+    ImageBuf bounded, exact;
+    REQUIRE(spread_aperture(bounded, color, radius, profile));
+    REQUIRE(spread_scanline(exact, color, radius, profile));
+    // The highlight lights each pixel of its disc with 1000 / (pi 40^2),
+    // about 0.2, so a merged highlight would differ by that much at its
+    // edge; merging the dim field (about 0.005) moves under 1% of that.
+    OIIO::ImageBufAlgo::CompareResults diff
+        = OIIO::ImageBufAlgo::compare(bounded, exact, 0.0f, 0.0f);
+    CHECK(diff.maxerror < 1e-4);
+}
+
+TEST_CASE("an in-focus pixel stays itself under the bounded disc")
+{
+    const ImageBuf one = impulse();
+    ImageBuf out;
+    REQUIRE(spread_aperture(out, one, constant_radius(one.roi(), 0.0f), ApertureProfile(Aperture())));
+    float p[4];
+    out.getpixel(0, 0, p);
+    CHECK(p[0] == Approx(1.0f).epsilon(1e-6));
+}
