@@ -279,7 +279,9 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
         source.roi = roi;
         source.color = e.color_pixels(roi.xbegin, roi.ybegin);
         source.radius = e.radius_pixels(roi.xbegin, roi.ybegin);
-        if (method == SpreadMethod::Bounded) {
+        const double layer_radius
+            = 0.5 * std::max(std::abs(depths[i].coc_min), std::abs(depths[i].coc_max));
+        if (method == SpreadMethod::Bounded && layer_radius >= smallest_merged_radius()) {
             e.highlights = visible_bokeh(layer.color, e.radius, exact_highlight_threshold,
                                          nthreads);
             source.keep_exact = e.highlights.data();

@@ -143,7 +143,7 @@ bool spread_image(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const OIIO::Im
     source.color = color;
     source.radius = in.radii(roi.xbegin, roi.ybegin);
     std::vector<uint8_t> visible;
-    if (visible_threshold > 0.0) {
+    if (visible_threshold > 0.0 && in.max_radius >= smallest_merged_radius()) {
         auto view = [&](int nchannels, const float* pixels) {
             ImageSpec spec(roi.width(), roi.height(), nchannels, OIIO::TypeFloat);
             spec.x = roi.xbegin;

@@ -33,6 +33,10 @@ constexpr float dense_limit = float(2.0 * block_ratio);
 /// that stays in the second-level cache while every source row within
 /// reach adds to it.
 constexpr int tile_rows = 64, tile_columns = 256;
+/// Every source pixel within reach of a tile is visited for it, so a box
+/// reaching far, whose pixels all take this path, gets tiles a few times
+/// its reach on a side: fewer visits outweigh a tile that leaves the cache.
+constexpr int box_tile_reaches = 4, box_tile_limit = 2048;
 
 using d4 = double __attribute__((vector_size(32)));
 using f4 = float __attribute__((vector_size(16)));
@@ -88,8 +92,7 @@ struct Component {
 /// levels L - 1 and L, so that footprints change continuously.
 int components(SpreadMethod method, float r, bool keep_exact, Component out[2])
 {
-    const double start = 2.0 * block_ratio * (1.0 - transition);  // of level 1
-    if (method != SpreadMethod::Bounded || !(r >= start) || keep_exact) {
+    if (method != SpreadMethod::Bounded || !(r >= smallest_merged_radius()) || keep_exact) {
         out[0] = { 0, 1.0f };
         return 1;
     }
@@ -136,6 +139,11 @@ Reach program_reach(const FootprintProgram& p)
 }
 
 }  // namespace
+
+double smallest_merged_radius()
+{
+    return 2.0 * block_ratio * (1.0 - transition);  // where level 1 starts
+}
 
 ShapePrograms::ShapePrograms(std::shared_ptr<const RowProfile> profile, double max_radius)
 {
@@ -736,11 +744,14 @@ void SpreadEngine::run(const ROI& window_in, RowSink& sink, int nthreads) const
     const ROI& roi = m_source.roi;
     const Reach dense_reach { m_dense.first_row, m_dense.last_row, m_dense.first_column,
                               m_dense.last_column };
-    const int bands = (window.height() + tile_rows - 1) / tile_rows;
+    const int box_reach = box ? m_dense.last_row - m_dense.first_row : 0;
+    const int band_rows = std::clamp(box_tile_reaches * box_reach, tile_rows, box_tile_limit);
+    const int tile_width = std::clamp(box_tile_reaches * box_reach, tile_columns, box_tile_limit);
+    const int bands = (window.height() + band_rows - 1) / band_rows;
     OIIO::parallel_for(int64_t(0), int64_t(bands), [&](int64_t band) {
         thread_local Workspace ws;
-        const int y_begin = window.ybegin + int(band) * tile_rows;
-        const int y_end = std::min(window.yend, y_begin + tile_rows);
+        const int y_begin = window.ybegin + int(band) * band_rows;
+        const int y_end = std::min(window.yend, y_begin + band_rows);
         ws.row_carry.assign(size_t(y_end - y_begin) * 4, 0.0);
         // Source rows and columns whose deltas can land in the band.
         const int sy0 = std::max(roi.ybegin, y_begin - m_dense.last_row);
@@ -754,8 +765,8 @@ void SpreadEngine::run(const ROI& window_in, RowSink& sink, int nthreads) const
                 prepare_dense_row(m_source, m_method, m_shape->pixels(), sy, sx0, sx1,
                                   ws.dense[sy - sy0], ws.color, ws.blend, ws.larger);
         }
-        for (int x_begin = window.xbegin; x_begin < window.xend; x_begin += tile_columns) {
-            const Tile tile { y_begin, y_end, x_begin, std::min(window.xend, x_begin + tile_columns),
+        for (int x_begin = window.xbegin; x_begin < window.xend; x_begin += tile_width) {
+            const Tile tile { y_begin, y_end, x_begin, std::min(window.xend, x_begin + tile_width),
                               x_begin == window.xbegin };
             const size_t row_size = size_t(tile.cells()) * 4;
             if (box) {

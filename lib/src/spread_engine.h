@@ -68,6 +68,10 @@ struct SpreadSource {
     const uint8_t* keep_exact = nullptr;
 };
 
+/// The smallest CoC radius the Bounded method merges into blocks: below
+/// it every pixel is spread exactly, so no highlight needs marking.
+double smallest_merged_radius();
+
 enum class SpreadMethod {
     Box,      ///< squares of the CoC disc's area, constant time (16 deltas)
     Exact,    ///< the shape, every pixel on its own: time grows with the radius
