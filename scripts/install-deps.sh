@@ -6,11 +6,10 @@ packages=(
     cmake g++ make pkg-config
     libopenimageio-dev openimageio-tools   # image I/O, ImageBuf, ArgParse, threads
     python3-openimageio                    # tests: Python opens .dof scenes via the plugin
-    libopenexr-dev openexr                 # multi-part and deep EXR, file checks
+    libopenexr-dev openexr                 # EXR reading (decode and damage checks in one pass)
     libopencolorio-dev opencolorio-tools   # colour management, ociocheck
     nlohmann-json3-dev                     # .dof scene files (JSON)
     catch2                                 # tests
-    libbenchmark-dev                       # benchmark programs
 )
 
 missing=()

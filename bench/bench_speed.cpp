@@ -1,0 +1,426 @@
+// defocus's speed, in one run, as medians of interleaved rounds: every
+// measurement runs once per round, so a busy moment of a shared machine
+// slows them all alike and the ratios stay fair.
+//
+//   bench_speed [--rounds N] [--garden DIR] [--scene4k FILE]
+//
+// Prints: ms per input megapixel per filter at radius 4, 32, 128 and 256;
+// the radius 128 / radius 4 ratio per aperture; the memory floor of
+// spreading four 4096x2160 layers against spreading and compositing them;
+// the read stage against a plain OpenEXR decode; whole frames of the garden
+// scene and the 4K example (`defocus` as a process) and their peak memory.
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputPart.h>
+#include <OpenEXR/ImfMultiPartInputFile.h>
+#include <OpenEXR/ImfThreading.h>
+#include <OpenImageIO/argparse.h>
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/strutil.h>
+#include <OpenImageIO/sysutil.h>
+#include <OpenImageIO/timer.h>
+
+#include <defocus/layered_dof.h>
+#include <defocus/scene_io.h>
+#include <defocus/spread.h>
+
+#include "memory_floor.h"
+
+using namespace OIIO;
+using Strutil::fmt::format;
+
+namespace {
+
+/// A named measurement: returns seconds (or, for peak memory, bytes).
+struct Measure {
+    std::string name;
+    std::function<double()> run;
+    std::vector<double> samples;
+    double median() const
+    {
+        std::vector<double> s = samples;
+        std::nth_element(s.begin(), s.begin() + s.size() / 2, s.end());
+        return s[s.size() / 2];
+    }
+};
+
+/// One layer of premultiplied noise and a constant CoC radius.
+struct TestLayer {
+    ImageBuf color, radius;
+    double megapixels() const { return color.spec().image_pixels() * 1e-6; }
+};
+
+TestLayer make_layer(int width, int height, float r)
+{
+    TestLayer layer { ImageBuf(ImageSpec(width, height, 4, TypeFloat)),
+                      ImageBuf(ImageSpec(width, height, 1, TypeFloat)) };
+    ImageBufAlgo::noise(layer.color, "uniform", 0.01f, 10.0f, false, 1);
+    ImageBufAlgo::fill(layer.radius, { r });
+    return layer;
+}
+
+double seconds(const std::function<bool()>& work)
+{
+    Timer timer;
+    if (!work()) {
+        std::fprintf(stderr, "bench_speed: a measurement failed\n");
+        std::exit(1);
+    }
+    return timer();
+}
+
+/// Runs a command line through /bin/sh; returns wall seconds and sets
+/// the child's peak resident memory in bytes (Linux counts a child's peak
+/// from its parent's size at fork, so the parent must be small).
+double run_process(const std::string& command, double& peak_bytes)
+{
+    Timer timer;
+    const pid_t pid = fork();
+    if (pid == 0) {
+        execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+        _exit(127);
+    }
+    int status = 0;
+    struct rusage usage {};
+    wait4(pid, &status, 0, &usage);
+    const double elapsed = timer();
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+        std::fprintf(stderr, "bench_speed: failed: %s\n", command.c_str());
+        std::exit(1);
+    }
+    peak_bytes = double(usage.ru_maxrss) * 1024.0;
+    return elapsed;
+}
+
+/// A small process, forked before the benchmark allocates its layers, that
+/// runs command lines for it, so that their peak memory is their own.
+class Launcher {
+public:
+    Launcher()
+    {
+        int commands[2], results[2];
+        if (pipe(commands) != 0 || pipe(results) != 0) {
+            std::perror("bench_speed: pipe");
+            std::exit(1);
+        }
+        m_pid = fork();
+        if (m_pid == 0) {
+            close(commands[1]);
+            close(results[0]);
+            FILE* in = fdopen(commands[0], "r");
+            FILE* out = fdopen(results[1], "w");
+            char line[8192];
+            while (std::fgets(line, sizeof line, in)) {
+                double peak = 0.0;
+                const double t = run_process(Strutil::strip(line, "\n"), peak);
+                std::fprintf(out, "%.9g %.0f\n", t, peak);
+                std::fflush(out);
+            }
+            _exit(0);
+        }
+        close(commands[0]);
+        close(results[1]);
+        m_commands = fdopen(commands[1], "w");
+        m_results = fdopen(results[0], "r");
+    }
+    ~Launcher()
+    {
+        std::fclose(m_commands);
+        std::fclose(m_results);
+        waitpid(m_pid, nullptr, 0);
+    }
+    /// As run_process().
+    double run(const std::string& command, double& peak_bytes)
+    {
+        std::fprintf(m_commands, "%s\n", command.c_str());
+        std::fflush(m_commands);
+        double t = 0.0;
+        if (std::fscanf(m_results, "%lf %lf", &t, &peak_bytes) != 2) {
+            std::fprintf(stderr, "bench_speed: failed: %s\n", command.c_str());
+            std::exit(1);
+        }
+        return t;
+    }
+
+private:
+    pid_t m_pid = 0;
+    FILE* m_commands = nullptr;
+    FILE* m_results = nullptr;
+};
+
+/// Every part's channels decoded to float by OpenEXR alone, with as many
+/// threads as defocus uses: what reading costs before defocus does
+/// anything.
+bool plain_openexr_decode(const std::string& filename)
+{
+    Imf::setGlobalThreadCount(int(Sysutil::hardware_concurrency()));
+    Imf::MultiPartInputFile file(filename.c_str());
+    for (int p = 0; p < file.parts(); ++p) {
+        Imf::InputPart part(file, p);
+        const Imath::Box2i dw = part.header().dataWindow();
+        const size_t width = size_t(dw.max.x - dw.min.x + 1);
+        const size_t height = size_t(dw.max.y - dw.min.y + 1);
+        const Imf::ChannelList& channels = part.header().channels();
+        size_t nchannels = 0;
+        for (auto it = channels.begin(); it != channels.end(); ++it)
+            ++nchannels;
+        std::vector<float> pixels(width * height * nchannels);
+        Imf::FrameBuffer frame;
+        size_t c = 0;
+        for (auto it = channels.begin(); it != channels.end(); ++it, ++c) {
+            char* origin = reinterpret_cast<char*>(pixels.data() + c);
+            const intptr_t first = (intptr_t(dw.min.y) * intptr_t(width) + dw.min.x)
+                                   * intptr_t(nchannels * sizeof(float));
+            frame.insert(it.name(), Imf::Slice(Imf::FLOAT, origin - first,
+                                               nchannels * sizeof(float),
+                                               width * nchannels * sizeof(float)));
+        }
+        part.setFrameBuffer(frame);
+        part.readPixels(dw.min.y, dw.max.y);
+    }
+    return true;
+}
+
+bool read_stage(const std::string& filename)
+{
+    defocus::Scene scene;
+    std::string error;
+    return defocus::read_scene({ filename }, {}, scene, error);
+}
+
+/// The four 4096x2160 layers of the floor, as a scene with a camera that
+/// gives blur up to 100 px: far field (CoC 60 px), hills in the lower half
+/// (10 to 40 px), an in-focus post (10% of the width) and near leaves
+/// (100 px, a quarter of the frame).
+struct FloorScene {
+    defocus::Scene scene;
+    defocus::RenderSettings settings;
+};
+
+FloorScene make_floor_scene(const std::vector<bench::FloorLayer>& layers)
+{
+    FloorScene s;
+    // A 50 mm lens at f/1 on a 36 mm sensor: infinity blurs to 72 px.
+    s.settings.camera.focal_length_mm = 50.0;
+    s.settings.camera.fstop = 1.0;
+    s.settings.camera.sensor_width_mm = 36.0;
+    s.settings.camera.focus_distance = 4.0;
+    const int width = 4096;
+    const defocus::CircleOfConfusion coc(s.settings.camera, width);
+    const char* names[4] = { "far", "hills", "post", "leaves" };
+    for (size_t i = 0; i < layers.size(); ++i) {
+        const bench::FloorLayer& l = layers[i];
+        defocus::Layer layer { names[i], ImageBuf(ImageSpec(l.width, l.height, 4, TypeFloat)),
+                               ImageBuf(ImageSpec(l.width, l.height, 1, TypeFloat)) };
+        layer.color.specmod().alpha_channel = 3;
+        layer.color.set_pixels(ROI(0, l.width, 0, l.height, 0, 1, 0, 4), TypeFloat,
+                               l.color.data());
+        std::vector<float> depth(l.coc.size());
+        std::transform(l.coc.begin(), l.coc.end(), depth.begin(),
+                       [&](float diameter) { return float(coc.depth_at(diameter)); });
+        layer.depth.set_pixels(ROI(0, l.width, 0, l.height, 0, 1, 0, 1), TypeFloat, depth.data());
+        s.scene.layers.push_back(std::move(layer));
+    }
+    s.scene.spec = ImageSpec(width, 2160, 4, TypeFloat);
+    return s;
+}
+
+std::string arg_quote(const std::string& s)
+{
+    return "'" + Strutil::replace(s, "'", "'\\''", true) + "'";
+}
+
+}  // namespace
+
+int main(int argc, const char* argv[])
+{
+    int rounds = 5;
+    std::string garden = std::string(DEFOCUS_SHARED_DATA) + "/scenes/garden";
+    std::string scene4k;
+    ArgParse ap;
+    ap.intro("bench_speed -- defocus's speed, as medians of interleaved rounds")
+        .usage("bench_speed [options]");
+    ap.arg("--rounds %d:N", &rounds).help("Rounds of every measurement (default: 5)");
+    ap.arg("--garden %s:DIR", &garden).help("The garden scene's folder (skipped when absent)");
+    ap.arg("--scene4k %s:FILE", &scene4k)
+        .help("The 4K example scene (default: made with make_example_scene in a temporary folder)");
+    if (ap.parse_args(argc, argv) < 0 || rounds < 1) {
+        std::fprintf(stderr, "bench_speed: %s\n", ap.geterror().c_str());
+        return 1;
+    }
+    Launcher launcher;
+    const std::string scratch = Filesystem::temp_directory_path() + "/"
+                                + Filesystem::unique_path("bench_speed_%%%%%%");
+    Filesystem::create_directory(scratch);
+    if (scene4k.empty()) {
+        scene4k = scratch + "/scene4k.exr";
+        double unused;
+        std::printf("making the 4K example scene...\n");
+        launcher.run(format("{} --width 3840 --height 2160 -o {} > /dev/null", MAKE_EXAMPLE_SCENE_BIN,
+                           arg_quote(scene4k)),
+                    unused);
+    }
+
+    std::vector<Measure> measures;
+    auto add = [&](const std::string& name, std::function<double()> run) {
+        measures.push_back({ name, std::move(run), {} });
+    };
+
+    // Filters on one 2048x1080 layer (a quarter of that for the filters
+    // whose cost grows with the radius), per input megapixel.
+    const int radii[] = { 4, 32, 128, 256 };
+    std::map<int, TestLayer> layers, small_layers;
+    for (int r : radii) {
+        layers[r] = make_layer(2048, 1080, float(r));
+        small_layers[r] = make_layer(1024, 540, float(r));
+    }
+    auto disc = std::make_shared<defocus::ApertureProfile>(defocus::Aperture());
+    defocus::Aperture hexagon_aperture;
+    hexagon_aperture.shape = defocus::ApertureShape::Polygon;
+    auto hexagon = std::make_shared<defocus::ApertureProfile>(hexagon_aperture);
+    auto mask = std::make_shared<defocus::MaskProfile>();
+    std::string error;
+    if (!mask->load(std::string(EXAMPLES_DIR) + "/psf/blades7.exr", 1.0, error)) {
+        std::fprintf(stderr, "bench_speed: %s\n", error.c_str());
+        return 1;
+    }
+    using Filter = std::function<bool(ImageBuf&, const TestLayer&)>;
+    const std::vector<std::pair<std::string, Filter>> filters = {
+        { "box", [](ImageBuf& out, const TestLayer& l) {
+              return defocus::spread_box(out, l.color, l.radius); } },
+        { "disc", [&](ImageBuf& out, const TestLayer& l) {
+              return defocus::spread_aperture(out, l.color, l.radius, *disc); } },
+        { "polygon", [&](ImageBuf& out, const TestLayer& l) {
+              return defocus::spread_aperture(out, l.color, l.radius, *hexagon); } },
+        { "mask", [&](ImageBuf& out, const TestLayer& l) {
+              return defocus::spread_aperture(out, l.color, l.radius, *mask); } },
+        { "disc, --spread exact", [&](ImageBuf& out, const TestLayer& l) {
+              return defocus::spread_scanline(out, l.color, l.radius, *disc); } },
+        { "tent", [](ImageBuf& out, const TestLayer& l) {
+              return defocus::spread_smooth(out, l.color, l.radius, 2); } },
+        { "smooth", [](ImageBuf& out, const TestLayer& l) {
+              return defocus::spread_smooth(out, l.color, l.radius, 3); } },
+    };
+    for (const auto& [name, filter] : filters) {
+        const bool small = name == "disc, --spread exact" || name == "tent" || name == "smooth";
+        for (int r : radii) {
+            const TestLayer& layer = small ? small_layers[r] : layers[r];
+            add(format("filter {} r{}", name, r), [&, filter = filter] {
+                return seconds([&] {
+                           ImageBuf out;
+                           return filter(out, layer);
+                       })
+                       / layer.megapixels();
+            });
+        }
+    }
+
+    // The floor, and the real thing on the same four layers.
+    const std::vector<bench::FloorLayer> floor_layers = bench::make_floor_layers();
+    const FloorScene floor_scene = make_floor_scene(floor_layers);
+    add("floor", [&] { return bench::memory_floor(floor_layers); });
+    add("spread and composite, 4 layers 4096x2160", [&] {
+        return seconds([&] {
+            ImageBuf out;
+            return defocus::render_layered_dof(out, floor_scene.scene, floor_scene.settings);
+        });
+    });
+
+    // Reading.
+    const bool have_garden = Filesystem::exists(garden + "/layers.exr");
+    std::vector<std::pair<std::string, std::string>> inputs = { { "4K example", scene4k } };
+    if (have_garden)
+        inputs.insert(inputs.begin(), { "garden", garden + "/layers.exr" });
+    for (const auto& [name, file] : inputs) {
+        add(format("read {} (defocus)", name), [file = file] {
+            return seconds([&] { return read_stage(file); });
+        });
+        add(format("read {} (plain OpenEXR)", name), [file = file] {
+            return seconds([&] { return plain_openexr_decode(file); });
+        });
+    }
+
+    // Whole frames, as a user runs them.
+    std::map<std::string, double> peak;
+    const std::vector<std::pair<std::string, std::string>> frames = [&] {
+        std::vector<std::pair<std::string, std::string>> f;
+        if (have_garden)
+            f.push_back({ "garden", format("{} {} -o {}/garden.exr --focal 85 --fstop 1.4 --focus 3 -q",
+                                           DEFOCUS_BIN, arg_quote(garden + "/layers.exr"),
+                                           arg_quote(scratch)) });
+        f.push_back({ "4K example", format("{} {} -o {}/4k.exr --focal 50 --fstop 1.8 --focus 4 "
+                                           "--compression none -q",
+                                           DEFOCUS_BIN, arg_quote(scene4k), arg_quote(scratch)) });
+        return f;
+    }();
+    for (const auto& [name, command] : frames)
+        add(format("frame {}", name), [&, name = name, command = command] {
+            double bytes = 0.0;
+            const double t = launcher.run(command, bytes);
+            peak[name] = std::max(peak[name], bytes);
+            return t;
+        });
+
+    for (int round = 0; round < rounds; ++round) {
+        std::printf("round %d of %d\n", round + 1, rounds);
+        std::fflush(stdout);
+        for (Measure& m : measures)
+            m.samples.push_back(m.run());
+    }
+    std::map<std::string, double> median;
+    for (const Measure& m : measures)
+        median[m.name] = m.median();
+
+    std::printf("\nmedians of %d interleaved rounds, %d threads\n", rounds,
+                int(Sysutil::hardware_concurrency()));
+    std::printf("\nms per input megapixel (2048x1080 layer; exact, tent, smooth: 1024x540)\n");
+    std::printf("%-22s %9s %9s %9s %9s\n", "filter", "r 4", "r 32", "r 128", "r 256");
+    for (const auto& [name, filter] : filters) {
+        std::printf("%-22s", name.c_str());
+        for (int r : radii)
+            std::printf(" %9.1f", 1e3 * median[format("filter {} r{}", name, r)]);
+        std::printf("\n");
+    }
+    std::printf("\nradius 128 / radius 4, per input megapixel (target: at most 1.3)\n");
+    for (const char* name : { "box", "disc", "polygon", "mask" })
+        std::printf("  %-8s %.2f\n", name,
+                    median[format("filter {} r128", name)] / median[format("filter {} r4", name)]);
+    const double floor = median["floor"];
+    const double spread = median["spread and composite, 4 layers 4096x2160"];
+    std::printf("\nfour 4096x2160 layers, blur up to 100 px, disc\n");
+    std::printf("  memory floor            %8.1f ms\n", 1e3 * floor);
+    std::printf("  spread and composite    %8.1f ms  (%.1fx the floor; target: at most 4x)\n",
+                1e3 * spread, spread / floor);
+    std::printf("\nread stage (target: at most 1.5x a plain OpenEXR decode)\n");
+    for (const auto& [name, file] : inputs) {
+        const double ours = median[format("read {} (defocus)", name)];
+        const double plain = median[format("read {} (plain OpenEXR)", name)];
+        std::printf("  %-12s %8.1f ms, plain OpenEXR %8.1f ms: %.2fx\n", name.c_str(), 1e3 * ours,
+                    1e3 * plain, ours / plain);
+    }
+    std::printf("\nwhole frames (defocus as a process)\n");
+    for (const auto& [name, command] : frames)
+        std::printf("  %-12s %8.3f s, peak memory %6.0f MB\n", name.c_str(),
+                    median["frame " + name], peak[name] * 1e-6);
+    if (!have_garden)
+        std::printf("  (garden skipped: no %s)\n", garden.c_str());
+    std::printf("  4K frame's layers as float RGBA: %.0f MB (target: peak at most twice that)\n",
+                4.0 * 4096 * 2160 * 16 * 1e-6);
+    Filesystem::remove_all(scratch);
+    return 0;
+}
