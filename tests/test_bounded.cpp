@@ -21,24 +21,6 @@ namespace {
 /// No pixel counts as a highlight: every large footprint is merged.
 constexpr double merge_all = std::numeric_limits<double>::infinity();
 
-/// Random premultiplied RGBA in [0.01, 10) and radii in [rmin, rmax].
-void random_layer(const ROI& roi, double rmin, double rmax, unsigned seed, ImageBuf& color,
-                  ImageBuf& radius)
-{
-    color = zero_image(roi, 4);
-    radius = zero_image(roi, 1);
-    Random rng(seed);
-    for (int y = roi.ybegin; y < roi.yend; ++y)
-        for (int x = roi.xbegin; x < roi.xend; ++x) {
-            float v[4];
-            for (float& c : v)
-                c = float(0.01 + 10.0 * rng.uniform());
-            color.setpixel(x, y, v);
-            const float r = float(rmin + (rmax - rmin) * rng.uniform());
-            radius.setpixel(x, y, &r);
-        }
-}
-
 Aperture hexagon()
 {
     Aperture a;
@@ -134,14 +116,4 @@ TEST_CASE("a highlight keeps its exact bokeh among merged pixels")
     OIIO::ImageBufAlgo::CompareResults diff
         = OIIO::ImageBufAlgo::compare(bounded, exact, 0.0f, 0.0f);
     CHECK(diff.maxerror < 1e-4);
-}
-
-TEST_CASE("an in-focus pixel stays itself under the bounded disc")
-{
-    const ImageBuf one = impulse();
-    ImageBuf out;
-    REQUIRE(spread_aperture(out, one, constant_radius(one.roi(), 0.0f), ApertureProfile(Aperture())));
-    float p[4];
-    out.getpixel(0, 0, p);
-    CHECK(p[0] == Approx(1.0f).epsilon(1e-6));
 }

@@ -48,17 +48,8 @@ TEST_CASE("scanline spreading equals the direct reference for discs and polygons
         for (auto [rmin, rmax] : { std::pair { 0.0, 0.0 }, { 3.0, 3.0 }, { 4.6, 4.6 },
                                    { 0.0, 11.5 } }) {
             INFO(aperture_shape_name(shape.shape) << " radii " << rmin << ".." << rmax);
-            ImageBuf color = zero_image(roi, 4), radius = zero_image(roi, 1);
-            Random rng(unsigned(rmax * 10 + shape.blades));
-            for (int y = roi.ybegin; y < roi.yend; ++y)
-                for (int x = roi.xbegin; x < roi.xend; ++x) {
-                    float v[4];
-                    for (float& c : v)
-                        c = float(0.01 + 10.0 * rng.uniform());
-                    color.setpixel(x, y, v);
-                    const float r = float(rmin + (rmax - rmin) * rng.uniform());
-                    radius.setpixel(x, y, &r);
-                }
+            ImageBuf color, radius;
+            random_layer(roi, rmin, rmax, unsigned(rmax * 10 + shape.blades), color, radius);
             ImageBuf fast, direct;
             REQUIRE(spread_scanline(fast, color, radius, *profile));
             REQUIRE(spread_direct(direct, color, radius, aperture_psf(profile)));
@@ -120,14 +111,19 @@ TEST_CASE("a disc footprint changes continuously with the radius")
     CHECK(largest_step < 0.02);
 }
 
-TEST_CASE("an in-focus pixel stays itself under a disc")
+TEST_CASE("an in-focus pixel stays itself under a disc, exact or bounded")
 {
     const ImageBuf one = impulse();
-    ImageBuf out;
-    REQUIRE(spread_scanline(out, one, constant_radius(one.roi(), 0.0f), ApertureProfile(Aperture())));
-    float p[4];
-    out.getpixel(0, 0, p);
-    CHECK(p[0] == Approx(1.0f).epsilon(1e-6));
+    const ImageBuf zero = constant_radius(one.roi(), 0.0f);
+    const ApertureProfile disc{Aperture()};
+    ImageBuf exact, bounded;
+    REQUIRE(spread_scanline(exact, one, zero, disc));
+    REQUIRE(spread_aperture(bounded, one, zero, disc));
+    for (const ImageBuf* out : { &exact, &bounded }) {
+        float p[4];
+        out->getpixel(0, 0, p);
+        CHECK(p[0] == Approx(1.0f).epsilon(1e-6));
+    }
 }
 
 namespace {

@@ -63,6 +63,23 @@ double largest_footprint_step(const std::function<ImageBuf(float)>& spread_at, f
     return largest;
 }
 
+void random_layer(const ROI& roi, double rmin, double rmax, unsigned seed, ImageBuf& color,
+                  ImageBuf& radius)
+{
+    color = zero_image(roi, 4);
+    radius = zero_image(roi, 1);
+    Random rng(seed);
+    for (int y = roi.ybegin; y < roi.yend; ++y)
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            float v[4];
+            for (float& c : v)
+                c = float(0.01 + 10.0 * rng.uniform());
+            color.setpixel(x, y, v);
+            const float r = float(rmin + (rmax - rmin) * rng.uniform());
+            radius.setpixel(x, y, &r);
+        }
+}
+
 defocus::Camera synthetic_camera(double focus)
 {
     defocus::Camera cam;

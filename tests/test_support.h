@@ -42,6 +42,11 @@ private:
     unsigned long long m_state;
 };
 
+/// A layer of random premultiplied RGBA in [0.01, 10) over roi, and random
+/// radii in [rmin, rmax].
+void random_layer(const ROI& roi, double rmin, double rmax, unsigned seed, ImageBuf& color,
+                  ImageBuf& radius);
+
 /// Sum of channel `c` over the whole data window, in double.
 double channel_sum(const ImageBuf& image, int c);
 
