@@ -48,7 +48,7 @@ DEFOCUS_KERNEL d4 load4(const double* p)
     return v;
 }
 
-DEFOCUS_KERNEL void store4(double* p, d4 v)
+DEFOCUS_KERNEL void store4(double* p, const d4& v)
 {
     std::memcpy(p, &v, sizeof v);
 }
