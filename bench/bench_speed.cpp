@@ -259,6 +259,10 @@ int main(int argc, const char* argv[])
     ap.arg("--garden %s:DIR", &garden).help("The garden scene's folder (skipped when absent)");
     ap.arg("--scene4k %s:FILE", &scene4k)
         .help("The 4K example scene (default: made with make_example_scene in a temporary folder)");
+    std::string only;
+    ap.arg("--only %s:TEXT", &only)
+        .help("Run only the measurements whose name contains TEXT and print their medians "
+              "(for profiling one of them)");
     if (ap.parse_args(argc, argv) < 0 || rounds < 1) {
         std::fprintf(stderr, "bench_speed: %s\n", ap.geterror().c_str());
         return 1;
@@ -376,6 +380,12 @@ int main(int argc, const char* argv[])
             return t;
         });
 
+    if (!only.empty())
+        measures.erase(std::remove_if(measures.begin(), measures.end(),
+                                      [&](const Measure& m) {
+                                          return m.name.find(only) == std::string::npos;
+                                      }),
+                       measures.end());
     for (int round = 0; round < rounds; ++round) {
         std::printf("round %d of %d\n", round + 1, rounds);
         std::fflush(stdout);
@@ -385,6 +395,12 @@ int main(int argc, const char* argv[])
     std::map<std::string, double> median;
     for (const Measure& m : measures)
         median[m.name] = m.median();
+    if (!only.empty()) {
+        for (const Measure& m : measures)
+            std::printf("%-45s %10.1f ms\n", m.name.c_str(), 1e3 * m.median());
+        Filesystem::remove_all(scratch);
+        return 0;
+    }
 
     std::printf("\nmedians of %d interleaved rounds, %d threads\n", rounds,
                 int(Sysutil::hardware_concurrency()));
