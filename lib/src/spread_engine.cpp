@@ -100,6 +100,10 @@ int components(SpreadMethod method, float r, bool keep_exact, Component out[2])
     while (level < max_level && r >= block_ratio * (2 << level) * (1.0 - transition))
         ++level;
     const double u = (r / (block_ratio * (1 << level)) - (1.0 - transition)) / transition;
+    if (u <= 0.0) {  // where the transition starts: the smaller size alone
+        out[0] = { level - 1, 1.0f };
+        return 1;
+    }
     if (u < 1.0) {
         out[0] = { level - 1, float(1.0 - u) };
         out[1] = { level, float(u) };
@@ -269,6 +273,20 @@ DEFOCUS_KERNEL void cluster_body(double* cells, const Colors& c, int q0, int n)
     }
 }
 
+/// Adds the M taps of items [lo, hi), `stride` columns apart, item lo's
+/// first tap at `cells`.
+template<int M, typename Colors>
+DEFOCUS_KERNEL void items_body(double* cells, const Colors& c, int stride, int lo, int hi)
+{
+    for (int i = lo; i < hi; ++i, cells += size_t(stride) * 4) {
+        d4 tap[M];  // read before any cell is written, so the colour is loaded once
+        for (int t = 0; t < M; ++t)
+            tap[t] = c.tap(t, i);
+        for (int t = 0; t < M; ++t)
+            store4(cells + t * 4, load4(cells + t * 4) + tap[t]);
+    }
+}
+
 /// Adds one cluster of m <= 4 taps for items [lo, hi) of a run whose items
 /// are 2^shift columns apart, item 0's first tap at cell cb. Along a run of
 /// pixels one column apart, which share cells, each cell is written once;
@@ -303,10 +321,14 @@ DEFOCUS_KERNEL void add_cluster(double* row, const Colors& c, int m, int cb, int
         };
         for (int i = touch_lo; i < std::min(touch_hi, inside_lo); ++i)
             add_item(i);
-        for (int i = inside_lo; i < inside_hi; ++i) {
-            double* px = row + size_t(cb + stride * i) * 4;
-            for (int t = 0; t < m; ++t)
-                store4(px + t * 4, load4(px + t * 4) + c.tap(t, i));
+        if (inside_lo < inside_hi) {
+            double* cells = row + size_t(cb + stride * inside_lo) * 4;
+            switch (m) {
+            case 1: items_body<1>(cells, c, stride, inside_lo, inside_hi); break;
+            case 2: items_body<2>(cells, c, stride, inside_lo, inside_hi); break;
+            case 3: items_body<3>(cells, c, stride, inside_lo, inside_hi); break;
+            default: items_body<4>(cells, c, stride, inside_lo, inside_hi); break;
+            }
         }
         for (int i = inside_hi; i < touch_hi; ++i)
             add_item(i);
