@@ -26,7 +26,7 @@ bool focus_map(ImageBuf& dst, const Scene& scene, const Camera& camera, double i
     spec.full_y = display.ybegin;
     spec.channelnames = { "R", "G", "B", "A" };
     spec.alpha_channel = 3;
-    dst.reset(spec);
+    dst.reset(spec, InitializePixels::No);  // every pixel is written below
     const CircleOfConfusion coc(camera, s.full_width);
     const double max_blur = std::max(camera.max_blur_px, 1e-6);
     parallel_for(display.ybegin, display.yend, [&](int y) {

@@ -22,7 +22,7 @@ bool gather(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
     roi = in.roi;
     ROI window = roi;
     window.chend = nc;
-    dst.reset(output_spec(src, window));
+    dst.reset(output_spec(src, window), OIIO::InitializePixels::No);  // every pixel is written below
     float* out = static_cast<float*>(dst.localpixels());
     OIIO::parallel_for(roi.ybegin, roi.yend, [&](int y) {
         std::vector<double> sum(nc);

@@ -14,6 +14,7 @@
 
 #include "float_pixels.h"
 #include "spread_engine.h"
+#include "zeroed_image.h"
 
 namespace defocus {
 
@@ -28,7 +29,7 @@ bool coc_radius(ImageBuf& dst, const ImageBuf& depth,
     roi.chend = 1;
     ImageSpec spec(roi, TypeFloat);
     spec.channelnames = { "radius" };
-    dst.reset(spec);
+    dst.reset(spec, InitializePixels::No);  // every pixel is written below
     const FloatPixels z(depth, roi);
     parallel_for(roi.ybegin, roi.yend, [&](int y) {
         const float* in = z(roi.xbegin, y);
@@ -304,8 +305,8 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
     spec.full_height = display.height();
     spec.extra_attribs = scene.spec.extra_attribs;
     erase_part_attributes(spec);
-    ImageBuf frame(spec);
-    ImageBufAlgo::zero(frame, {}, nthreads);
+    ImageBuf frame;
+    reset_zeroed(frame, spec, nthreads);
 
     Over over(frame);
     for (size_t i : order) {

@@ -190,8 +190,9 @@ bool extract_layer(const Fragments& frags, int k, Layer& layer, int nthreads)
     ImageSpec depth_spec(roi, TypeFloat);
     depth_spec.nchannels = 1;
     depth_spec.channelnames = { "Z" };
-    layer.color.reset(color_spec);
-    layer.depth.reset(depth_spec);
+    // Every pixel is written below.
+    layer.color.reset(color_spec, InitializePixels::No);
+    layer.depth.reset(depth_spec, InitializePixels::No);
     std::atomic<bool> any { false };
     parallel_for(roi.ybegin, roi.yend, [&](int y) {
         bool row_any = false;

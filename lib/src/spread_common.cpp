@@ -7,8 +7,9 @@
 #include <cmath>
 #include <vector>
 
-#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/parallel.h>
+
+#include "zeroed_image.h"
 
 namespace defocus {
 
@@ -158,8 +159,7 @@ bool spread_image(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const OIIO::Im
     if (shape)
         programs = std::make_unique<ShapePrograms>(borrow(*shape), in.max_radius);
     const SpreadEngine engine(source, method, programs.get(), nthreads);
-    dst.reset(output_spec(src, engine.extent()));
-    OIIO::ImageBufAlgo::zero(dst, {}, nthreads);
+    reset_zeroed(dst, output_spec(src, engine.extent()), nthreads);
     StoreRows rows(dst, nc);
     engine.run(engine.extent(), rows, nthreads);
     return true;

@@ -54,7 +54,7 @@ bool spread_direct(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
             }
     });
 
-    dst.reset(output_spec(src, ext));
+    dst.reset(output_spec(src, ext), OIIO::InitializePixels::No);  // every pixel is written below
     std::copy(acc.begin(), acc.end(), static_cast<float*>(dst.localpixels()));
     return true;
 }

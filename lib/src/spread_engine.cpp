@@ -501,6 +501,27 @@ void scatter_box_row(const SpreadSource& src, int sy, int x0, int x1, double* ro
     }
 }
 
+/// The runs of a row of items (2^shift columns apart, their footprints
+/// reaching `reach`) that can touch the tile's columns: [first, last).
+struct RunsInReach {
+    std::vector<ProgramRun>::const_iterator first, last;
+    int x_lo, x_hi;  ///< the anchors whose footprints touch the columns
+    bool empty() const { return first == last; }
+};
+
+RunsInReach runs_in_reach(const ItemRow& items, int shift, const Reach& reach, const Tile& tile)
+{
+    RunsInReach r;
+    r.x_lo = tile.x_begin - reach.last_column;
+    r.x_hi = tile.x_end - reach.first_column;
+    r.first = std::lower_bound(items.runs.begin(), items.runs.end(),
+                               r.x_lo - ((items.longest - 1) << shift),
+                               [](const ProgramRun& run, int x) { return run.x < x; });
+    r.last = std::lower_bound(r.first, items.runs.end(), r.x_hi,
+                              [](const ProgramRun& run, int x) { return run.x < x; });
+    return r;
+}
+
 /// Adds the footprints of one row of items (pixels or blocks 2^shift
 /// columns apart, anchored on row `anchor`) to the tile's delta rows: the
 /// items' reach is `reach` (of the largest of `family`'s programs they
@@ -510,14 +531,9 @@ void scatter_items(const ProgramFamily& family, int shift, const Reach& reach,
                    const ItemRow& items, int anchor, double* rows, const Tile& tile)
 {
     const size_t row_size = size_t(tile.cells()) * 4;
-    // Anchors whose footprints can touch the tile's columns, from the
-    // first run that can reach them.
-    const int x_lo = tile.x_begin - reach.last_column;
-    const int x_hi = tile.x_end - reach.first_column;
-    auto first = std::lower_bound(items.runs.begin(), items.runs.end(),
-                                  x_lo - ((items.longest - 1) << shift),
-                                  [](const ProgramRun& r, int x) { return r.x < x; });
-    for (auto it = first; it != items.runs.end() && it->x < x_hi; ++it) {
+    const RunsInReach runs = runs_in_reach(items, shift, reach, tile);
+    const int x_lo = runs.x_lo, x_hi = runs.x_hi;
+    for (auto it = runs.first; it != runs.last; ++it) {
         const ProgramRun& run = *it;
         const int i0 = std::max(0, -floor_shift(run.x - x_lo, shift));
         const int i1 = std::min(run.n, -floor_shift(run.x - x_hi, shift));
@@ -811,22 +827,50 @@ void SpreadEngine::run(const ROI& window_in, RowSink& sink, int nthreads) const
             }
             // Shapes: every source row and block row within reach adds its
             // footprints' rows to the tile, a run at a time.
+            auto item_rows = [&](auto&& visit) {
+                if (dense)
+                    for (int sy = sy0; sy < sy1; ++sy)
+                        if (!visit(m_shape->pixels(), 0, dense_reach, ws.dense[sy - sy0], sy))
+                            return;
+                for (const std::unique_ptr<Sparse>& level : m_sparse) {
+                    const int s = level->block, half = s == 1 ? 0 : s / 2 - 1;
+                    const int first = level->first_block_row;
+                    const int lo = std::max(first, -floor_div(-(y_begin - level->reach.last_row - half), s));
+                    const int hi = std::min(first + int(level->rows.size()) - 1,
+                                            floor_div(y_end - 1 - level->reach.first_row - half, s));
+                    for (int b = lo; b <= hi; ++b)
+                        if (!visit(*level->family, level->shift, level->reach,
+                                   level->rows[b - first], level->anchor(b)))
+                            return;
+                }
+            };
+            bool lit = false;
+            item_rows([&](const ProgramFamily&, int shift, const Reach& reach, const ItemRow& items,
+                          int) {
+                lit = !runs_in_reach(items, shift, reach, tile).empty();
+                return !lit;
+            });
+            if (!lit) {
+                // Layers are sparse: a tile that no footprint reaches only
+                // carries the light from its left, mostly none.
+                ws.rows.resize(row_size);
+                for (int y = y_begin; y < y_end; ++y) {
+                    const double* carry = ws.row_carry.data() + size_t(y - y_begin) * 4;
+                    if (std::all_of(carry, carry + 4, [](double v) { return v == 0.0; }))
+                        continue;
+                    for (size_t i = 0; i < row_size; i += 4)
+                        std::copy(carry, carry + 4, ws.rows.begin() + ptrdiff_t(i));
+                    sink.row(y, tile.x_begin, tile.x_end, ws.rows.data() + 4);
+                }
+                continue;
+            }
             ws.rows.assign(size_t(y_end - y_begin) * row_size, 0.0);
             double* rows = ws.rows.data();
-            if (dense)
-                for (int sy = sy0; sy < sy1; ++sy)
-                    scatter_items(m_shape->pixels(), 0, dense_reach, ws.dense[sy - sy0], sy, rows,
-                                  tile);
-            for (const std::unique_ptr<Sparse>& level : m_sparse) {
-                const int s = level->block, half = s == 1 ? 0 : s / 2 - 1;
-                const int first = level->first_block_row;
-                const int lo = std::max(first, -floor_div(-(y_begin - level->reach.last_row - half), s));
-                const int hi = std::min(first + int(level->rows.size()) - 1,
-                                        floor_div(y_end - 1 - level->reach.first_row - half, s));
-                for (int b = lo; b <= hi; ++b)
-                    scatter_items(*level->family, level->shift, level->reach,
-                                  level->rows[b - first], level->anchor(b), rows, tile);
-            }
+            item_rows([&](const ProgramFamily& family, int shift, const Reach& reach,
+                          const ItemRow& items, int anchor) {
+                scatter_items(family, shift, reach, items, anchor, rows, tile);
+                return true;
+            });
             for (int y = y_begin; y < y_end; ++y) {
                 double* row = rows + (y - y_begin) * row_size;
                 finish_row(row, nullptr, ws.row_carry.data() + size_t(y - y_begin) * 4,

@@ -168,7 +168,7 @@ bool spread_smooth(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, i
     });
 
     // Integrate each column `order` times, in column chunks, into float.
-    dst.reset(output_spec(src, ext));
+    dst.reset(output_spec(src, ext), OIIO::InitializePixels::No);  // every pixel is written below
     float* out = static_cast<float*>(dst.localpixels());
     OIIO::parallel_for_chunked(0, int64_t(row_len), 0, [&](int64_t k0, int64_t k1) {
         std::vector<Fixed> sums(size_t(k1 - k0) * order, Fixed(0));
