@@ -200,7 +200,19 @@ TEST_CASE("every bad input ends in a one-line error and no output")
         { example_scene() + " -o " + out + " --focal 50", "--focus" },
         { example_scene() + camera, "-o" },
         { example_scene() + " -o " + out + camera + " --bogus", "bogus" },
-        { example_scene() + " -o " + dir + "/no/such/dir/out.exr" + camera, "out.exr" },
+        // The output is checked before any frame is rendered: one line, even
+        // for a sequence, naming the user's path and not a temporary file.
+        { example_scene() + " -o " + dir + "/no/such/dir/out.exr" + camera,
+          "out.exr: the folder " + dir + "/no/such/dir does not exist" },
+        { example_scene() + " --frames 1-3 -o " + dir + "/no/such/dir/out.#.exr" + camera,
+          "out.0001.exr: the folder" },
+        { example_scene() + " -o " + dir + "/out.xyz" + camera, "no image format writes .xyz files" },
+        { example_scene() + " -o " + out + camera + " --compression bogus",
+          "out.exr: unknown openexr compression 'bogus'" },
+        { example_scene() + " -o " + dir + "/out.png" + camera + " --compression piz",
+          "unknown png compression 'piz'" },
+        { example_scene() + " -o " + out + camera + " --preview " + dir + "/./out.exr",
+          "-o and --preview name the same file" },
         { example_scene() + " -o " + example_scene() + camera, "overwrite the input" },
     };
     for (const Case& c : cases) {

@@ -2,6 +2,7 @@
 
 #include <sys/stat.h>
 
+#include <filesystem>
 #include <set>
 
 #include <defocus/option_value.h>
@@ -24,6 +25,14 @@ std::string overwritten_input(const std::vector<std::string>& read,
             && inputs.count({ st.st_dev, st.st_ino }))
             return file;
     return "";
+}
+
+bool same_path(const std::string& a, const std::string& b)
+{
+    std::error_code ec_a, ec_b;
+    const std::filesystem::path pa = std::filesystem::weakly_canonical(a, ec_a);
+    const std::filesystem::path pb = std::filesystem::weakly_canonical(b, ec_b);
+    return ec_a || ec_b ? a == b : pa == pb;
 }
 
 std::function<void(cspan<const char*>)> store_into(std::string& into)

@@ -23,6 +23,9 @@ std::function<void(OIIO::cspan<const char*>)> store_into(std::string& into);
 std::string overwritten_input(const std::vector<std::string>& read,
                               const std::vector<std::string>& written);
 
+/// Whether two names, existing or not, lead to the same file.
+bool same_path(const std::string& a, const std::string& b);
+
 class ShotArguments {
 public:
     /// Adds option `spec` (e.g. "--focus DIST") setting shot setting

@@ -303,6 +303,17 @@ int main(int argc, const char* argv[])
         || !frame_outputs("-o", cl.output, frames, outputs, error)
         || !frame_outputs("--preview", cl.preview, frames, previews, error))
         return fail(error);
+    // Refused before any frame is rendered, not after each.
+    for (size_t i = 0; i < outputs.size(); ++i) {
+        if (!check_output(outputs[i], shot.compression, error))
+            return fail(error);
+        if (previews.empty())
+            continue;
+        if (!check_output(previews[i], "", error))
+            return fail("--preview " + error);
+        if (same_path(outputs[i], previews[i]))
+            return fail(outputs[i] + ": -o and --preview name the same file");
+    }
     // Nothing an input names may be overwritten: not by an image, a
     // preview or the scene file.
     std::vector<std::string> read, written = outputs;

@@ -90,6 +90,8 @@ int main(int argc, const char* argv[])
         return fail("give either -o OUTPUT.exr or --info");
     if (!overwritten_input(inputs, { output }).empty())
         return fail("{}: the output would overwrite the input", output);
+    if (!output.empty() && !check_output(output, "", error))
+        return fail("{}", error);
     OIIO::attribute("threads", threads);
 
     Scene scene;

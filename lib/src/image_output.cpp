@@ -2,6 +2,10 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <map>
+#include <vector>
+
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
@@ -33,22 +37,75 @@ bool commit(const std::string& tmp, const std::string& filename, std::string& er
     return false;
 }
 
+/// The compression names each format that takes one knows (an optional
+/// ":quality" may follow, e.g. dwaa:45).
+const std::map<std::string, std::vector<std::string>>& compressions()
+{
+    static const std::map<std::string, std::vector<std::string>> names = {
+        { "openexr", { "none", "rle", "zips", "zip", "piz", "pxr24", "b44", "b44a", "dwaa",
+                       "dwab" } },
+        { "tiff", { "none", "lzw", "zip", "packbits", "jpeg" } },
+        { "png", { "zip" } },
+        { "jpeg", { "jpeg" } },
+    };
+    return names;
+}
+
 }  // namespace
+
+bool check_output(const std::string& filename, const std::string& compression,
+                  std::string& error)
+{
+    auto fail = [&](const std::string& why) {
+        error = Strutil::fmt::format("{}: {}", filename, why);
+        return false;
+    };
+    const std::string parent = Filesystem::parent_path(filename);
+    const std::string folder = parent.empty() ? "." : parent;
+    if (!Filesystem::is_directory(folder))
+        return fail(Strutil::fmt::format("the folder {} does not exist", folder));
+    if (::access(folder.c_str(), W_OK | X_OK) != 0)
+        return fail(Strutil::fmt::format("the folder {} is not writable", folder));
+    if (Filesystem::is_directory(filename))
+        return fail("is a folder");
+    auto out = ImageOutput::create(filename);
+    if (!out) {
+        OIIO::geterror();  // cleared: our message says it better
+        const std::string ext = Filesystem::extension(filename);
+        return fail(ext.empty() ? "no extension to tell the image format (e.g. .exr)"
+                                : Strutil::fmt::format("no image format writes {} files", ext));
+    }
+    if (compression.empty())
+        return true;
+    const std::string format = out->format_name();
+    const std::string name = Strutil::lower(compression.substr(0, compression.find(':')));
+    const auto known = compressions().find(format);
+    if (known == compressions().end())
+        return fail(Strutil::fmt::format("{} files take no compression ('{}' given)", format,
+                                         compression));
+    if (std::find(known->second.begin(), known->second.end(), name) == known->second.end())
+        return fail(Strutil::fmt::format("unknown {} compression '{}' (known: {})", format,
+                                         compression, Strutil::join(known->second, ", ")));
+    return true;
+}
 
 bool write_atomic(const std::string& filename,
                   const std::function<bool(ImageOutput&, const std::string&)>& write,
                   std::string& error)
 {
+    const std::string tmp = temporary_name(filename);
+    // Errors name the user's file, never the temporary one.
     auto fail = [&](const std::string& why) {
-        error = Strutil::fmt::format("{}: {}", filename,
-                                     Strutil::replace(why, "\n", " ", true));
+        error = Strutil::fmt::format(
+            "{}: {}", filename,
+            Strutil::replace(Strutil::replace(why, tmp, filename, true), "\n", " ", true));
         return false;
     };
     auto out = ImageOutput::create(filename);
-    if (!out)
-        return fail(OIIO::geterror().empty() ? "no format writes this file type"
-                                             : OIIO::geterror());
-    const std::string tmp = temporary_name(filename);
+    if (!out) {
+        const std::string why = OIIO::geterror();  // geterror() clears it: read once
+        return fail(why.empty() ? "no format writes this file type" : why);
+    }
     if (!write(*out, tmp) || !out->close()) {
         const std::string why = out->geterror();
         out.reset();

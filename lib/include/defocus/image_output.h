@@ -20,6 +20,13 @@ bool write_atomic(const std::string& filename,
                                            const std::string& temporary)>& write,
                   std::string& error);
 
+/// Whether `filename` can be written as an image, checked before any work
+/// is done: its folder exists and is writable, a format writes its
+/// extension, and `compression` ("" for the default) is one that format
+/// knows. Otherwise `error` names the file and the problem.
+bool check_output(const std::string& filename, const std::string& compression,
+                  std::string& error);
+
 /// Writes a text file atomically, as write_atomic() does.
 bool write_text_atomic(const std::string& filename, const std::string& text,
                        std::string& error);
