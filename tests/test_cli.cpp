@@ -281,6 +281,16 @@ TEST_CASE("layerize writes the layers defocus uses, and defocus reads them back"
         both.specmod().channelnames = { "R", "G", "B", "A", "Z" };
         REQUIRE(both.write(flat));
     }
+    // -v names as many layers as it says the input was sliced into, even
+    // when some slices are empty.
+    REQUIRE(run_defocus(flat + " -o " + dir + "/v.exr -v --layers 12" + camera, log) == 0);
+    std::smatch sliced;
+    REQUIRE(std::regex_search(log, sliced, std::regex("sliced into ([0-9]+) depth layer")));
+    const std::regex layer_line("\n    \\S+ +[0-9]+ px  depth");
+    const auto listed = std::distance(std::sregex_iterator(log.begin(), log.end(), layer_line),
+                                      std::sregex_iterator());
+    CHECK(listed == std::stoi(sliced[1]));
+    CHECK(Strutil::contains(log, "empty slice(s) dropped"));
     const std::string layers = dir + "/layers.exr";
     REQUIRE(run(layerize + " " + flat + camera + " -o " + layers, log) == 0);
     REQUIRE(run_defocus(flat + " -o " + dir + "/direct.exr -d float" + camera, log) == 0);
@@ -556,6 +566,11 @@ TEST_CASE("defocus --focus-at focuses on what is seen at a pixel, keyframed too"
     std::string log;
     REQUIRE(run_defocus(scene + " -o " + dir + "/a.exr --focus-at 3,10", log) == 0);
     CHECK(attribute(dir + "/a.exr", "defocus:focusDistance") == 2.0f);
+    // -v prints a depth read from a float image with sensible precision.
+    const std::string at_1_7 = dir + "/at_1_7.exr";
+    write_scene(at_1_7, { "R", "G", "B", "A", "Z" }, { 1, 1, 1, 1, 1.7f });
+    REQUIRE(run_defocus(at_1_7 + " -o " + dir + "/c.exr --focus-at 0,0 -v", log) == 0);
+    CHECK(Strutil::contains(log, " focus 1.7 sensor"));  // not 1.7000000476837158
     // At x=10 the 5x5 window sees 10 pixels at 2 m and 15 at 6 m.
     REQUIRE(run_defocus(scene + " -o " + dir + "/b.#.exr --frames 1-3 --focus-at 1:3,10,3:17,10",
                         log) == 0);

@@ -238,6 +238,8 @@ TEST_CASE(".dof files: one-line errors for bad JSON, keys, types, values and fil
                    "b.exr: no such file"));
     CHECK(contains(dof_error("{\"version\": 1, \"inputs\": \"a.exr\"}", dir),
                    "inputs: expected a list"));
+    CHECK(contains(dof_error("{\"version\": 1, \"inputs\": []}", dir),
+                   "inputs: the list is empty"));
     CHECK(contains(dof_error(head + "\"camra\": {}}", dir), "unknown key 'camra'"));
     CHECK(contains(dof_error(head + "\"camera\": {\"fcous\": 3}}", dir),
                    "unknown key 'camera.fcous'"));

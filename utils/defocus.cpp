@@ -247,8 +247,8 @@ std::string verbose_report(const FrameResult& frame, const CommandLine& cl,
     const Camera& c = frame.camera;
     std::string r = format("defocus {}{}{} -> {}\n", label, label.empty() ? "" : ": ",
                            frame.source, output);
-    r += format("  camera: {} mm f/{} focus {} sensor {} mm, {} lens, {} aperture, max blur "
-                "{} px\n",
+    r += format("  camera: {:.4g} mm f/{:.3g} focus {:.4g} sensor {:.4g} mm, {} lens, {} aperture, "
+                "max blur {:.4g} px\n",
                 c.focal_length_mm, c.fstop, c.focus_distance, c.sensor_width_mm,
                 lens_model_name(c.lens), aperture_shape_name(cl.shot.aperture.shape),
                 c.max_blur_px);

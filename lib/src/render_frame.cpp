@@ -90,13 +90,18 @@ bool render(const Shot& shot, int frame, FrameResult& out, std::string& error,
         return false;
     const CircleOfConfusion coc(out.camera, scene.spec.full_width);
     const bool to_slice = !scene.flat.empty() || !scene.deep.empty();
+    const size_t layers_given = scene.layers.size();
     const LayerBounds bounds = decompose_layers(scene, coc, shot.layering, nthreads);
     if (to_slice) {
         std::vector<std::string> edges;
         for (int k = 0; k <= bounds.count(); ++k)
             edges.push_back(format("{:.3g}", bounds.boundary(k)));
-        out.slicing = format("sliced into {} depth layer(s), bounds in px of CoC: {}",
-                             bounds.count(), Strutil::join(edges, " "));
+        // Slices nothing falls into make no layer.
+        const int made = int(scene.layers.size() - layers_given);
+        const int empty = bounds.count() - made;
+        out.slicing = format("sliced into {} depth layer(s){}, bounds in px of CoC: {}", made,
+                             empty > 0 ? format(" ({} empty slice(s) dropped)", empty) : "",
+                             Strutil::join(edges, " "));
     }
     lap("slice");
 

@@ -164,8 +164,12 @@ bool is_section(const std::string& name)
 bool read_inputs(const json& value, const std::string& directory, Shot& shot,
                  std::string& error)
 {
-    if (!value.is_array() || value.empty()) {
+    if (!value.is_array()) {
         error = format("inputs: expected a list of file names, not {}", value.type_name());
+        return false;
+    }
+    if (value.empty()) {
+        error = "inputs: the list is empty: name at least one input file";
         return false;
     }
     std::vector<std::string> inputs;
