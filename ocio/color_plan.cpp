@@ -29,8 +29,17 @@ bool plan_color(ColorPlan& plan, const std::string& config_file,
             error = "--iscolorspace: " + error;
             return false;
         }
-    } else {
-        plan.input = c.find_space(input_spec.get_string_attribute("oiio:ColorSpace"));
+    }
+    const std::string tag = input_spec.get_string_attribute("oiio:ColorSpace");
+    if (input_space.empty()) {
+        // OIIO tags every EXR "Linear", whatever its primaries; most such
+        // renders (Blender's, most renderers' defaults) are linear Rec.709.
+        if (OIIO::Strutil::iequals(tag, "linear")) {
+            plan.input = c.find_space("lin_rec709");
+            plan.guess = format("the file's generic '{}' tag taken as linear Rec.709", tag);
+        } else {
+            plan.input = c.find_space(tag);
+        }
     }
     if (!plan.input.empty() && c.is_data(plan.input)) {
         error = format("--iscolorspace: '{}' is data, not colour: the input must be in "
@@ -38,8 +47,12 @@ bool plan_color(ColorPlan& plan, const std::string& config_file,
                        plan.input);
         return false;
     }
-    if (plan.input.empty())
+    if (plan.input.empty()) {
         plan.input = c.scene_linear();  // linear, as far as anyone can tell
+        plan.guess = tag.empty() ? "no colour space tag: taken as the config's scene_linear"
+                                 : format("tag '{}' unknown to the config: taken as its "
+                                          "scene_linear", tag);
+    }
     plan.output = plan.input;
     if (!output_space.empty()) {
         plan.output = c.require_space(output_space, error);
@@ -52,8 +65,10 @@ bool plan_color(ColorPlan& plan, const std::string& config_file,
     // a linear input is spread as it is.
     plan.convert_input = !c.is_linear(plan.input);
     plan.working       = plan.convert_input ? c.scene_linear() : plan.input;
-    plan.summary = format("colour: config {} ({}); input '{}', spread in '{}', output '{}'",
-                          c.path(), c.origin(), plan.input, plan.working, plan.output);
+    plan.summary = format("colour: config {} ({}); input '{}'{}, spread in '{}', output '{}'",
+                          c.path(), c.origin(), plan.input,
+                          plan.guess.empty() ? "" : " (a guess: " + plan.guess + ")",
+                          plan.working, plan.output);
     return true;
 }
 

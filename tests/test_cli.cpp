@@ -50,6 +50,14 @@ bool one_line_naming(const std::string& text, const std::string& what)
     return Strutil::contains(text, what) && text.find('\n') == text.size() - 1;
 }
 
+size_t count_of(const std::string& text, const std::string& what)
+{
+    size_t n = 0;
+    for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1))
+        ++n;
+    return n;
+}
+
 bool no_nan(const ImageBuf& image)
 {
     ImageBufAlgo::PixelStats stats = ImageBufAlgo::computePixelStats(image);
@@ -377,11 +385,25 @@ TEST_CASE("colour: the preview is an 8-bit image in the display's encoding")
     CHECK(preview.spec().format == TypeUInt8);
     CHECK(preview.spec().width == 320);
     CHECK(preview.spec().height == 180);
-    // The EXR holds the working space (the input was taken as scene_linear):
-    // the preview is OCIO's sRGB display, ACES 1.0 SDR video view, of it.
+    // OIIO tags the EXR input with its generic "Linear", taken as linear
+    // Rec.709: the preview is OCIO's sRGB display, ACES 1.0 SDR video view,
+    // of that. The guess is said once.
+    CHECK(count_of(log, "input colour space 'Linear Rec.709 (sRGB)' is a guess") == 1);
+    std::string named;
+    REQUIRE(run_defocus(example_scene() + " -o " + dir + "/named.exr" + camera
+                            + " --iscolorspace lin_rec709 --preview " + dir + "/named.png",
+                        named) == 0);
+    CHECK_FALSE(Strutil::contains(named, "guess"));
+    std::string sequence;
+    REQUIRE(run_defocus(example_scene() + " --frames 1-3 -o " + dir + "/seq.#.exr" + camera
+                            + " -v --preview " + dir + "/seq.#.png",
+                        sequence) == 0);
+    CHECK(count_of(sequence, "warning: ") == 1);
+    CHECK(count_of(sequence, "(a guess: the file's generic 'Linear' tag") == 3);  // -v
     OCIO::ConstConfigRcPtr config = OCIO::Config::CreateFromFile(SHIPPED_OCIO_CONFIG);
     OCIO::ConstCPUProcessorRcPtr to_display
-        = config->getProcessor("ACEScg", "sRGB", "ACES 1.0 - SDR Video", OCIO::TRANSFORM_DIR_FORWARD)
+        = config->getProcessor("Linear Rec.709 (sRGB)", "sRGB", "ACES 1.0 - SDR Video",
+                               OCIO::TRANSFORM_DIR_FORWARD)
               ->getDefaultCPUProcessor();
     int compared = 0;
     for (int y = 5; y < 180; y += 17)

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -340,6 +341,10 @@ int main(int argc, const char* argv[])
                               : isatty(STDOUT_FILENO) ? ProgressMode::Bar
                                                       : ProgressMode::Lines;
     Progress progress(mode, int(frames.size()));
+    // Display-referred output from a guessed input space may be wrong:
+    // said once a run, not once a frame.
+    const bool display_referred = !previews.empty() || !shot.output_space.empty();
+    std::once_flag guess_warning;
     auto render_one = [&](int i) {
         const std::string label = sequence ? format("frame {}", frames[i]) : "";
         Timer timer;
@@ -360,6 +365,12 @@ int main(int argc, const char* argv[])
             return true;
         }();
         if (ok) {
+            if (display_referred && !frame.color.guess.empty())
+                std::call_once(guess_warning, [&] {
+                    progress.error(format("warning: {}: input colour space '{}' is a guess "
+                                          "({}); give --iscolorspace to be sure",
+                                          frame.source, frame.color.input, frame.color.guess));
+                });
             if (cl.verbose)
                 progress.text(verbose_report(frame, cl, label, outputs[i]));
             progress.written(label, outputs[i], timer());

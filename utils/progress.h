@@ -26,7 +26,7 @@ public:
     void written(const std::string& frame, const std::string& file, double seconds);
     /// A block of text for stdout (the -v report), whole.
     void text(const std::string& text);
-    /// A one-line error, on stderr.
+    /// A one-line error or warning, on stderr.
     void error(const std::string& message);
     /// A frame is over, written or not.
     void frame_over();
