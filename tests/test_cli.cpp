@@ -400,6 +400,7 @@ TEST_CASE("colour: the preview is an 8-bit image in the display's encoding")
                         sequence) == 0);
     CHECK(count_of(sequence, "warning: ") == 1);
     CHECK(count_of(sequence, "(a guess: the file's generic 'Linear' tag") == 3);  // -v
+
     OCIO::ConstConfigRcPtr config = OCIO::Config::CreateFromFile(SHIPPED_OCIO_CONFIG);
     OCIO::ConstCPUProcessorRcPtr to_display
         = config->getProcessor("Linear Rec.709 (sRGB)", "sRGB", "ACES 1.0 - SDR Video",
@@ -419,6 +420,32 @@ TEST_CASE("colour: the preview is an 8-bit image in the display's encoding")
             ++compared;
         }
     CHECK(compared > 50);
+}
+
+TEST_CASE("colour: previews are composited over black unless --preview-alpha")
+{
+    // A half-transparent layer, in focus: the preview over black shows
+    // its premultiplied colour, whatever a viewer puts behind it.
+    const std::string dir = scratch_dir("cli_preview_alpha");
+    const std::string scene = dir + "/half.exr";
+    write_scene(scene, { "R", "G", "B", "A", "Z" }, { 0.09f, 0.09f, 0.09f, 0.5f, 4.0f });
+    std::string log;
+    REQUIRE(run_defocus(scene + " -o " + dir + "/o.exr" + camera + " --iscolorspace lin_rec709"
+                            + " --display-view Raw --preview " + dir + "/black.png",
+                        log) == 0);
+    REQUIRE(run_defocus(scene + " -o " + dir + "/o.exr" + camera + " --iscolorspace lin_rec709"
+                            + " --display-view Raw --preview " + dir + "/alpha.png --preview-alpha",
+                        log) == 0);
+    ImageBuf black(dir + "/black.png"), alpha(dir + "/alpha.png");
+    REQUIRE(black.read());
+    REQUIRE(alpha.read());
+    CHECK(black.nchannels() == 3);
+    CHECK(alpha.nchannels() == 4);
+    float over_black[3], kept[4];
+    black.getpixel(8, 8, over_black);
+    alpha.getpixel(8, 8, kept);
+    CHECK(over_black[0] == Approx(0.09f).margin(1.0 / 255));  // the Raw view: values as they are
+    CHECK(kept[3] == Approx(0.5f).margin(1.0 / 255));
 }
 
 TEST_CASE("colour: any format OIIO writes, e.g. an sRGB JPEG proxy")

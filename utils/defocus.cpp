@@ -33,7 +33,7 @@ namespace {
 struct CommandLine {
     Shot shot;
     std::string output, preview, display, display_view, save_scene;
-    bool verbose = false, quiet = false, stop_on_error = false;
+    bool verbose = false, quiet = false, stop_on_error = false, preview_alpha = false;
     int threads = 0;
 };
 
@@ -130,6 +130,10 @@ std::string parse_command_line(int argc, const char* argv[], CommandLine& cl,
         .help("Also write an 8-bit display-referred preview (e.g. a .png) of the display "
               "window; a frame pattern for sequences")
         .action(store_into(cl.preview));
+    ap.arg("--preview-alpha")
+        .help("Keep alpha in the preview (default: the preview is composited over black, "
+              "so what shows through is not up to the viewer)")
+        .action([&](cspan<const char*>) { cl.preview_alpha = true; });
     ap.arg("--display NAME")
         .help("Display for --preview (default: the config's default display)")
         .action(store_into(cl.display));
@@ -235,6 +239,9 @@ bool write_preview(const FrameResult& frame, const CommandLine& cl, const std::s
     ImageBufAlgo::crop(framed, frame.image,
                        ROI(spec.full_x, spec.full_x + spec.full_width, spec.full_y,
                            spec.full_y + spec.full_height, 0, 1, 0, spec.nchannels));
+    // Premultiplied colour over black is the colour itself, without alpha.
+    if (!cl.preview_alpha && spec.nchannels > 3)
+        framed = ImageBufAlgo::channels(framed, 3, { 0, 1, 2 });
     if (!c.display(shown, framed, frame.color.output, display, view, error)) {
         error = "--preview: " + error;
         return false;
