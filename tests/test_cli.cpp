@@ -221,6 +221,14 @@ TEST_CASE("every bad input ends in a one-line error and no output")
           "unknown png compression 'piz'" },
         { example_scene() + " -o " + out + camera + " --preview " + dir + "/./out.exr",
           "-o and --preview name the same file" },
+        // Conflicting or unused options.
+        { example_scene() + " -o " + out + camera + " --crop --grow",
+          "--crop and --grow contradict each other" },
+        { example_scene() + " -o " + out + camera + " --blades 5",
+          "--blades applies only to --aperture polygon (the aperture is disc)" },
+        { example_scene() + " -o " + out + " -o " + dir + "/other.exr" + camera,
+          "-o given twice" },
+        { example_scene() + " -o " + out + camera + " --focus 2", "--focus given twice" },
         { example_scene() + " -o " + example_scene() + camera, "overwrite the input" },
     };
     for (const Case& c : cases) {
@@ -236,6 +244,20 @@ TEST_CASE("every bad input ends in a one-line error and no output")
     std::vector<std::string> files;
     Filesystem::get_directory_entries(dir, files);
     CHECK(files.size() == 3);  // only the inputs written above
+}
+
+TEST_CASE("options take --option=value as well as --option value")
+{
+    const std::string dir = scratch_dir("cli_equals");
+    std::string log;
+    REQUIRE(run_defocus(example_scene() + " -o " + dir + "/equals.exr -d float --focal=50 "
+                            "--fstop=1.8 --focus=4 --aperture=polygon --blades=6",
+                        log) == 0);
+    REQUIRE(run_defocus(example_scene() + " -o " + dir + "/polygon.exr -d float" + camera
+                            + " --aperture polygon",
+                        log) == 0);
+    ImageBuf equals(dir + "/equals.exr"), polygon(dir + "/polygon.exr");
+    CHECK(ImageBufAlgo::compare(equals, polygon, 0.0f, 0.0f).maxerror == 0.0);
 }
 
 TEST_CASE("the help teaches the options")

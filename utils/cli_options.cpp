@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 
 #include <filesystem>
+#include <regex>
 #include <set>
 
 #include <defocus/option_value.h>
@@ -35,16 +36,38 @@ bool same_path(const std::string& a, const std::string& b)
     return ec_a || ec_b ? a == b : pa == pb;
 }
 
-std::function<void(cspan<const char*>)> store_into(std::string& into)
+int parse_arguments(ArgParse& ap, int argc, const char* argv[])
 {
-    return [&into](cspan<const char*> argv) { into = argv[1]; };
+    static const std::regex option_value("(--[a-z][a-z0-9-]*)=(.*)");
+    std::vector<std::string> args;
+    std::cmatch m;
+    for (int i = 0; i < argc; ++i) {
+        if (i > 0 && std::regex_match(argv[i], m, option_value)) {
+            args.push_back(m[1]);
+            args.push_back(m[2]);
+        } else {
+            args.emplace_back(argv[i]);
+        }
+    }
+    std::vector<const char*> pointers;
+    for (const std::string& a : args)
+        pointers.push_back(a.c_str());
+    return ap.parse_args(int(pointers.size()), pointers.data());
+}
+
+std::function<void(cspan<const char*>)> ShotArguments::store_into(std::string& into)
+{
+    return [this, &into](cspan<const char*> argv) {
+        m_given.push_back({ argv[0], "", argv[1] });
+        into = argv[1];
+    };
 }
 
 void ShotArguments::add(ArgParse& ap, const char* spec, const char* setting, const char* help,
                         const char* value)
 {
     ap.arg(spec).help(help).action([this, setting, value](cspan<const char*> argv) {
-        m_given.emplace_back(setting, value ? value : argv[1]);
+        m_given.push_back({ argv[0], setting, value ? value : argv[1] });
     });
 }
 
@@ -89,10 +112,34 @@ void ShotArguments::add_threads(ArgParse& ap)
 
 bool ShotArguments::apply(Shot& shot, std::string& error) const
 {
-    for (const auto& [setting, value] : m_given)
-        if (!set_shot_setting(shot, setting, value, error,
-                              setting == "pixel-type" ? "-d" : ""))
+    for (size_t i = 0; i < m_given.size(); ++i)
+        for (size_t j = i + 1; j < m_given.size(); ++j) {
+            const Given &a = m_given[i], &b = m_given[j];
+            const bool same = a.setting.empty() ? a.option == b.option : a.setting == b.setting;
+            if (!same || a.value == b.value)
+                continue;
+            error = a.option == b.option
+                        ? OIIO::Strutil::fmt::format("{} given twice ('{}' and '{}'): give it once",
+                                                     a.option, a.value, b.value)
+                        : OIIO::Strutil::fmt::format("{} and {} contradict each other: give one",
+                                                     a.option, b.option);
             return false;
+        }
+    for (const Given& g : m_given)
+        if (!g.setting.empty()
+            && !set_shot_setting(shot, g.setting, g.value, error,
+                                 g.setting == "pixel-type" ? "-d" : ""))
+            return false;
+    // Options that shape only a polygon do nothing to other apertures.
+    for (const Given& g : m_given)
+        if ((g.setting == "blades" || g.setting == "roundness" || g.setting == "rotation")
+            && shot.aperture.shape != ApertureShape::Polygon) {
+            error = OIIO::Strutil::fmt::format("{} applies only to --aperture polygon (the "
+                                               "aperture is {})",
+                                               g.option,
+                                               aperture_shape_name(shot.aperture.shape));
+            return false;
+        }
     return true;
 }
 

@@ -5,7 +5,6 @@
 
 #include <functional>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include <OpenImageIO/argparse.h>
@@ -14,8 +13,8 @@
 
 namespace defocus {
 
-/// An ArgParse action that stores an option's value into `into`.
-std::function<void(OIIO::cspan<const char*>)> store_into(std::string& into);
+/// ap.parse_args(), also taking "--option=value" for "--option value".
+int parse_arguments(OIIO::ArgParse& ap, int argc, const char* argv[]);
 
 /// The first of `written` that is the same file as one of `read` (by device
 /// and inode, so links count), or "" when none would overwrite an input.
@@ -26,8 +25,14 @@ std::string overwritten_input(const std::vector<std::string>& read,
 /// Whether two names, existing or not, lead to the same file.
 bool same_path(const std::string& a, const std::string& b);
 
+/// The options given on a command line: those that set shot settings, and
+/// others stored into strings, with the checks they share (an option given
+/// twice, options that contradict each other or do not apply).
 class ShotArguments {
 public:
+    /// An ArgParse action that stores the option's value into `into`.
+    std::function<void(OIIO::cspan<const char*>)> store_into(std::string& into);
+
     /// Adds option `spec` (e.g. "--focus DIST") setting shot setting
     /// `setting` to its value, or for a switch (e.g. "--crop") to `value`.
     void add(OIIO::ArgParse& ap, const char* spec, const char* setting, const char* help,
@@ -41,13 +46,19 @@ public:
     /// --threads.
     void add_threads(OIIO::ArgParse& ap);
 
-    /// Applies the options given to `shot`, in command-line order.
+    /// Applies the options given to `shot`, in command-line order. Fails
+    /// when an option was given twice with different values, two options
+    /// set one setting differently (--crop and --grow), or an option does
+    /// not apply to the shot (--blades without --aperture polygon).
     bool apply(Shot& shot, std::string& error) const;
     /// The worker threads asked for (0 = all cores).
     bool threads(int& threads, std::string& error) const;
 
 private:
-    std::vector<std::pair<std::string, std::string>> m_given;  ///< (setting, value)
+    struct Given {
+        std::string option, setting, value;  ///< setting: "" for stored options
+    };
+    std::vector<Given> m_given;
     std::string m_threads = "0";
 };
 

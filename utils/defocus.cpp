@@ -129,23 +129,23 @@ std::string parse_command_line(int argc, const char* argv[], CommandLine& cl,
     ap.arg("--preview FILE")
         .help("Also write an 8-bit display-referred preview (e.g. a .png) of the display "
               "window; a frame pattern for sequences")
-        .action(store_into(cl.preview));
+        .action(shot_args.store_into(cl.preview));
     ap.arg("--preview-alpha")
         .help("Keep alpha in the preview (default: the preview is composited over black, "
               "so what shows through is not up to the viewer)")
         .action([&](cspan<const char*>) { cl.preview_alpha = true; });
     ap.arg("--display NAME")
         .help("Display for --preview (default: the config's default display)")
-        .action(store_into(cl.display));
+        .action(shot_args.store_into(cl.display));
     ap.arg("--display-view NAME")
         .help("View of that display for --preview (default: the display's default view; "
               "--view is the EXR view of the input)")
-        .action(store_into(cl.display_view));
+        .action(shot_args.store_into(cl.display_view));
     ap.separator("Output:");
     ap.arg("-o FILE")
         .help("Output file, or frame pattern for sequences (required); its extension "
               "picks the format")
-        .action(store_into(cl.output));
+        .action(shot_args.store_into(cl.output));
     shot_args.add(ap, "--output KIND", "output",
                   "image: the defocused image (default); focusmap: where the focus falls, "
                   "green in focus, red in front, blue behind, brighter with more blur, "
@@ -164,7 +164,7 @@ std::string parse_command_line(int argc, const char* argv[], CommandLine& cl,
                   "grown");
     ap.arg("--save-scene FILE")
         .help("Write the inputs and settings as a .dof scene file (without -o: only that)")
-        .action(store_into(cl.save_scene));
+        .action(shot_args.store_into(cl.save_scene));
     ap.separator("General:");
     ap.arg("-v").help("Verbose: settings, layers, pixel fixes and per-stage timings")
         .action([&](cspan<const char*>) { cl.verbose = true; });
@@ -172,7 +172,7 @@ std::string parse_command_line(int argc, const char* argv[], CommandLine& cl,
         .action([&](cspan<const char*>) { cl.quiet = true; });
     shot_args.add_threads(ap);
 
-    if (ap.parse_args(argc, argv) < 0)
+    if (parse_arguments(ap, argc, argv) < 0)
         return ap.geterror();
     if (ap.aborted()) {  // --help
         help_only = true;

@@ -63,13 +63,13 @@ int main(int argc, const char* argv[])
     shot_args.add_scene(ap);
     ap.separator("Output:");
     ap.arg("-o FILE").help("Multi-part EXR to write the layers to")
-        .action(store_into(output));
+        .action(shot_args.store_into(output));
     ap.arg("--info").help("Print the layers instead of writing them")
         .action([&](cspan<const char*>) { info = true; });
     ap.separator("General:");
     shot_args.add_threads(ap);
 
-    if (ap.parse_args(argc, argv) < 0)
+    if (parse_arguments(ap, argc, argv) < 0)
         return fail("{}", ap.geterror());
     if (ap.aborted())
         return EXIT_SUCCESS;
