@@ -54,8 +54,12 @@ bool ColorManagement::load(const std::string& explicit_file, std::string& error)
         m_path = env;
         m_origin = "$OCIO";
     } else {
+        // Beside the program or plugin (build tree or installed), else
+        // where it was installed, for programs of other projects.
         m_path   = Filesystem::parent_path(this_module_path()) + "/../share/defocus/config.ocio";
         m_origin = "shipped";
+        if (!Filesystem::exists(m_path))
+            m_path = DEFOCUS_INSTALLED_OCIO_CONFIG;
     }
     if (!Filesystem::exists(m_path)) {
         error = format("{}: colour config ({}) not found", m_path, m_origin);

@@ -9,3 +9,5 @@ data="${DEFOCUS_SHARED_DATA:-$(cd .. && pwd)/shared/data}"
 [ -d "$data" ] || echo "note: no shared data at $data: the tests that need it are skipped"
 cd build
 ctest --output-on-failure -j"$(nproc)"
+# Why a test was skipped (CTest only says that it was).
+grep -h "^SKIPPED:" Testing/Temporary/LastTest.log || true

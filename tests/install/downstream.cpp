@@ -1,0 +1,18 @@
+// Links the installed library and loads the colour config the package
+// names; prints the path it loaded.
+#include <cstdio>
+#include <cstdlib>
+
+#include <defocus/color.h>
+
+int main()
+{
+    defocus::ColorManagement color;
+    std::string error;
+    if (!color.load(PACKAGE_OCIO_CONFIG, error)) {
+        std::fprintf(stderr, "%s\n", error.c_str());
+        return 1;
+    }
+    std::printf("loaded %s\n", color.path().c_str());
+    return 0;
+}
