@@ -246,6 +246,25 @@ TEST_CASE("every bad input ends in a one-line error and no output")
     CHECK(files.size() == 3);  // only the inputs written above
 }
 
+TEST_CASE("--depth-scale reads Z in other units than metres")
+{
+    // The same scene with Z in metres and in centimetres.
+    const std::string dir = scratch_dir("cli_depth_scale");
+    write_scene(dir + "/m.exr", { "R", "G", "B", "A", "Z" }, { 1, 0.5f, 0.25f, 1, 2.5f }, 48);
+    write_scene(dir + "/cm.exr", { "R", "G", "B", "A", "Z" }, { 1, 0.5f, 0.25f, 1, 250 }, 48);
+    // CoC 3.4 px at 2.5 m, 17 px at 250 m.
+    const std::string close_up = " --focal 50 --fstop 1 --focus 2 --sensor 3.6";
+    std::string log;
+    for (const std::string& args : { "m.exr -o " + dir + "/m_out.exr",
+                                      "cm.exr -o " + dir + "/cm_out.exr --depth-scale 0.01",
+                                      "cm.exr -o " + dir + "/cm_unscaled.exr" })
+        REQUIRE(run_defocus(dir + "/" + args + " -d float --grow" + close_up, log) == 0);
+    ImageBuf metres(dir + "/m_out.exr"), centimetres(dir + "/cm_out.exr"),
+        unscaled(dir + "/cm_unscaled.exr");
+    CHECK(ImageBufAlgo::compare(centimetres, metres, 1e-6f, 1e-6f).nfail == 0);
+    CHECK(ImageBufAlgo::compare(unscaled, metres, 1e-3f, 1e-3f).nfail > 0);
+}
+
 TEST_CASE("options take --option=value as well as --option value")
 {
     const std::string dir = scratch_dir("cli_equals");

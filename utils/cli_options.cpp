@@ -98,6 +98,9 @@ void ShotArguments::add_scene(ArgParse& ap)
         "Channel prefix of colour and depth, e.g. 'beauty' for beauty.R..beauty.Z, or "
         "Blender's view layer name (default: plain R,G,B,A,Z or the file's only "
         "prefixed set)");
+    add(ap, "--depth-scale S", "depth-scale",
+        "Metres per depth unit of the input's Z, e.g. 0.01 for centimetres (default: 1; "
+        "--focus stays in metres)");
     add(ap, "--layers N", "layers",
         "Depth layers to cut deep and flat inputs into, spaced evenly in CoC (default: "
         "0 = automatic: boundaries in the gaps between objects, at most 24 px of CoC "

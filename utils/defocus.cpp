@@ -57,7 +57,7 @@ std::string parse_command_line(int argc, const char* argv[], CommandLine& cl,
         "layers. Several INPUTs are the layers of one scene. Each layer is\n"
         "spread with its own per-pixel circle of confusion and the layers are\n"
         "composited back to front. Depth (Z) is planar camera-space depth in\n"
-        "metres, as --focus is.\n"
+        "metres, as --focus is (--depth-scale converts other units).\n"
         "\n"
         "Sequences use oiiotool's frame patterns: shot.#.exr (4 digits),\n"
         "shot.@@.exr (one digit per @), shot.%04d.exr, or shot.1-100#.exr; the\n"

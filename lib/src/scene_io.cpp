@@ -500,6 +500,29 @@ void erase_part_attributes(ImageSpec& spec)
         spec.erase_attribute(part_only);
 }
 
+namespace {
+
+/// Depth in metres: every Z, and a deep sample's Z back, times `scale`.
+void scale_depth(Scene& scene, float scale)
+{
+    for (auto* list : { &scene.layers, &scene.flat })
+        for (Layer& layer : *list) {
+            const ROI roi = layer.depth.roi();
+            parallel_for(roi.ybegin, roi.yend, [&](int y) {
+                float* z = static_cast<float*>(layer.depth.pixeladdr(roi.xbegin, y));
+                for (int x = 0; x < roi.width(); ++x)
+                    z[x] *= scale;
+            });
+        }
+    for (DeepImage& image : scene.deep)
+        for (DeepSample& s : image.samples) {
+            s.z *= scale;
+            s.zback *= scale;
+        }
+}
+
+}  // namespace
+
 bool read_scene_spec(const std::vector<std::string>& filenames, const ReadOptions& options,
                      ImageSpec& spec, std::string& error)
 {
@@ -563,6 +586,8 @@ bool read_scene(const std::vector<std::string>& filenames, const ReadOptions& op
     for (const DeepImage& image : scene.deep)
         data_window = roi_union(data_window, image.roi);
     scene.spec.set_roi(data_window);
+    if (options.depth_scale != 1.0)
+        scale_depth(scene, float(options.depth_scale));
     return true;
 }
 

@@ -80,6 +80,8 @@ const std::vector<SettingRule>& rules()
         text({ "layer", "scene", "layer", K::Text }, [](auto& s) -> auto& { return s.read.layer; }),
         number({ "layers", "scene", "layers", K::Number },
                      [](auto& s) -> auto& { return s.layering.layers; }, 0, 256),
+        number({ "depth-scale", "scene", "depth_scale", K::Number },
+               [](auto& s) -> auto& { return s.read.depth_scale; }, 1e-9, 1e9),
 
         keyframes({ "focus", "camera", "focus", K::Keyframes }, &Shot::focus, 1, 1e-6,
                   1e30, &Shot::focus_at),

@@ -18,6 +18,9 @@ struct ReadOptions {
     /// ViewLayer.Combined.R..ViewLayer.Depth.Z ("" = plain R,G,B,A,Z, or
     /// the one prefixed set the file has).
     std::string layer;
+    /// Metres per depth unit: Z (and a deep sample's Z back) is multiplied
+    /// by it as it is read, e.g. 0.01 for renders with Z in centimetres.
+    double depth_scale = 1.0;
 };
 
 /// Reads a scene from one or several files.
