@@ -246,7 +246,7 @@ TEST_CASE("every bad input ends in a one-line error and no output")
     CHECK(files.size() == 3);  // only the inputs written above
 }
 
-TEST_CASE("--depth-scale reads Z in other units than metres")
+TEST_CASE("Z in other units than metres is read with --depth-scale")
 {
     // The same scene with Z in metres and in centimetres.
     const std::string dir = scratch_dir("cli_depth_scale");
