@@ -177,3 +177,27 @@ TEST_CASE("the focus map shows in-focus green, in front red, behind blue")
     CHECK(p[1] >= 0.5f);
     CHECK(p[2] >= 0.5f);
 }
+
+TEST_CASE("antialiased edges without a depth take their covered neighbours' depth")
+{
+    // One row: an opaque object at 2 m, its antialiased edge written with
+    // the renderer's "nothing" depth, then empty; and a half-covered pixel
+    // of sky, whose neighbours are sky too.
+    const ROI row(0, 6, 0, 1);
+    Layer layer { "edge", zero_image(row, 4), zero_image(row, 1) };
+    const float alpha[6] = { 1.0f, 1.0f, 0.4f, 0.0f, 0.5f, 1.0f };
+    const float depth[6] = { 2.0f, 2.0f, 1e10f, 1e10f, 1e10f, 1e10f };
+    for (int x = 0; x < 6; ++x) {
+        const float c[4] = { 0.5f * alpha[x], 0.5f * alpha[x], 0.5f * alpha[x], alpha[x] };
+        layer.color.setpixel(x, 0, c);
+        layer.depth.setpixel(x, 0, &depth[x]);
+    }
+    Scene scene;
+    scene.layers.push_back(layer);
+    const PixelCounts fixed = sanitize(scene);
+    CHECK(fixed.edge_depth == 1);
+    auto z = [&](int x) { return scene.layers[0].depth.getchannel(x, 0, 0, 0); };
+    CHECK(z(2) == 2.0f);    // the edge belongs to the object beside it
+    CHECK(z(4) == 1e10f);   // no neighbour has a depth: the sky stays the sky
+    CHECK(z(5) == 1e10f);   // fully covered: a depth of its own
+}

@@ -105,15 +105,16 @@ TEST_CASE("box aperture on layers.exr scores against the path-traced truths")
 TEST_CASE("the disc aperture on layers.exr scores close to exact disc spreading")
 {
     // The default, bounded-time disc merges large blurs in blocks; exact
-    // scanline spreading (38.93 / 38.48 dB) is what it must stay close to.
+    // scanline spreading is what it must stay close to. (Antialiased edges
+    // given their object's depth, not the renderer's 1e10, gain 0.1 dB.)
     const double focus3 = score(garden("layers.exr"), 3.0, 0, "disc");
     const double focus125 = score(garden("layers.exr"), 1.25, 0, "disc");
     const double exact3 = score(garden("layers.exr") + " --spread exact", 3.0, 0, "disc");
     const double exact125 = score(garden("layers.exr") + " --spread exact", 1.25, 0, "disc");
     WARN("garden layers.exr, disc: " << focus3 << " / " << focus125 << " dB at focus 3 / 1.25; "
                                      << "exact: " << exact3 << " / " << exact125 << " dB");
-    CHECK(focus3 >= 38.9);
-    CHECK(focus125 >= 38.4);
+    CHECK(focus3 >= 39.0);
+    CHECK(focus125 >= 38.5);
     CHECK(focus3 >= exact3 - 0.05);
     CHECK(focus125 >= exact125 - 0.05);
 }

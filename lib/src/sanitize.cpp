@@ -3,6 +3,8 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <utility>
+#include <vector>
 
 #include <OpenImageIO/parallel.h>
 
@@ -11,6 +13,8 @@ namespace defocus {
 namespace {
 
 const float infinity = std::numeric_limits<float>::infinity();
+/// Depths from here on are a renderer's "no surface" (1e10 in most).
+const float empty_depth = 1e9f;
 
 /// Applies the rules of sanitize() to one pixel or sample; counts into n.
 /// Returns false when the pixel carries no light (and has been cleared).
@@ -34,14 +38,57 @@ bool sanitize_one(float& r, float& g, float& b, float& a, float& z, PixelCounts&
 }
 
 struct AtomicCounts {
-    std::atomic<int64_t> nonfinite { 0 }, depth { 0 }, transparent { 0 };
+    std::atomic<int64_t> nonfinite { 0 }, depth { 0 }, transparent { 0 }, edge { 0 };
     void add(const PixelCounts& n)
     {
         nonfinite += n.nonfinite_color;
         depth += n.bad_depth;
         transparent += n.transparent_light;
+        edge += n.edge_depth;
     }
 };
+
+/// Gives antialiased edge pixels without a depth of their own the depth of
+/// their most covered neighbour that has one (see sanitize()). Neighbours
+/// are read before any pixel is changed, so the order does not matter.
+void fill_edge_depth(Layer& layer, AtomicCounts& counts, int nthreads)
+{
+    const OIIO::ROI roi = layer.color.roi();
+    const int w = roi.width(), h = roi.height();
+    const float* color = static_cast<const float*>(layer.color.localpixels());
+    float* depth = static_cast<float*>(layer.depth.localpixels());
+    auto has_depth = [&](size_t p) { return color[p * 4 + 3] > 0.0f && depth[p] < empty_depth; };
+    std::vector<std::vector<std::pair<size_t, float>>> rows(size_t(std::max(0, h)));
+    OIIO::parallel_for(0, h, [&](int y) {
+        for (int x = 0; x < w; ++x) {
+            const size_t p = size_t(y) * w + x;
+            const float a = color[p * 4 + 3];
+            if (!(a > 0.0f && a < 1.0f) || depth[p] < empty_depth)
+                continue;
+            float best_alpha = 0.0f, z = 0.0f;
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const int nx = x + dx, ny = y + dy;
+                    if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= w || ny >= h)
+                        continue;
+                    const size_t q = size_t(ny) * w + nx;
+                    if (has_depth(q) && color[q * 4 + 3] > best_alpha) {
+                        best_alpha = color[q * 4 + 3];
+                        z = depth[q];
+                    }
+                }
+            if (best_alpha > 0.0f)
+                rows[y].emplace_back(p, z);
+        }
+    }, OIIO::paropt(nthreads));
+    PixelCounts n;
+    for (const auto& row : rows)
+        for (const auto& [p, z] : row) {
+            depth[p] = z;
+            ++n.edge_depth;
+        }
+    counts.add(n);
+}
 
 void sanitize_layer(Layer& layer, AtomicCounts& counts, int nthreads)
 {
@@ -78,11 +125,13 @@ PixelCounts sanitize(Scene& scene, int nthreads)
 {
     AtomicCounts counts;
     for (auto* list : { &scene.layers, &scene.flat })
-        for (Layer& layer : *list)
+        for (Layer& layer : *list) {
             sanitize_layer(layer, counts, nthreads);
+            fill_edge_depth(layer, counts, nthreads);
+        }
     for (DeepImage& image : scene.deep)
         sanitize_deep(image, counts, nthreads);
-    return { counts.nonfinite, counts.depth, counts.transparent };
+    return { counts.nonfinite, counts.depth, counts.transparent, counts.edge };
 }
 
 }  // namespace defocus

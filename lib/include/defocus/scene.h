@@ -57,6 +57,7 @@ struct PixelCounts {
     int64_t nonfinite_color = 0;    ///< NaN or inf in R,G,B or A: dropped
     int64_t bad_depth       = 0;    ///< Z NaN, zero or negative: moved to infinity
     int64_t transparent_light = 0;  ///< alpha <= 0 with colour: dropped
+    int64_t edge_depth = 0;  ///< partly covered, no depth: given its covered neighbours'
 };
 
 /// Makes every pixel and deep sample safe to spread, and counts what it
@@ -65,7 +66,12 @@ struct PixelCounts {
 ///  - a pixel with alpha <= 0 carries no light: it is cleared whatever its
 ///    colour and depth (renders write Z = 0 or 1e10 there);
 ///  - a covered pixel with depth NaN, -inf, zero or negative is taken as
-///    infinitely far (+inf is a valid depth: the sky).
+///    infinitely far (+inf is a valid depth: the sky);
+///  - a partly covered pixel of a layer or flat render (an antialiased
+///    edge) whose depth is invalid or the renderer's "nothing" (infinite,
+///    or 1e9 and beyond: renderers write 1e10) takes the depth of its most
+///    covered neighbour of the 8 that has a depth; otherwise it would be
+///    blurred as infinitely far, a halo around the object.
 /// Deep samples follow the same rules; a ZBack that is not a valid depth
 /// at or behind Z is set to Z.
 PixelCounts sanitize(Scene& scene, int nthreads = 0);
