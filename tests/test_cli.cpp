@@ -246,6 +246,28 @@ TEST_CASE("every bad input ends in a one-line error and no output")
     CHECK(files.size() == 3);  // only the inputs written above
 }
 
+TEST_CASE("a uniform field stays uniform to the corners without overscan")
+{
+    // No overscan and a 17 px CoC: the edges are extended by default (and
+    // -v says so); with --edge black the corners lose most of their light.
+    const std::string dir = scratch_dir("cli_edges");
+    write_scene(dir + "/field.exr", { "R", "G", "B", "A", "Z" }, { 0.5f, 0.5f, 0.5f, 1, 250 }, 48);
+    const std::string close_up = " --focal 50 --fstop 1 --focus 2 --sensor 3.6 -d float";
+    std::string log;
+    REQUIRE(run_defocus(dir + "/field.exr -o " + dir + "/auto.exr -v" + close_up, log) == 0);
+    CHECK(Strutil::contains(log, "edges: layers extended up to"));
+    REQUIRE(run_defocus(dir + "/field.exr -o " + dir + "/black.exr --edge black" + close_up, log)
+            == 0);
+    const auto extended = ImageBufAlgo::computePixelStats(ImageBuf(dir + "/auto.exr"));
+    const auto black = ImageBufAlgo::computePixelStats(ImageBuf(dir + "/black.exr"));
+    for (int c = 0; c < 4; ++c) {
+        const float expected = c == 3 ? 1.0f : 0.5f;
+        CHECK(extended.min[c] == Approx(expected).epsilon(1e-5));
+        CHECK(extended.max[c] == Approx(expected).epsilon(1e-5));
+    }
+    CHECK(black.min[3] < 0.5f);
+}
+
 TEST_CASE("Z in other units than metres is read with --depth-scale")
 {
     // The same scene with Z in metres and in centimetres.

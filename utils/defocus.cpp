@@ -158,6 +158,10 @@ std::string parse_command_line(int argc, const char* argv[], CommandLine& cl,
                   "Clip the result to the display window (default: the input's data "
                   "window, as oiiotool keeps it)",
                   "display");
+    shot_args.add(ap, "--edge MODE", "edge",
+                  "Beyond the data window: extend (its edge pixels continue outwards, so "
+                  "the frame keeps its light to the corners), black (nothing), auto "
+                  "(default: extend where the data window does not cover the blur)");
     shot_args.add(ap, "--grow", "window",
                   "Grow the data window by the blur, keeping all of the light spread "
                   "beyond the input's data window",
@@ -263,6 +267,8 @@ std::string verbose_report(const FrameResult& frame, const CommandLine& cl,
     r += "  " + frame.color.summary + "\n";
     if (!frame.slicing.empty())
         r += "  " + frame.slicing + "\n";
+    if (!frame.edges.empty())
+        r += "  " + frame.edges + "\n";
     if (!frame.layers.empty())
         r += "  layers, back to front:\n";
     int64_t slow = 0, covered = 0;

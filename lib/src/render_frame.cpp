@@ -126,6 +126,14 @@ bool render(const Shot& shot, int frame, FrameResult& out, std::string& error,
                 return false;
             settings.psf_image = psf;
         }
+        const int extended = extend_edges(scene, coc, shot.edge, nthreads);
+        if (extended > 0)
+            out.edges = format("edges: layers extended up to {} px past the data window ({}; "
+                               "--edge black keeps them dark)",
+                               extended,
+                               shot.edge == EdgeMode::Extend
+                                   ? "--edge extend"
+                                   : "the data window does not cover the blur's reach");
         RenderTimings timings;
         if (!render_layered_dof(image, scene, settings, &out.layers, &timings, nthreads)) {
             error = scene.source + ": " + image.geterror();

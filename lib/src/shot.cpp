@@ -188,6 +188,14 @@ const std::vector<SettingRule>& rules()
               return false;
           },
           [](const Shot& shot) { return std::string(output_window_name(shot.window)); } },
+        { { "edge", "scene", "edge", K::Text },
+          [](Shot& shot, const std::string& label, const std::string& value, std::string& error) {
+              if (parse_edge_mode(value, shot.edge))
+                  return true;
+              error = label + ": unknown edge '" + value + "' (choose auto, extend or black)";
+              return false;
+          },
+          [](const Shot& shot) { return std::string(edge_mode_name(shot.edge)); } },
     };
     return table;
 }

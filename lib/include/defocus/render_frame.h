@@ -30,6 +30,7 @@ struct FrameResult {
     OIIO::TypeDesc pixel_type;  ///< to write it as
     PixelCounts fixed;
     std::string slicing;  ///< how flat or deep input was cut into layers ("" = not)
+    std::string edges;    ///< how the layers were extended past the data window ("" = not)
     std::vector<LayerReport> layers;
     /// Seconds per stage: read, colour, slice, spread, composite (or focus
     /// map), colour out.

@@ -9,6 +9,7 @@
 
 #include <defocus/aperture.h>
 #include <defocus/camera.h>
+#include <defocus/edges.h>
 #include <defocus/keyframes.h>
 #include <defocus/layered_dof.h>
 #include <defocus/layering.h>
@@ -54,6 +55,7 @@ struct Shot {
     OIIO::TypeDesc pixel_type = OIIO::TypeUnknown;  ///< unknown = the input's
     std::string compression;                        ///< "" = the input's
     OutputWindow window = OutputWindow::Input;
+    EdgeMode edge = EdgeMode::Auto;  ///< beyond the data window, when the blur reaches it
 };
 
 /// How a setting's value is written in a .dof file.
