@@ -76,7 +76,13 @@ int extend_edges(Scene& scene, const CircleOfConfusion& coc, EdgeMode mode, int 
                                   own.ybegin <= data.ybegin, own.yend >= data.yend };
         int add[4];
         for (int side = 0; side < 4; ++side) {
-            const int wanted = mode == EdgeMode::Extend ? reach : reach - std::max(0, overscan[side]);
+            // A data window edge inside the display window bounds content
+            // (a tight deep bounding box, say), not a render cut off by the
+            // frame: nothing lies beyond it.
+            const bool cut_off = overscan[side] >= 0;
+            const int wanted = mode == EdgeMode::Extend ? reach
+                               : cut_off                ? reach - overscan[side]
+                                                        : 0;
             add[side] = touches[side] ? std::max(0, wanted) : 0;
             most = std::max(most, add[side]);
         }

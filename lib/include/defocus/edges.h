@@ -22,10 +22,11 @@ const char* edge_mode_name(EdgeMode mode);
 /// repeating their outermost pixels, colour and depth, so that a blurred
 /// frame does not lose light at its borders: a uniform field stays uniform
 /// to the corners. Only the sides where a layer touches the data window are
-/// extended, by the reach of its largest blur; Auto does so only on the
-/// sides where the data window does not already reach that far past the
-/// display window (overscan). Returns the most pixels added on any side
-/// (0: none).
+/// extended, by the reach of its largest blur. Auto does so only where the
+/// render was cut off by the frame: on the sides where the data window
+/// reaches the display window but not that far past it (overscan); a data
+/// window inside the display window bounds the content, with nothing
+/// beyond. Returns the most pixels added on any side (0: none).
 int extend_edges(Scene& scene, const CircleOfConfusion& coc, EdgeMode mode, int nthreads = 0);
 
 }  // namespace defocus
