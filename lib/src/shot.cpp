@@ -53,6 +53,23 @@ SettingRule text(ShotSetting s, Member member)
              [=](const Shot& shot) { return member(shot); } };
 }
 
+/// One of an enum's names, read and written by its own functions; `what`
+/// and `choices` word the error.
+template<typename Member, typename Enum>
+SettingRule choice(ShotSetting s, Member member, bool (*parse)(const std::string&, Enum&),
+                   const char* (*name)(Enum), const char* what, const char* choices)
+{
+    return { s,
+             [=](Shot& shot, const std::string& label, const std::string& value,
+                 std::string& error) {
+                 if (parse(value, member(shot)))
+                     return true;
+                 error = format("{}: unknown {} '{}' (choose {})", label, what, value, choices);
+                 return false;
+             },
+             [=](const Shot& shot) { return std::string(name(member(shot))); } };
+}
+
 /// Keyframes of `arity` numbers; setting them clears `other` (focus and
 /// focus-at exclude each other).
 SettingRule keyframes(ShotSetting s, Keyframes Shot::*member, int arity, double lo,
@@ -92,14 +109,8 @@ const std::vector<SettingRule>& rules()
         keyframes({ "fstop", "camera", "fstop", K::Keyframes }, &Shot::fstop, 1, 0.1, 1e4),
         number({ "sensor", "camera", "sensor", K::Number },
                [](auto& s) -> auto& { return s.sensor_width_mm; }, 1e-3, 1e4),
-        { { "lens", "camera", "lens", K::Text },
-          [](Shot& shot, const std::string& label, const std::string& value, std::string& error) {
-              if (parse_lens_model(value, shot.lens))
-                  return true;
-              error = label + ": unknown model '" + value + "' (choose thin or optical)";
-              return false;
-          },
-          [](const Shot& shot) { return std::string(lens_model_name(shot.lens)); } },
+        choice({ "lens", "camera", "lens", K::Text }, [](auto& s) -> auto& { return s.lens; },
+               parse_lens_model, lens_model_name, "model", "thin or optical"),
         number({ "max-blur", "camera", "max_blur", K::Number },
                [](auto& s) -> auto& { return s.max_blur_px; }, 0.0, 1e5),
 
@@ -179,23 +190,11 @@ const std::vector<SettingRule>& rules()
           } },
         text({ "compression", "output", "compression", K::Text },
              [](auto& s) -> auto& { return s.compression; }),
-        { { "window", "output", "window", K::Text },
-          [](Shot& shot, const std::string& label, const std::string& value, std::string& error) {
-              if (parse_output_window(value, shot.window))
-                  return true;
-              error = label + ": unknown window '" + value
-                      + "' (choose input, display or grown)";
-              return false;
-          },
-          [](const Shot& shot) { return std::string(output_window_name(shot.window)); } },
-        { { "edge", "scene", "edge", K::Text },
-          [](Shot& shot, const std::string& label, const std::string& value, std::string& error) {
-              if (parse_edge_mode(value, shot.edge))
-                  return true;
-              error = label + ": unknown edge '" + value + "' (choose auto, extend or black)";
-              return false;
-          },
-          [](const Shot& shot) { return std::string(edge_mode_name(shot.edge)); } },
+        choice({ "window", "output", "window", K::Text },
+               [](auto& s) -> auto& { return s.window; }, parse_output_window,
+               output_window_name, "window", "input, display or grown"),
+        choice({ "edge", "scene", "edge", K::Text }, [](auto& s) -> auto& { return s.edge; },
+               parse_edge_mode, edge_mode_name, "edge", "auto, extend or black"),
     };
     return table;
 }
