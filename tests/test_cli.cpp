@@ -173,8 +173,8 @@ TEST_CASE("every bad input ends in a one-line error and no output")
     const std::string out = dir + "/out.exr";
     const std::string not_image = dir + "/notes.exr";
     Filesystem::write_text_file(not_image, "this is not an image\n");
-    const std::string no_alpha = dir + "/no_alpha.exr";
-    write_scene(no_alpha, { "R", "G", "B", "Z" }, { 1, 1, 1, 2 });
+    const std::string no_colour = dir + "/no_colour.exr";
+    write_scene(no_colour, { "R", "G", "Z" }, { 1, 1, 2 });
     const std::string no_depth = dir + "/no_depth.exr";
     write_scene(no_depth, { "R", "G", "B", "A" }, { 1, 1, 1, 1 });
 
@@ -184,8 +184,9 @@ TEST_CASE("every bad input ends in a one-line error and no output")
     const std::vector<Case> cases = {
         { dir + "/missing.exr -o " + out + camera, "missing.exr: no such file" },
         { not_image + " -o " + out + camera, "notes.exr" },
-        { no_alpha + " -o " + out + camera, "no A channel" },
+        { no_colour + " -o " + out + camera, "no B channel" },
         { no_depth + " -o " + out + camera, "no Z channel" },
+        { no_depth + " -o " + out + camera + " --depth depth.Z", "--depth depth.Z: no such channel" },
         { example_scene() + " -o " + out + " --focal 50 --fstop abc --focus 4",
           "--fstop: 'abc' is not a number" },
         { example_scene() + " -o " + out + " --focal 50 --fstop 1.8 --focus -2",
@@ -691,6 +692,61 @@ TEST_CASE("defocus --focus-at focuses on what is seen at a pixel, keyframed too"
     CHECK(attribute(dir + "/b.0003.exr", "defocus:focusDistance") == 6.0f);
     REQUIRE(run_defocus(scene + " -o " + dir + "/c.exr --focus-at 30,10", log) == 1);
     CHECK(one_line_naming(log, "outside the 20x20 display window"));
+}
+
+TEST_CASE("a render without alpha is opaque, and one without Z takes its depth from --depth")
+{
+    const std::string dir = scratch_dir("cli_depth");
+    const std::string scene_file = two_depth_scene(dir);
+    const ImageBuf scene(scene_file);
+    auto write_channels = [&](const std::string& name, const std::vector<int>& order,
+                              const std::vector<std::string>& names) {
+        const std::string path = dir + "/" + name;
+        ImageBuf part = ImageBufAlgo::channels(scene, int(order.size()), order, {}, names);
+        REQUIRE(part.write(path));
+        return path;
+    };
+    const std::string rgbz  = write_channels("rgbz.exr", { 0, 1, 2, 4 }, { "R", "G", "B", "Z" });
+    const std::string rgba  = write_channels("rgba.exr", { 0, 1, 2, 3 }, { "R", "G", "B", "A" });
+    const std::string named = write_channels("named.exr", { 0, 1, 2, 3, 4 },
+                                             { "R", "G", "B", "A", "P.depth" });
+    for (int f : { 1, 2 })
+        write_channels(format("depth.{:04}.exr", f), { 4 }, { "Y" });
+    const std::string depth = dir + "/depth.0001.exr";
+    for (int f : { 1, 2 })
+        REQUIRE(Filesystem::copy(rgba, format("{}/rgba.{:04}.exr", dir, f)));
+    const std::string look = " -d float --focal 50 --fstop 1.4 --focus 2 --sensor 3.6";
+
+    std::string log;
+    REQUIRE(run_defocus(scene_file + " -o " + dir + "/reference.exr" + look, log) == 0);
+    REQUIRE(run_defocus(rgbz + " -o " + dir + "/opaque.exr -v" + look, log) == 0);
+    CHECK(Strutil::contains(log, "rgbz.exr: no alpha channel, taken as opaque"));
+    REQUIRE(run_defocus(rgba + " -o " + dir + "/file.exr -v --depth " + depth + look, log) == 0);
+    CHECK(Strutil::contains(log, "depth from " + depth));
+    REQUIRE(run_defocus(named + " -o " + dir + "/channel.exr --depth P.depth" + look, log) == 0);
+    // A depth sequence beside a colour sequence, frame by frame.
+    REQUIRE(run_defocus(dir + "/rgba.#.exr -o " + dir + "/seq.#.exr --depth " + dir
+                            + "/depth.#.exr" + look,
+                        log) == 0);
+    // A .dof keeps a depth file relative to itself.
+    REQUIRE(run_defocus(rgba + " --depth " + depth + look + " --save-scene " + dir + "/shot.dof",
+                        log) == 0);
+    std::string dof;
+    REQUIRE(Filesystem::read_text_file(dir + "/shot.dof", dof));
+    CHECK(Strutil::contains(dof, "\"depth\": \"depth.0001.exr\""));
+    REQUIRE(run_defocus(dir + "/shot.dof -o " + dir + "/dof.exr", log) == 0);
+
+    const ImageBuf reference(dir + "/reference.exr");
+    for (const char* result : { "opaque", "file", "channel", "seq.0002", "dof" }) {
+        INFO(result);
+        CHECK(ImageBufAlgo::compare(ImageBuf(dir + "/" + result + ".exr"), reference, 1e-6f, 1e-6f)
+                  .nfail
+              == 0);
+    }
+    REQUIRE(run_defocus(rgba + " -o " + dir + "/x.exr" + look, log) == 1);
+    CHECK(one_line_naming(log, "rgba.exr: part 0 has no Z channel (channels: R,G,B,A): give its "
+                               "depth with --depth FILE or --depth CHANNEL"));
+    CHECK_FALSE(Filesystem::exists(dir + "/x.exr"));
 }
 
 TEST_CASE("the help and the README document the same options")

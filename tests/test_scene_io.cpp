@@ -54,13 +54,16 @@ std::string write_parts(const std::string& file, const std::vector<PartDesc>& pa
 }
 
 /// A deep file (deepscanline, or deeptile with `tiled`): every pixel
-/// holds `samples` R,G,B,A,Z samples.
+/// holds `samples` R,G,B,A,Z samples (R,G,B,Z without `alpha`).
 std::string write_deep(const std::string& file, const std::vector<std::array<float, 5>>& samples,
-                       bool tiled = false)
+                       bool tiled = false, bool alpha = true)
 {
     const std::string path = scratch_dir("scene_io_" + file) + "/" + file;
-    ImageSpec spec(4, 3, 5, TypeFloat);
-    spec.channelnames = { "R", "G", "B", "A", "Z" };
+    const std::vector<int> source = alpha ? std::vector<int> { 0, 1, 2, 3, 4 }
+                                          : std::vector<int> { 0, 1, 2, 4 };
+    ImageSpec spec(4, 3, int(source.size()), TypeFloat);
+    spec.channelnames = alpha ? std::vector<std::string> { "R", "G", "B", "A", "Z" }
+                              : std::vector<std::string> { "R", "G", "B", "Z" };
     spec.deep = true;
     if (tiled)
         spec.tile_width = spec.tile_height = 16;
@@ -68,8 +71,8 @@ std::string write_deep(const std::string& file, const std::vector<std::array<flo
     for (int64_t p = 0; p < data.pixels(); ++p) {
         data.set_samples(p, int(samples.size()));
         for (int s = 0; s < int(samples.size()); ++s)
-            for (int c = 0; c < 5; ++c)
-                data.set_deep_value(p, c, s, samples[s][c]);
+            for (int c = 0; c < int(source.size()); ++c)
+                data.set_deep_value(p, c, s, samples[s][source[c]]);
     }
     auto out = ImageOutput::create(path);
     REQUIRE(out->open(path, spec));
@@ -219,4 +222,69 @@ TEST_CASE("inputs with different display windows are refused")
     ImageBufAlgo::fill(wide, { 1, 1, 1, 1, 1 });
     REQUIRE(wide.write(path));
     CHECK_THAT(read_error({ a, path }), Catch::Contains("display window"));
+}
+
+TEST_CASE("colour without alpha is read as opaque, and said so")
+{
+    const std::string f = write_parts("rgbz.exr", { { { "R", "G", "B", "Z" }, { 0.5f, 0.25f, 0, 3 } } });
+    const Scene s = read({ f });
+    REQUIRE(s.flat.size() == 1);
+    CHECK(value(s.flat[0].color, 0) == 0.5f);
+    CHECK(value(s.flat[0].color, 3) == 1.0f);
+    REQUIRE(s.notes.size() == 1);
+    CHECK_THAT(s.notes[0], Catch::Contains("rgbz.exr") && Catch::Contains("opaque"));
+    // A set with alpha is the beauty; one without is a colour pass.
+    const std::string passes = write_parts("passes.exr", { { { "beauty.R", "beauty.G", "beauty.B",
+                                                               "beauty.A", "beauty.Z", "diffuse.R",
+                                                               "diffuse.G", "diffuse.B" },
+                                                             { 1, 1, 1, 0.5f, 3, 2, 2, 2 } } });
+    const Scene beauty = read({ passes });
+    CHECK(value(beauty.flat[0].color, 3) == 0.5f);
+    CHECK(beauty.notes.empty());
+    // Deep samples without alpha have no coverage to composite by.
+    const std::string deep = write_deep("deep_rgb.exr", { { 1, 1, 1, 1, 3 } }, false, false);
+    CHECK_THAT(read_error({ deep }), Catch::Contains("deep_rgb.exr") && Catch::Contains("no A channel"));
+}
+
+TEST_CASE("a depth channel named by the user, or a depth file, stands in for Z")
+{
+    const std::string f = write_parts("rgba.exr", { { { "R", "G", "B", "A", "P.z" }, { 1, 1, 1, 1, 6 } } });
+    CHECK_THAT(read_error({ f }), Catch::Contains("no Z channel") && Catch::Contains("--depth"));
+    ReadOptions by_channel;
+    by_channel.depth = "P.z";
+    CHECK(value(read({ f }, by_channel).flat[0].depth, 0) == 6.0f);
+
+    // A one-channel depth file over a smaller data window: depth it does
+    // not cover is 0, which sanitize() takes as missing.
+    const std::string depth = scratch_dir("scene_io_depth_file") + "/depth.exr";
+    ImageSpec spec(8, 6, 1, TypeFloat);
+    spec.width        = 5;
+    spec.channelnames = { "Y" };
+    ImageBuf plane(spec);
+    ImageBufAlgo::fill(plane, { 2.5f });
+    REQUIRE(plane.write(depth));
+    ReadOptions by_file;
+    by_file.depth = depth;
+    const Scene s = read({ f }, by_file);
+    REQUIRE(s.flat.size() == 1);
+    CHECK(value(s.flat[0].depth, 0) == 2.5f);
+    float z = -1;
+    s.flat[0].depth.getpixel(7, 2, &z, 1);
+    CHECK(z == 0.0f);
+    CHECK(std::find(s.notes.begin(), s.notes.end(), "depth from " + depth) != s.notes.end());
+
+    ReadOptions missing;
+    missing.depth = "nothing";
+    CHECK_THAT(read_error({ f }, missing),
+               Catch::Contains("--depth nothing") && Catch::Contains("no such file"));
+    ReadOptions several;
+    several.depth = f;  // R,G,B,A,P.z: which one is the depth?
+    CHECK_THAT(read_error({ f }, several), Catch::Contains("no Z channel"));
+    CHECK_THAT(read_error({ f, f }, by_file), Catch::Contains("not 2 inputs"));
+    const std::string wide = scratch_dir("scene_io_depth_wide") + "/wide.exr";
+    ImageBuf wide_plane(ImageSpec(9, 6, 1, TypeFloat));
+    REQUIRE(wide_plane.write(wide));
+    ReadOptions other_window;
+    other_window.depth = wide;
+    CHECK_THAT(read_error({ f }, other_window), Catch::Contains("display window"));
 }

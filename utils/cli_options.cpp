@@ -98,6 +98,9 @@ void ShotArguments::add_scene(ArgParse& ap)
         "Channel prefix of colour and depth, e.g. 'beauty' for beauty.R..beauty.Z, or "
         "Blender's view layer name (default: plain R,G,B,A,Z or the file's only "
         "prefixed set)");
+    add(ap, "--depth FILE|CHANNEL", "depth",
+        "Depth for a render without Z, or instead of its Z: a channel of the input by name, "
+        "or a depth image (its Z or only channel; a frame pattern for sequences)");
     add(ap, "--depth-scale S", "depth-scale",
         "Metres per depth unit of the input's Z, e.g. 0.01 for centimetres (default: 1; "
         "--focus stays in metres)");

@@ -264,6 +264,8 @@ std::string verbose_report(const FrameResult& frame, const CommandLine& cl,
                 c.focal_length_mm, c.fstop, c.focus_distance, c.sensor_width_mm,
                 lens_model_name(c.lens), aperture_shape_name(cl.shot.aperture.shape),
                 c.max_blur_px);
+    for (const std::string& note : frame.notes)
+        r += "  " + note + "\n";
     r += "  " + frame.color.summary + "\n";
     if (!frame.slicing.empty())
         r += "  " + frame.slicing + "\n";

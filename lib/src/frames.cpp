@@ -44,6 +44,13 @@ std::vector<std::string> frame_inputs(const Shot& shot, int frame)
     return files;
 }
 
+ReadOptions frame_read_options(const Shot& shot, int frame)
+{
+    ReadOptions options = shot.read;
+    options.depth       = frame_path(options.depth, frame);
+    return options;
+}
+
 bool is_sequence(const Shot& shot)
 {
     if (!shot.frames.empty())

@@ -67,9 +67,10 @@ bool render(const Shot& shot, int frame, FrameResult& out, std::string& error,
 
     stage("read");
     Scene scene;
-    if (!read_scene(frame_inputs(shot, frame), shot.read, scene, error))
+    if (!read_scene(frame_inputs(shot, frame), frame_read_options(shot, frame), scene, error))
         return false;
     out.source = scene.source;
+    out.notes  = scene.notes;
     out.fixed  = sanitize(scene, nthreads);
     lap("read");
 
@@ -157,7 +158,8 @@ bool frame_spec(const Shot& shot, int frame, ImageSpec& spec, std::string& error
 {
     ImageSpec input;
     ColorPlan color;
-    if (!read_scene_spec(frame_inputs(shot, frame), shot.read, input, error)
+    if (!read_scene_spec(frame_inputs(shot, frame), frame_read_options(shot, frame), input,
+                         error)
         || !plan_color(color, shot.color_config, shot.input_space, shot.output_space, input,
                        error))
         return false;

@@ -39,11 +39,12 @@ std::string channel_name(const std::string& prefix, const std::string& channel)
 
 /// Where one part keeps a layer's colour and depth; -1 where it has none.
 struct Channels {
-    std::string prefix;  ///< of the colour channels
-    int color[4] = { -1, -1, -1, -1 };
+    std::string prefix;                 ///< of the colour channels
+    int color[4] = { -1, -1, -1, -1 };  ///< R,G,B,A; A is -1 in colour without alpha
     int depth    = -1;
 
-    bool has_color() const { return color[3] >= 0; }
+    bool has_color() const { return color[0] >= 0; }
+    bool has_alpha() const { return color[3] >= 0; }
     bool has_depth() const { return depth >= 0; }
 };
 
@@ -59,8 +60,10 @@ int first_channel(const ImageSpec& spec, const std::vector<std::string>& names)
 }
 
 /// Resolves the colour and depth channels of one part. Colour is R,G,B,A
-/// under the chosen prefix (--layer, also with Blender's ".Combined"), or
-/// plain, or the part's only prefixed set. Depth is Z next to the colour,
+/// (or, when no set has A, R,G,B) under the chosen prefix (--layer, also
+/// with Blender's ".Combined"), or plain, or the part's only prefixed set.
+/// Sets without A are passed over when one has it: they are a render's
+/// colour passes (diffuse, albedo), not its beauty. Depth is Z next to the colour,
 /// Blender's <viewlayer>.Depth.Z, or a depth pass named Z or depth.Z.
 /// `error` is set when the choice is ambiguous.
 Channels find_channels(const ImageSpec& spec, const std::string& layer,
@@ -77,21 +80,22 @@ Channels find_channels(const ImageSpec& spec, const std::string& layer,
                 prefixes.push_back(n.substr(0, n.size() - 2));
     }
     Channels ch;
-    std::vector<std::string> complete;
+    std::vector<std::string> rgba_sets, rgb_sets;
     for (const std::string& p : prefixes) {
-        int c[4];
-        const char* rgba[4] = { "R", "G", "B", "A" };
-        bool all = true;
-        for (int i = 0; i < 4; ++i)
-            all &= (c[i] = spec.channelindex(channel_name(p, rgba[i]))) >= 0;
-        if (!all)
+        const int c[4] = { spec.channelindex(channel_name(p, "R")),
+                           spec.channelindex(channel_name(p, "G")),
+                           spec.channelindex(channel_name(p, "B")),
+                           spec.channelindex(channel_name(p, "A")) };
+        if (c[0] < 0 || c[1] < 0 || c[2] < 0)
             continue;
-        complete.push_back(p);
-        if (complete.size() == 1) {
+        auto& sets = c[3] >= 0 ? rgba_sets : rgb_sets;
+        sets.push_back(p);
+        if (rgba_sets.size() + rgb_sets.size() == 1 || (c[3] >= 0 && rgba_sets.size() == 1)) {
             ch.prefix = p;
             std::copy(c, c + 4, ch.color);
         }
     }
+    const auto& complete = rgba_sets.empty() ? rgb_sets : rgba_sets;
     if (complete.size() > 1 && !complete.front().empty())
         error = format("it holds several layers ({}): choose one with --layer NAME",
                        Strutil::join(complete, ", "));
@@ -112,10 +116,10 @@ Channels find_channels(const ImageSpec& spec, const std::string& layer,
     return ch;
 }
 
-/// The first of R,G,B,A,Z a part lacks, for messages.
+/// The first of R,G,B,Z a part lacks, for messages.
 std::string missing_channel(const ImageSpec& spec, const std::string& layer)
 {
-    for (const char* c : { "R", "G", "B", "A" })
+    for (const char* c : { "R", "G", "B" })
         if (spec.channelindex(channel_name(layer, c)) < 0
             && spec.channelindex(channel_name(layer, std::string("Combined.") + c)) < 0)
             return channel_name(layer, c);
@@ -183,38 +187,73 @@ bool allocate_layer(const std::string& name, const ROI& window, const ImageSpec&
     return true;
 }
 
-/// A layer from the colour channels of one part and the depth channel of
-/// another (or the same) part, read through OpenImageIO, over the colour
-/// part's data window, in one pass. Depth outside the depth part's data
-/// window is 0, which sanitize() treats as missing.
-void copy_layer(Layer& layer, const ImageBuf& color_part, const int color[4],
-                const ImageBuf& depth_part, int depth)
+/// Sets a layer's colour from channels `color` of `part` and, when
+/// `depth` is not -1, its depth from that channel of the same part. Colour
+/// without alpha (color[3] = -1) is left for set_opaque().
+void copy_layer(Layer& layer, const ImageBuf& part, const int color[4], int depth)
 {
-    const ROI window       = color_part.roi();
-    const ROI depth_window = depth_part.roi();
-    const bool same_part   = &depth_part == &color_part;
-    const int n            = color_part.nchannels();
+    const ROI window = part.roi();
+    const int n      = part.nchannels();
+    const int ncolor = color[3] >= 0 ? 4 : 3;
     parallel_for(window.ybegin, window.yend, [&](int y) {
         float* rgba = static_cast<float*>(layer.color.pixeladdr(window.xbegin, y));
         float* z    = static_cast<float*>(layer.depth.pixeladdr(window.xbegin, y));
-        const float* src = static_cast<const float*>(color_part.pixeladdr(window.xbegin, y));
+        const float* src = static_cast<const float*>(part.pixeladdr(window.xbegin, y));
         for (int x = window.xbegin; x < window.xend; ++x, rgba += 4, ++z, src += n) {
-            for (int c = 0; c < 4; ++c)
+            for (int c = 0; c < ncolor; ++c)
                 rgba[c] = src[color[c]];
-            if (same_part)
+            if (depth >= 0)
                 *z = src[depth];
-            else
-                *z = depth_window.contains(x, y)
-                         ? static_cast<const float*>(depth_part.pixeladdr(x, y))[depth]
-                         : 0.0f;
         }
     });
 }
 
-/// A layer decoded straight from an EXR: colour from one part, depth from
-/// the same part or another one, over the colour part's data window.
+/// Alpha 1 everywhere: colour read without alpha is opaque.
+void set_opaque(Layer& layer)
+{
+    const ROI window = layer.color.roi();
+    parallel_for(window.ybegin, window.yend, [&](int y) {
+        float* rgba = static_cast<float*>(layer.color.pixeladdr(window.xbegin, y));
+        for (int x = 0; x < window.width(); ++x)
+            rgba[4 * x + 3] = 1.0f;
+    });
+}
+
+/// Sets a layer's depth from channel `channel` of `depth`, an image over
+/// another window. Depth it does not cover is 0, which sanitize() treats
+/// as missing.
+void lay_depth(Layer& layer, const ImageBuf& depth, int channel)
+{
+    const ROI window       = layer.depth.roi();
+    const ROI depth_window = depth.roi();
+    parallel_for(window.ybegin, window.yend, [&](int y) {
+        float* z = static_cast<float*>(layer.depth.pixeladdr(window.xbegin, y));
+        for (int x = window.xbegin; x < window.xend; ++x, ++z)
+            *z = depth_window.contains(x, y)
+                     ? static_cast<const float*>(depth.pixeladdr(x, y))[channel]
+                     : 0.0f;
+    });
+}
+
+/// A one-channel float image over `window` of a part whose header is
+/// `from` (display window), its pixels not yet set.
+ImageBuf depth_image(const ROI& window, const ImageSpec& from)
+{
+    ImageSpec spec(window, TypeFloat);
+    spec.nchannels    = 1;
+    spec.channelnames = { "Z" };
+    spec.full_x       = from.full_x;
+    spec.full_y       = from.full_y;
+    spec.full_width   = from.full_width;
+    spec.full_height  = from.full_height;
+    return ImageBuf(spec, InitializePixels::No);
+}
+
+/// A layer decoded straight from an EXR: colour from one part and, unless
+/// `depth_part` is null, depth from the same part or another one, over the
+/// colour part's data window.
 bool decode_layer(const ExrInput& exr, const std::string& filename, const std::string& name,
-                  const Part& color_part, const Part& depth_part, Layer& layer,
+                  const Part& color_part, const Part* depth_part, Layer& layer,
                   std::string& error)
 {
     const ROI window = color_part.spec.roi();
@@ -226,33 +265,54 @@ bool decode_layer(const ExrInput& exr, const std::string& filename, const std::s
     float* z = static_cast<float*>(layer.depth.localpixels());
     std::vector<ChannelTarget> targets;
     for (int c = 0; c < 4; ++c)
-        targets.push_back({ cs.channelnames[color_part.channels.color[c]], rgba + c, 4, 4 * width });
-    const std::string depth_name = depth_part.spec.channelnames[depth_part.channels.depth];
-    const ROI depth_window = depth_part.spec.roi();
-    if (depth_part.subimage == color_part.subimage || depth_window == window) {
-        ChannelTarget depth { depth_name, z, 1, width };
-        if (depth_part.subimage == color_part.subimage)
-            targets.push_back(depth);
-        else if (!exr.read(depth_part.subimage, { depth }, error, 0))
-            return false;
-        return exr.read(color_part.subimage, targets, error, 0);
+        if (color_part.channels.color[c] >= 0)
+            targets.push_back({ cs.channelnames[color_part.channels.color[c]], rgba + c, 4, 4 * width });
+    if (depth_part) {
+        const std::string depth_name = depth_part->spec.channelnames[depth_part->channels.depth];
+        const ROI depth_window = depth_part->spec.roi();
+        if (depth_part->subimage == color_part.subimage) {
+            targets.push_back({ depth_name, z, 1, width });
+        } else if (depth_window == window) {
+            if (!exr.read(depth_part->subimage, { { depth_name, z, 1, width } }, error, 0))
+                return false;
+        } else {
+            ImageBuf depth = depth_image(depth_window, depth_part->spec);
+            if (!exr.read(depth_part->subimage,
+                          { { depth_name, static_cast<float*>(depth.localpixels()), 1,
+                              size_t(depth_window.width()) } },
+                          error, 0))
+                return false;
+            lay_depth(layer, depth, 0);
+        }
     }
-    // A depth part over another window: decoded apart, then laid over the
-    // colour's window; depth it does not cover is 0, which sanitize()
-    // treats as missing.
-    std::vector<float> depth(size_t(depth_window.npixels()));
-    if (!exr.read(depth_part.subimage, { { depth_name, depth.data(), 1, size_t(depth_window.width()) } },
-                  error, 0)
-        || !exr.read(color_part.subimage, targets, error, 0))
-        return false;
-    parallel_for(window.ybegin, window.yend, [&](int y) {
-        float* row = z + size_t(y - window.ybegin) * width;
-        for (int x = window.xbegin; x < window.xend; ++x)
-            row[x - window.xbegin] = depth_window.contains(x, y)
-                                         ? depth[size_t(y - depth_window.ybegin) * depth_window.width()
-                                                 + (x - depth_window.xbegin)]
-                                         : 0.0f;
-    });
+    return exr.read(color_part.subimage, targets, error, 0);
+}
+
+/// A flat layer: colour from `color_part` (opaque without alpha) and, unless
+/// `depth_part` is null, depth from the same part or another one.
+bool read_layer(const ExrInput& exr, ImageInput& in, const std::string& filename,
+                const std::string& name, const Part& color_part, const Part* depth_part,
+                Layer& layer, std::string& error)
+{
+    if (is_openexr(filename)) {
+        if (!decode_layer(exr, filename, name, color_part, depth_part, layer, error))
+            return false;
+    } else {
+        ImageBuf color, depth;
+        const bool same_part = depth_part && depth_part->subimage == color_part.subimage;
+        if (!read_pixels(in, color_part, color, filename, error)
+            || !allocate_layer(name, color.roi(), color_part.spec, layer, filename, error))
+            return false;
+        copy_layer(layer, color, color_part.channels.color,
+                   same_part ? color_part.channels.depth : -1);
+        if (depth_part && !same_part) {
+            if (!read_pixels(in, *depth_part, depth, filename, error))
+                return false;
+            lay_depth(layer, depth, depth_part->channels.depth);
+        }
+    }
+    if (!color_part.channels.has_alpha())
+        set_opaque(layer);
     return true;
 }
 
@@ -262,6 +322,7 @@ struct FileLayout {
     std::vector<size_t> complete; ///< parts with colour and depth: layers or one flat render
     int joined_color = -1;        ///< else a beauty part ...
     int joined_depth = -1;        ///< ... and a depth part: one flat render
+    std::string depth_file;       ///< or the beauty part's depth in another file
     ROI data_window;              ///< the union of what is read
 
     /// The first part's header: display window, metadata.
@@ -329,6 +390,20 @@ bool choose_parts(ImageInput& in, const std::string& filename, const ReadOptions
         return false;
     }
 
+    // --depth names a channel of the file's parts, or else a file.
+    bool depth_is_channel = false;
+    for (const Part& part : parts)
+        depth_is_channel |= !options.depth.empty() && part.spec.channelindex(options.depth) >= 0;
+    if (!options.depth.empty() && !depth_is_channel) {
+        if (!Filesystem::is_regular(options.depth)) {
+            error = format("{}: --depth {}: no such channel (channels: {}) and no such file",
+                           filename, options.depth,
+                           Strutil::join(parts.front().spec.channelnames, ","));
+            return false;
+        }
+        layout.depth_file = options.depth;
+    }
+
     std::vector<size_t> color_only, depth_only;
     for (size_t i = 0; i < parts.size(); ++i) {
         Part& part = parts[i];
@@ -342,7 +417,14 @@ bool choose_parts(ImageInput& in, const std::string& filename, const ReadOptions
             error = format("{}: {} is a volume image", filename, part.label);
             return false;
         }
-        const Channels& c = part.channels;
+        Channels& c = part.channels;
+        if (!options.depth.empty())
+            c.depth = depth_is_channel ? part.spec.channelindex(options.depth) : -1;
+        if (part.spec.deep && c.has_color() && !c.has_alpha()) {
+            error = format("{}: {} is deep and has no A channel: deep samples need their "
+                           "coverage", filename, part.label);
+            return false;
+        }
         if (c.has_color() && c.has_depth())
             layout.complete.push_back(i);
         else if (c.has_color())
@@ -353,7 +435,19 @@ bool choose_parts(ImageInput& in, const std::string& filename, const ReadOptions
     for (size_t i : layout.complete)
         layout.data_window = roi_union(layout.data_window, parts[i].spec.roi());
 
-    if (layout.complete.empty()) {
+    if (!layout.depth_file.empty()) {
+        // A beauty part, its depth in another file.
+        if (color_only.size() != 1 || parts[color_only[0]].spec.deep) {
+            error = format("{}: --depth FILE gives one flat render its depth, and this file "
+                           "{}", filename,
+                           color_only.empty()                ? "has no R,G,B channels"
+                           : parts[color_only[0]].spec.deep ? "is deep"
+                                                             : "has several colour parts");
+            return false;
+        }
+        layout.joined_color = int(color_only[0]);
+        layout.data_window  = parts[color_only[0]].spec.roi();
+    } else if (layout.complete.empty()) {
         // A beauty part and a depth part of the same view: one flat render.
         if (color_only.size() == 1 && depth_only.size() == 1 && !parts[color_only[0]].spec.deep) {
             layout.joined_color = int(color_only[0]);
@@ -365,9 +459,13 @@ bool choose_parts(ImageInput& in, const std::string& filename, const ReadOptions
             return false;
         } else {
             const Part& first = color_only.empty() ? parts.front() : parts[color_only.front()];
-            error = format("{}: {} has no {} channel (channels: {})", filename, first.label,
-                           missing_channel(first.spec, options.layer),
-                           Strutil::join(first.spec.channelnames, ","));
+            const std::string missing =
+                options.depth.empty() ? missing_channel(first.spec, options.layer) : options.depth;
+            const bool no_depth = first.channels.has_color();
+            error = format("{}: {} has no {} channel (channels: {}){}", filename, first.label,
+                           missing, Strutil::join(first.spec.channelnames, ","),
+                           no_depth ? ": give its depth with --depth FILE or --depth CHANNEL"
+                                    : "");
             return false;
         }
     }
@@ -387,6 +485,46 @@ bool same_display_window(const ImageSpec& first, const ImageSpec& scene,
     return false;
 }
 
+/// Lays a flat render's depth from its own file (--depth FILE) into `layer`:
+/// the Z channel of the file's first part, or its only channel. The file
+/// must share the render's display window (`render`).
+bool read_depth_file(const std::string& filename, const ImageSpec& render, Layer& layer,
+                     std::string& error)
+{
+    ExrInput exr;
+    auto in = open_file(filename, &exr, error);
+    if (!in)
+        return false;
+    const Part part { 0, in->spec(), "part 0", {} };
+    const ImageSpec& spec = part.spec;
+    int channel = first_channel(spec, { "Z", "depth.Z", "Depth.Z" });
+    if (channel < 0 && spec.nchannels == 1)
+        channel = 0;
+    if (spec.deep || channel < 0) {
+        error = format("{}: {}: --depth takes a flat image with a Z channel or one channel",
+                       filename,
+                       spec.deep ? "is a deep image"
+                                 : format("has no Z channel (channels: {})",
+                                          Strutil::join(spec.channelnames, ",")));
+        return false;
+    }
+    if (!same_display_window(spec, render, filename, error))
+        return false;
+    ImageBuf depth;
+    if (is_openexr(filename)) {
+        depth = depth_image(spec.roi(), spec);
+        if (!exr.read(0, { { spec.channelnames[channel], static_cast<float*>(depth.localpixels()),
+                             1, size_t(spec.width) } },
+                      error, 0))
+            return false;
+        channel = 0;
+    } else if (!read_pixels(*in, part, depth, filename, error)) {
+        return false;
+    }
+    lay_depth(layer, depth, channel);
+    return true;
+}
+
 /// Reads one file into `scene`: its layers, flat renders and deep images.
 bool read_file(const std::string& filename, const ReadOptions& options,
                Scene& scene, std::string& error)
@@ -396,7 +534,6 @@ bool read_file(const std::string& filename, const ReadOptions& options,
     FileLayout layout;
     if (!in || !choose_parts(*in, filename, options, layout, error))
         return false;
-    const bool is_exr = is_openexr(filename);
     auto layer_name = [](const Part& part, const char* fallback) -> std::string {
         return part.spec.get_string_attribute("name", format("{}{}", fallback, part.subimage));
     };
@@ -421,37 +558,30 @@ bool read_file(const std::string& filename, const ReadOptions& options,
             continue;
         }
         Layer layer;
-        if (is_exr) {
-            if (!decode_layer(exr, filename, layer_name(part, "layer"), part, part, layer, error))
-                return false;
-        } else {
-            ImageBuf pixels;
-            if (!read_pixels(*in, part, pixels, filename, error)
-                || !allocate_layer(layer_name(part, "layer"), pixels.roi(), part.spec, layer,
-                                   filename, error))
-                return false;
-            copy_layer(layer, pixels, c.color, pixels, c.depth);
-        }
+        if (!read_layer(exr, *in, filename, layer_name(part, "layer"), part, &part, layer, error))
+            return false;
         (layout.complete.size() > 1 ? scene.layers : scene.flat).push_back(std::move(layer));
     }
     if (layout.joined_color >= 0) {
         const Part& color_part = layout.parts[layout.joined_color];
-        const Part& depth_part = layout.parts[layout.joined_depth];
+        const Part* depth_part =
+            layout.joined_depth >= 0 ? &layout.parts[layout.joined_depth] : nullptr;
         const std::string name = color_part.spec.get_string_attribute("name", "beauty");
         Layer layer;
-        if (is_exr) {
-            if (!decode_layer(exr, filename, name, color_part, depth_part, layer, error))
+        if (!read_layer(exr, *in, filename, name, color_part, depth_part, layer, error))
+            return false;
+        if (!layout.depth_file.empty()) {
+            if (!read_depth_file(layout.depth_file, color_part.spec, layer, error))
                 return false;
-        } else {
-            ImageBuf color, depth;
-            if (!read_pixels(*in, color_part, color, filename, error)
-                || !read_pixels(*in, depth_part, depth, filename, error)
-                || !allocate_layer(name, color.roi(), color_part.spec, layer, filename, error))
-                return false;
-            copy_layer(layer, color, color_part.channels.color, depth, depth_part.channels.depth);
+            scene.notes.push_back("depth from " + layout.depth_file);
         }
         scene.flat.push_back(std::move(layer));
     }
+    for (const Part& part : layout.parts)
+        if (part.channels.has_color() && !part.channels.has_alpha()) {
+            scene.notes.push_back(filename + ": no alpha channel, taken as opaque");
+            break;
+        }
     if (scene.spec.nchannels == 0 || scene.spec.full_width == 0) {
         scene.spec = layout.first();
         return true;
@@ -521,15 +651,30 @@ void scale_depth(Scene& scene, float scale)
         }
 }
 
-}  // namespace
-
-bool read_scene_spec(const std::vector<std::string>& filenames, const ReadOptions& options,
-                     ImageSpec& spec, std::string& error)
+/// Checks that there are inputs, and that a depth file is given to one.
+bool check_inputs(const std::vector<std::string>& filenames, const ReadOptions& options,
+                  std::string& error)
 {
     if (filenames.empty()) {
         error = "no input file";
         return false;
     }
+    if (filenames.size() > 1 && Filesystem::is_regular(options.depth)) {
+        error = format("--depth {}: a depth file gives one flat render its depth, not {} "
+                       "inputs",
+                       options.depth, filenames.size());
+        return false;
+    }
+    return true;
+}
+
+}  // namespace
+
+bool read_scene_spec(const std::vector<std::string>& filenames, const ReadOptions& options,
+                     ImageSpec& spec, std::string& error)
+{
+    if (!check_inputs(filenames, options, error))
+        return false;
     ROI data_window;
     for (size_t f = 0; f < filenames.size(); ++f) {
         auto in = open_file(filenames[f], nullptr, error);
@@ -550,10 +695,8 @@ bool read_scene(const std::vector<std::string>& filenames, const ReadOptions& op
                 Scene& scene, std::string& error)
 {
     scene = Scene();
-    if (filenames.empty()) {
-        error = "no input file";
+    if (!check_inputs(filenames, options, error))
         return false;
-    }
     for (const std::string& filename : filenames) {
         Scene part;
         part.spec = scene.spec;
@@ -572,6 +715,9 @@ bool read_scene(const std::vector<std::string>& filenames, const ReadOptions& op
             scene.layers.push_back(std::move(layer));
         for (DeepImage& image : part.deep)
             scene.deep.push_back(std::move(image));
+        for (std::string& note : part.notes)
+            if (std::find(scene.notes.begin(), scene.notes.end(), note) == scene.notes.end())
+                scene.notes.push_back(std::move(note));
         scene.source += (scene.source.empty() ? "" : " ") + filename;
     }
     if (scene.deep.size() > 1) {

@@ -97,6 +97,8 @@ const std::vector<SettingRule>& rules()
         text({ "layer", "scene", "layer", K::Text }, [](auto& s) -> auto& { return s.read.layer; }),
         number({ "layers", "scene", "layers", K::Number },
                      [](auto& s) -> auto& { return s.layering.layers; }, 0, 256),
+        text({ "depth", "scene", "depth", K::FileOrName },
+             [](auto& s) -> auto& { return s.read.depth; }),
         number({ "depth-scale", "scene", "depth_scale", K::Number },
                [](auto& s) -> auto& { return s.read.depth_scale; }, 1e-9, 1e9),
 

@@ -99,6 +99,7 @@ bool to_text(const json& value, ShotValueKind kind, std::string& text, std::stri
     }
     case ShotValueKind::Text:
     case ShotValueKind::Path:
+    case ShotValueKind::FileOrName:
         if (!value.is_string())
             break;
         text = value.get<std::string>();
@@ -107,6 +108,7 @@ bool to_text(const json& value, ShotValueKind kind, std::string& text, std::stri
     static const char* expected[] = {
         "a number", "a number or keyframes {\"frame\": number, ...}",
         "[x, y] or keyframes {\"frame\": [x, y], ...}", "a string", "a file name",
+        "a file or channel name",
     };
     error = format("expected {}, not {}", expected[int(kind)], value.type_name());
     return false;
@@ -125,7 +127,8 @@ json to_json(const std::string& text, ShotValueKind kind)
     switch (kind) {
     case ShotValueKind::Number: return number_json(std::stod(text));
     case ShotValueKind::Text:
-    case ShotValueKind::Path: return text;
+    case ShotValueKind::Path:
+    case ShotValueKind::FileOrName: return text;
     case ShotValueKind::Keyframes:
     case ShotValueKind::Point: break;
     }
@@ -243,7 +246,9 @@ bool read_document(const json& doc, const std::string& directory, Shot& shot,
                 error = where + ": " + error;
                 return false;
             }
-            if (setting->kind == ShotValueKind::Path)
+            if (setting->kind == ShotValueKind::Path
+                || (setting->kind == ShotValueKind::FileOrName
+                    && OIIO::Filesystem::exists(resolve(text, directory))))
                 text = resolve(text, directory);
             if (!set_shot_setting(shot, setting->name, text, error, where))
                 return false;
@@ -304,7 +309,8 @@ std::string shot_to_json(const Shot& shot, const std::string& directory)
         std::string text = shot_setting(shot, s.name);
         if (text.empty())
             continue;
-        if (s.kind == ShotValueKind::Path)
+        if (s.kind == ShotValueKind::Path
+            || (s.kind == ShotValueKind::FileOrName && OIIO::Filesystem::exists(text)))
             text = relative_to(text, directory);
         doc[s.section][s.key] = to_json(text, s.kind);
     }

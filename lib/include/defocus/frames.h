@@ -22,6 +22,9 @@ std::string frame_path(const std::string& path, int frame);
 /// filled in.
 std::vector<std::string> frame_inputs(const Shot& shot, int frame);
 
+/// The read options of `frame`: a --depth file pattern filled in.
+ReadOptions frame_read_options(const Shot& shot, int frame);
+
 /// True when a shot is a sequence: it has a frame list or a frame pattern
 /// among its inputs.
 bool is_sequence(const Shot& shot);

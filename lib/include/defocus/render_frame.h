@@ -29,6 +29,7 @@ struct FrameResult {
     OIIO::ImageBuf image;
     OIIO::TypeDesc pixel_type;  ///< to write it as
     PixelCounts fixed;
+    std::vector<std::string> notes;  ///< how reading took what the files did not say
     std::string slicing;  ///< how flat or deep input was cut into layers ("" = not)
     std::string edges;    ///< how the layers were extended past the data window ("" = not)
     std::vector<LayerReport> layers;

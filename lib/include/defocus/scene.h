@@ -46,6 +46,9 @@ struct Scene {
     std::vector<Layer> layers;   ///< layers as given: spread as they are
     std::vector<Layer> flat;     ///< flat renders (RGBA+Z), to be sliced
     std::vector<DeepImage> deep; ///< deep images, to be sliced
+    /// How reading took what the files did not say, for -v, e.g. "x.exr:
+    /// no alpha channel, taken as opaque".
+    std::vector<std::string> notes;
 };
 
 /// Removes the attributes that describe one part of an input file (its

@@ -21,6 +21,11 @@ struct ReadOptions {
     /// Metres per depth unit: Z (and a deep sample's Z back) is multiplied
     /// by it as it is read, e.g. 0.01 for renders with Z in centimetres.
     double depth_scale = 1.0;
+    /// Where the depth is when the input has no Z (or another one is
+    /// wanted): a channel of the input by name, or else a depth image file
+    /// (its Z channel, or its only channel) over the same display window
+    /// ("" = the input's Z).
+    std::string depth;
 };
 
 /// Reads a scene from one or several files.
@@ -31,6 +36,7 @@ struct ReadOptions {
 ///  - a flat render: one part with R,G,B,A and Z, or an RGBA part and a
 ///    part holding the depth (Z or depth.Z) of the same view, joined;
 ///  - a deep image (deepscanline or deeptile), one or more parts.
+/// Colour without alpha (R,G,B only) is taken as opaque.
 /// In a multi-view file only the parts of the chosen view (and parts with
 /// no view) are read. Several files are layers of one scene: a flat file
 /// among them is one layer, and all deep images are merged into one (each

@@ -65,6 +65,7 @@ enum class ShotValueKind {
     Point,      ///< [x, y], or {"frame": [x, y], ...}
     Text,       ///< a JSON string
     Path,       ///< a JSON string naming a file, relative to the .dof file
+    FileOrName, ///< a JSON string: a file as Path when one is there, else a name
 };
 
 /// One setting of a shot: its option name (the defocus command's long
