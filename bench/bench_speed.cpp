@@ -275,7 +275,7 @@ int main(int argc, const char* argv[])
         scene4k = scratch + "/scene4k.exr";
         double unused;
         std::printf("making the 4K example scene...\n");
-        launcher.run(format("{} --width 3840 --height 2160 -o {} > /dev/null", MAKE_EXAMPLE_SCENE_BIN,
+        launcher.run(format("{} --width 3840 --height 2160 {} > /dev/null", MAKE_EXAMPLE_SCENE_BIN,
                            arg_quote(scene4k)),
                     unused);
     }
