@@ -7,6 +7,8 @@
 
 #include <defocus/layered_dof.h>
 
+#include "parallel_rows.h"
+
 namespace defocus {
 
 using namespace OIIO;
@@ -49,7 +51,7 @@ ImageBuf clamped_copy(const ImageBuf& image, const ROI& grown, int nthreads)
             std::copy_n(static_cast<const char*>(image.pixeladdr(sx, sy)), pixel_bytes,
                         static_cast<char*>(out.pixeladdr(x, y)));
         }
-    }, paropt(nthreads));
+    }, by_rows(nthreads));
     return out;
 }
 

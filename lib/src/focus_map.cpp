@@ -7,6 +7,8 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/parallel.h>
 
+#include "parallel_rows.h"
+
 namespace defocus {
 
 using namespace OIIO;
@@ -62,7 +64,7 @@ bool focus_map(ImageBuf& dst, const Scene& scene, const Camera& camera, double i
                 for (int i = 0; i < 3; ++i)
                     p[i] = 0.5f * (p[i] + 1.0f);
         }
-    }, paropt(nthreads));
+    }, by_rows(nthreads));
     return true;
 }
 

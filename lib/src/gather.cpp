@@ -8,6 +8,7 @@
 #include <OpenImageIO/parallel.h>
 
 #include "float_pixels.h"
+#include "parallel_rows.h"
 #include "spread_common.h"
 
 namespace defocus {
@@ -51,7 +52,7 @@ bool gather(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
             for (int c = 0; c < nc; ++c)
                 o[c] = wsum > 0.0 ? float(sum[c] / wsum) : 0.0f;
         }
-    }, OIIO::paropt(nthreads));
+    }, by_rows(nthreads));
     return true;
 }
 

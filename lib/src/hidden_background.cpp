@@ -7,6 +7,8 @@
 
 #include <OpenImageIO/parallel.h>
 
+#include "parallel_rows.h"
+
 namespace defocus {
 
 using namespace OIIO;
@@ -49,7 +51,7 @@ void fill_hidden_background(Layer& layer, const std::vector<bool>& holes,
             cell.v[4] = c[3] > 0.0f ? c[3] * std::min(z, 1e30f) : 0.0f;
             cell.w = 1.0f;
         }
-    }, paropt(nthreads));
+    }, by_rows(nthreads));
 
     // Push: each level sums 2x2 cells of the finer one, as far as a cell
     // spans the distance to fill.
@@ -116,7 +118,7 @@ void fill_hidden_background(Layer& layer, const std::vector<bool>& holes,
                 c[i] = cell.v[i] / cell.w;
             *static_cast<float*>(layer.depth.pixeladdr(x, y)) = cell.v[4] / cell.v[3];
         }
-    }, paropt(nthreads));
+    }, by_rows(nthreads));
 }
 
 }  // namespace defocus

@@ -8,6 +8,7 @@
 #include <OpenImageIO/strutil.h>
 
 #include "float_pixels.h"
+#include "parallel_rows.h"
 
 namespace defocus {
 
@@ -116,7 +117,7 @@ std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius
         double sum = 0.0;
         for (int x = 0; x < w; ++x, c += pixels.nchannels())
             row[x] = sum += luminance(c);
-    }, paropt(nthreads));
+    }, by_rows(nthreads));
     parallel_for_chunked(0, w + 1, 0, [&](int64_t x0, int64_t x1) {
         for (int y = 1; y <= h; ++y) {
             double* row = &sat[size_t(y) * (w + 1)];
@@ -124,7 +125,7 @@ std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius
             for (int64_t x = x0; x < x1; ++x)
                 row[x] += above[x];
         }
-    }, paropt(nthreads));
+    }, by_rows(nthreads));
     std::vector<uint8_t> selected(size_t(w) * h, 0);
     parallel_for(0, h, [&](int y) {
         const float* c = pixels(roi.xbegin, roi.ybegin + y);
@@ -141,7 +142,7 @@ std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius
             const double mean = sum / (double(x1 - x0) * (y1 - y0));
             selected[size_t(y) * w + x] = l > threshold * mean;
         }
-    }, paropt(nthreads));
+    }, by_rows(nthreads));
     return selected;
 }
 

@@ -13,6 +13,7 @@
 #include <defocus/spread.h>
 
 #include "float_pixels.h"
+#include "parallel_rows.h"
 #include "spread_engine.h"
 #include "zeroed_image.h"
 
@@ -36,7 +37,7 @@ bool coc_radius(ImageBuf& dst, const ImageBuf& depth,
         float* out = static_cast<float*>(dst.pixeladdr(roi.xbegin, y));
         for (int x = 0; x < roi.width(); ++x, in += z.nchannels())
             out[x] = float(coc.radius(*in));
-    }, paropt(nthreads));
+    }, by_rows(nthreads));
     return true;
 }
 
@@ -72,7 +73,7 @@ LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc, int
             r.weight += a;
             r.weighted_inverse += a * (std::isinf(z) ? 0.0 : 1.0 / z);
         }
-    }, paropt(nthreads));
+    }, by_rows(nthreads));
     RowDepth total;
     for (const RowDepth& r : rows) {
         total.pixels += r.pixels;
@@ -159,7 +160,7 @@ bool spread_apart(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
                 s[k] = is_slow ? c[k] : 0.0f;
             }
         }
-    }, paropt(nthreads));
+    }, by_rows(nthreads));
     const std::shared_ptr<const PsfImage> psf = settings.psf_image;
     ImageBuf fast_spread, slow_spread;
     if (!fast(fast_spread, fast_part)
@@ -184,7 +185,7 @@ void composite_image(ImageBuf& frame, const ImageBuf& layer, int nthreads)
                     = static_cast<const float*>(layer.pixeladdr(x, y))[c];
         if (both.width() > 0)
             over.row(y, both.xbegin, both.xend, row.data());
-    }, paropt(nthreads));
+    }, by_rows(nthreads));
 }
 
 /// Whether a layer goes through the spreading engine, composited as it is

@@ -10,6 +10,8 @@
 
 #include <defocus/footprint.h>
 
+#include "parallel_rows.h"
+
 namespace defocus {
 
 using namespace OIIO;
@@ -97,7 +99,7 @@ Fragments flat_fragments(const Layer& flat, const CircleOfConfusion& coc,
             if (f.a > 0.0f)
                 assign_layers(f, coc, bounds);
         }
-    }, paropt(nthreads));
+    }, by_rows(nthreads));
     return out;
 }
 
@@ -162,7 +164,7 @@ Fragments deep_fragments(const DeepImage& deep, const CircleOfConfusion& coc,
                 assign_layers(row[i], coc, bounds);
             row.push_back({ 0, 0, 0, 0, -1, -1, 0, 0 });  // end of pixel
         }
-    }, paropt(nthreads));
+    }, by_rows(nthreads));
 
     Fragments out;
     out.roi = deep.roi;
@@ -224,7 +226,7 @@ bool extract_layer(const Fragments& frags, int k, Layer& layer, int nthreads)
         }
         if (row_any)
             any = true;
-    }, paropt(nthreads));
+    }, by_rows(nthreads));
     return any;
 }
 
@@ -313,7 +315,7 @@ void for_each_coc(const Scene& scene, const CircleOfConfusion& coc, Fn&& fn)
                 if (a > 0.0f)
                     fn(y, coc.diameter(*static_cast<const float*>(flat.depth.pixeladdr(x, y))), a);
             }
-        });
+        }, by_rows(0));
     }
     for (const DeepImage& deep : scene.deep)
         parallel_for(deep.roi.ybegin, deep.roi.yend, [&](int y) {
@@ -326,7 +328,7 @@ void for_each_coc(const Scene& scene, const CircleOfConfusion& coc, Fn&& fn)
                         fn(y, coc.diameter(s.zback), 0.0f);
                 }
             }
-        });
+        }, by_rows(0));
 }
 
 CocHistogram coc_histogram(const Scene& scene, const CircleOfConfusion& coc)

@@ -5,6 +5,8 @@
 
 #include <OpenImageIO/parallel.h>
 
+#include "parallel_rows.h"
+
 namespace defocus {
 
 /// Run fn(band_begin, band_end) over [begin, end) split into one band of
@@ -15,7 +17,7 @@ namespace defocus {
 template<typename Fn>
 void for_each_row_band(int begin, int end, int nthreads, Fn&& fn)
 {
-    OIIO::paropt opt(nthreads);
+    OIIO::paropt opt = by_rows(nthreads);
     opt.resolve();
     const int bands = std::max(1, std::min(opt.maxthreads(), end - begin));
     const int64_t band_rows = (int64_t(end - begin) + bands - 1) / bands;

@@ -8,6 +8,8 @@
 
 #include <OpenImageIO/parallel.h>
 
+#include "parallel_rows.h"
+
 namespace defocus {
 
 namespace {
@@ -80,7 +82,7 @@ void fill_edge_depth(Layer& layer, AtomicCounts& counts, int nthreads)
             if (best_alpha > 0.0f)
                 rows[y].emplace_back(p, z);
         }
-    }, OIIO::paropt(nthreads));
+    }, by_rows(nthreads));
     PixelCounts n;
     for (const auto& row : rows)
         for (const auto& [p, z] : row) {
@@ -102,7 +104,7 @@ void sanitize_layer(Layer& layer, AtomicCounts& counts, int nthreads)
                 sanitize_one(c[0], c[1], c[2], c[3], *z, n);
         }
         counts.add(n);
-    }, OIIO::paropt(nthreads));
+    }, by_rows(nthreads));
 }
 
 void sanitize_deep(DeepImage& image, AtomicCounts& counts, int nthreads)

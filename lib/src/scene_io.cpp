@@ -12,6 +12,7 @@
 #include <OpenImageIO/strutil.h>
 
 #include "exr_input.h"
+#include "parallel_rows.h"
 
 namespace defocus {
 
@@ -205,7 +206,7 @@ void copy_layer(Layer& layer, const ImageBuf& part, const int color[4], int dept
             if (depth >= 0)
                 *z = src[depth];
         }
-    });
+    }, by_rows(0));
 }
 
 /// Alpha 1 everywhere: colour read without alpha is opaque.
@@ -216,7 +217,7 @@ void set_opaque(Layer& layer)
         float* rgba = static_cast<float*>(layer.color.pixeladdr(window.xbegin, y));
         for (int x = 0; x < window.width(); ++x)
             rgba[4 * x + 3] = 1.0f;
-    });
+    }, by_rows(0));
 }
 
 /// Sets a layer's depth from channel `channel` of `depth`, an image over
@@ -232,7 +233,7 @@ void lay_depth(Layer& layer, const ImageBuf& depth, int channel)
             *z = depth_window.contains(x, y)
                      ? static_cast<const float*>(depth.pixeladdr(x, y))[channel]
                      : 0.0f;
-    });
+    }, by_rows(0));
 }
 
 /// A one-channel float image over `window` of a part whose header is
@@ -642,7 +643,7 @@ void scale_depth(Scene& scene, float scale)
                 float* z = static_cast<float*>(layer.depth.pixeladdr(roi.xbegin, y));
                 for (int x = 0; x < roi.width(); ++x)
                     z[x] *= scale;
-            });
+            }, by_rows(0));
         }
     for (DeepImage& image : scene.deep)
         for (DeepSample& s : image.samples) {

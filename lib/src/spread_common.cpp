@@ -1,3 +1,4 @@
+#include "parallel_rows.h"
 #include "spread_common.h"
 
 #include <defocus/hybrid.h>
@@ -28,7 +29,7 @@ double max_radius(OIIO::ImageBuf& dst, const FloatPixels& pixels,
             if (!is_zero(pixels(x, y), pixels.nchannels()))
                 m = std::max(m, double(*radii(x, y)));
         row_max[y - roi.ybegin] = m;
-    }, OIIO::paropt(nthreads));
+    }, by_rows(nthreads));
     const double m = row_max.empty() ? 0.0 : *std::max_element(row_max.begin(), row_max.end());
     // Beyond this a footprint would not fit in memory: a clamped CoC never
     // comes near it.

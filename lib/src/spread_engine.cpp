@@ -1,3 +1,4 @@
+#include "parallel_rows.h"
 #include "spread_engine.h"
 
 // The 4-double vector helpers below are inlined into each clone of the
@@ -164,21 +165,22 @@ struct ItemRow {
     std::vector<double> color;
     int longest = 0;               ///< items in the longest run
 
-    /// Appends a run of n items of program k that all blend its sizes by t.
-    void add_folded(int x, int n, int k, float t, const double* color)
+    void clear()
     {
-        longest = std::max(longest, n);
-        runs.push_back({ x, n, k, int(this->color.size()), t, false });
-        this->color.insert(this->color.end(), color, color + size_t(n) * 4);
+        runs.clear();
+        color.clear();
+        longest = 0;
     }
-    /// Appends a run of n items of program k: their colours on its smaller
-    /// and on its larger size.
-    void add_blended(int x, int n, int k, const double* smaller, const double* larger)
+    /// Appends a run of n items of program k, blending its sizes by t
+    /// alike (folded) or not (blended), and returns where its colours go:
+    /// 4 values per item, then for a blended run 4 more per item on the
+    /// larger size.
+    double* add_run(int x, int n, int k, float t, bool blended)
     {
         longest = std::max(longest, n);
-        runs.push_back({ x, n, k, int(color.size()), 0.0f, true });
-        color.insert(color.end(), smaller, smaller + size_t(n) * 4);
-        color.insert(color.end(), larger, larger + size_t(n) * 4);
+        runs.push_back({ x, n, k, int(color.size()), blended ? 0.0f : t, blended });
+        color.resize(color.size() + size_t(n) * (blended ? 8 : 4));
+        return color.data() + runs.back().at;
     }
 };
 
@@ -220,7 +222,7 @@ struct Tile {
 /// its memory is touched once rather than once per layer.
 struct Workspace {
     std::vector<ItemRow> dense;        ///< the band's dense source rows, prepared
-    std::vector<double> color, larger;  ///< scratch for preparing them
+    std::vector<double> color;         ///< scratch for preparing them
     std::vector<float> blend;
     std::vector<double> rows;          ///< the tile's delta rows
     std::vector<double> column_carry;  ///< the box's deltas integrated down the columns
@@ -402,21 +404,21 @@ DEFOCUS_KERNEL void add_run(double* row, const FootprintProgram& p, int o, const
 
 /// Appends a run of n pixels of program k, colours `color` (4 each),
 /// blending its sizes by `t` each: folded when they all blend alike.
-/// `larger` is scratch.
-void add_run_colors(ItemRow& row, int x, int n, int k, double* color, const float* t,
-                    std::vector<double>& larger)
+void add_run_colors(ItemRow& row, int x, int n, int k, const double* color, const float* t)
 {
-    if (std::all_of(t, t + n, [&](float ti) { return ti == t[0]; })) {
-        row.add_folded(x, n, k, t[0], color);
+    const bool blended = !std::all_of(t, t + n, [&](float ti) { return ti == t[0]; });
+    double* out = row.add_run(x, n, k, t[0], blended);
+    if (!blended) {
+        std::copy(color, color + size_t(n) * 4, out);
         return;
     }
-    larger.resize(size_t(n) * 4);
+    double* larger = out + size_t(n) * 4;
     for (int i = 0; i < n; ++i)
         for (int ch = 0; ch < 4; ++ch) {
-            larger[size_t(i) * 4 + ch] = t[i] * color[size_t(i) * 4 + ch];
-            color[size_t(i) * 4 + ch] -= larger[size_t(i) * 4 + ch];
+            const double v = color[size_t(i) * 4 + ch];
+            larger[size_t(i) * 4 + ch] = t[i] * v;
+            out[size_t(i) * 4 + ch] = v - t[i] * v;
         }
-    row.add_blended(x, n, k, color, larger.data());
 }
 
 /// The dense pixels of source row `sy` within [x0, x1), as runs of
@@ -424,12 +426,10 @@ void add_run_colors(ItemRow& row, int x, int n, int k, double* color, const floa
 __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 void prepare_dense_row(const SpreadSource& src, SpreadMethod method, const ProgramFamily& family,
                        int sy, int x0, int x1, ItemRow& row, std::vector<double>& color,
-                       std::vector<float>& blend, std::vector<double>& larger)
+                       std::vector<float>& blend)
 {
     const size_t base = size_t(sy - src.roi.ybegin) * src.roi.width() - src.roi.xbegin;
-    row.runs.clear();
-    row.color.clear();
-    row.longest = 0;
+    row.clear();
     color.resize(size_t(std::max(0, x1 - x0)) * 4);
     blend.resize(size_t(std::max(0, x1 - x0)));
     float cached_radius = -1.0f;
@@ -450,7 +450,7 @@ void prepare_dense_row(const SpreadSource& src, SpreadMethod method, const Progr
             b = family.pick(r);
         }
         if (n > 0 && (!dense || b.k != k || run_x + n != x)) {
-            add_run_colors(row, run_x, n, k, color.data(), blend.data(), larger);
+            add_run_colors(row, run_x, n, k, color.data(), blend.data());
             n = 0;
         }
         if (!dense)
@@ -587,7 +587,8 @@ SpreadEngine::Sparse::Row block_row(const SpreadSource& source, SpreadMethod met
     const ROI& roi = source.roi;
     const int s = level.block;
     const int y0 = std::max(roi.ybegin, by * s), y1 = std::min(roi.yend, by * s + s);
-    std::vector<Entry> entries;
+    thread_local std::vector<Entry> entries;  // reused: a row's entries are many
+    entries.clear();
     float cached_radius = -1.0f;
     ProgramBlend b { 0, 0.0f };
     Component c[2];
@@ -633,7 +634,7 @@ SpreadEngine::Sparse::Row block_row(const SpreadSource& source, SpreadMethod met
     // Runs of consecutive blocks on one program, folded when all of their
     // pixels blend its sizes alike.
     SpreadEngine::Sparse::Row row;
-    std::vector<double> smaller, larger;
+    row.color.reserve(entries.size() * 8);
     for (size_t i = 0; i < entries.size();) {
         size_t j = i + 1;
         while (j < entries.size() && entries[j].k == entries[i].k
@@ -642,19 +643,16 @@ SpreadEngine::Sparse::Row block_row(const SpreadSource& source, SpreadMethod met
         const bool folded = std::all_of(entries.begin() + i, entries.begin() + j, [&](const Entry& e) {
             return !e.blended && e.t == entries[i].t;
         });
-        smaller.clear();
-        larger.clear();
-        for (size_t e = i; e < j; ++e)
+        const int count = int(j - i);
+        double* out = row.add_run(level.anchor(entries[i].bx), count, entries[i].k, entries[i].t,
+                                  !folded);
+        for (size_t e = i; e < j; ++e, out += 4)
             for (int ch = 0; ch < 4; ++ch) {
-                smaller.push_back(folded ? entries[e].smaller[ch] + entries[e].larger[ch]
-                                         : entries[e].smaller[ch]);
-                larger.push_back(entries[e].larger[ch]);
+                out[ch] = folded ? entries[e].smaller[ch] + entries[e].larger[ch]
+                                 : entries[e].smaller[ch];
+                if (!folded)
+                    out[size_t(count) * 4 + ch] = entries[e].larger[ch];
             }
-        const int x = level.anchor(entries[i].bx), count = int(j - i);
-        if (folded)
-            row.add_folded(x, count, entries[i].k, entries[i].t, smaller.data());
-        else
-            row.add_blended(x, count, entries[i].k, smaller.data(), larger.data());
         i = j;
     }
     std::sort(row.runs.begin(), row.runs.end(),
@@ -713,7 +711,7 @@ SpreadEngine::SpreadEngine(const SpreadSource& source, SpreadMethod method,
         m_dense.max_radius = std::max(m_dense.max_radius, dense);
         for (int l = 0; l < levels; ++l)
             sparse_max[l] = std::max(sparse_max[l], sparse[l]);
-    }, OIIO::paropt(nthreads));
+    }, by_rows(nthreads));
 
     // The last column of a footprint's deltas (and for the box the last
     // row) only ends it: the pixels it lights stop one before.
@@ -755,7 +753,7 @@ SpreadEngine::SpreadEngine(const SpreadSource& source, SpreadMethod method,
                     level->rows[i] = block_row(source, method, *level, l, by);
                     break;
                 }
-        }, OIIO::paropt(nthreads));
+        }, by_rows(nthreads));
         const int first = level->first_block_row, last = first + int(level->rows.size()) - 1;
         const ROI anchors(level->anchor(floor_div(roi.xbegin, s)),
                           level->anchor(floor_div(roi.xend - 1, s)) + 1, level->anchor(first),
@@ -801,7 +799,7 @@ void SpreadEngine::run(const ROI& window_in, RowSink& sink, int nthreads) const
                 ws.dense.resize(sy1 - sy0);
             for (int sy = sy0; sy < sy1; ++sy)
                 prepare_dense_row(m_source, m_method, m_shape->pixels(), sy, sx0, sx1,
-                                  ws.dense[sy - sy0], ws.color, ws.blend, ws.larger);
+                                  ws.dense[sy - sy0], ws.color, ws.blend);
         }
         for (int x_begin = window.xbegin; x_begin < window.xend; x_begin += tile_width) {
             const Tile tile { y_begin, y_end, x_begin, std::min(window.xend, x_begin + tile_width),
@@ -878,7 +876,7 @@ void SpreadEngine::run(const ROI& window_in, RowSink& sink, int nthreads) const
                 sink.row(y, tile.x_begin, tile.x_end, row + 4);
             }
         }
-    }, OIIO::paropt(nthreads));
+    }, by_rows(nthreads));
 }
 
 }  // namespace defocus

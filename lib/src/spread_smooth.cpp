@@ -17,6 +17,7 @@
 
 #include <OpenImageIO/parallel.h>
 
+#include "parallel_rows.h"
 #include "row_bands.h"
 #include "spread_common.h"
 
@@ -183,7 +184,7 @@ bool spread_smooth(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, i
                 o[k] = float(double(__int128(s[order - 1])) / fixed_scale);
             }
         }
-    }, OIIO::paropt(nthreads));
+    }, by_rows(nthreads));
     return true;
 }
 

@@ -6,6 +6,8 @@
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/parallel.h>
 
+#include "parallel_rows.h"
+
 namespace defocus {
 
 /// Resets `image` to `spec` (local pixels) with every pixel zero. OIIO's
@@ -19,7 +21,7 @@ inline void reset_zeroed(OIIO::ImageBuf& image, const OIIO::ImageSpec& spec, int
     const size_t row_bytes = spec.scanline_bytes();
     OIIO::parallel_for(int64_t(0), int64_t(spec.height) * spec.depth, [&](int64_t row) {
         std::memset(pixels + size_t(row) * row_bytes, 0, row_bytes);
-    }, OIIO::paropt(nthreads));
+    }, by_rows(nthreads));
 }
 
 }  // namespace defocus
