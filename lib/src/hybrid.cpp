@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/parallel.h>
@@ -110,9 +111,13 @@ std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius
     const FloatPixels radii(radius, ROI(roi.xbegin, roi.xend, roi.ybegin, roi.yend, 0, 1, 0, 1));
     // Summed-area table of luminance, one row and column of zeros in front:
     // each row's running sums in parallel, then down the columns in bands.
-    std::vector<double> sat(size_t(w + 1) * (h + 1), 0.0);
+    // Not zero-filled on allocation: the passes below write every entry,
+    // in parallel, which also spreads the fresh pages' faults over threads.
+    const std::unique_ptr<double[]> sat(new double[size_t(w + 1) * (h + 1)]);
+    std::fill(&sat[0], &sat[0] + w + 1, 0.0);
     parallel_for(0, h, [&](int y) {
-        double* row = &sat[size_t(y + 1) * (w + 1) + 1];
+        double* row = &sat[size_t(y + 1) * (w + 1)];
+        *row++ = 0.0;
         const float* c = pixels(roi.xbegin, roi.ybegin + y);
         double sum = 0.0;
         for (int x = 0; x < w; ++x, c += pixels.nchannels())
