@@ -289,6 +289,25 @@ DEFOCUS_KERNEL void items_body(double* cells, const Colors& c, int stride, int l
     }
 }
 
+/// Adds the M (3 or 4) taps of items [lo, hi) two columns apart, item lo's
+/// first tap at `cells`. Neighbours' taps share cells; each cell is written
+/// once, with the earlier item's taps carried in registers, so that no item
+/// waits for the store of the one before.
+template<int M, typename Colors>
+DEFOCUS_KERNEL void paired_items_body(double* cells, const Colors& c, int lo, int hi)
+{
+    static_assert(M == 3 || M == 4, "two columns apart, fewer taps do not overlap");
+    d4 carry[2] = { splat(0.0), splat(0.0) };  // the previous item's taps 2 and 3
+    for (int i = lo; i < hi; ++i, cells += 8) {
+        for (int u = 0; u < 2; ++u)
+            store4(cells + u * 4, load4(cells + u * 4) + carry[u] + c.tap(u, i));
+        for (int u = 0; u < M - 2; ++u)
+            carry[u] = c.tap(2 + u, i);
+    }
+    for (int u = 0; u < M - 2; ++u)
+        store4(cells + u * 4, load4(cells + u * 4) + carry[u]);
+}
+
 /// Adds one cluster of m <= 4 taps for items [lo, hi) of a run whose items
 /// are 2^shift columns apart, item 0's first tap at cell cb. Along a run of
 /// pixels one column apart, which share cells, each cell is written once;
@@ -328,8 +347,18 @@ DEFOCUS_KERNEL void add_cluster(double* row, const Colors& c, int m, int cb, int
             switch (m) {
             case 1: items_body<1>(cells, c, stride, inside_lo, inside_hi); break;
             case 2: items_body<2>(cells, c, stride, inside_lo, inside_hi); break;
-            case 3: items_body<3>(cells, c, stride, inside_lo, inside_hi); break;
-            default: items_body<4>(cells, c, stride, inside_lo, inside_hi); break;
+            case 3:
+                if (shift == 1)
+                    paired_items_body<3>(cells, c, inside_lo, inside_hi);
+                else
+                    items_body<3>(cells, c, stride, inside_lo, inside_hi);
+                break;
+            default:
+                if (shift == 1)
+                    paired_items_body<4>(cells, c, inside_lo, inside_hi);
+                else
+                    items_body<4>(cells, c, stride, inside_lo, inside_hi);
+                break;
             }
         }
         for (int i = inside_hi; i < touch_hi; ++i)
