@@ -1,5 +1,5 @@
 // Bounded-time spreading of shapes (spread_aperture), the default for the
-// disc, polygon and mask: exact below radius 15, merged in blocks above.
+// disc, polygon and mask: exact below radius 7.5, merged in blocks above.
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -32,11 +32,11 @@ Aperture hexagon()
 
 }  // namespace
 
-TEST_CASE("below radius 15 the bounded disc is the exact disc")
+TEST_CASE("below radius 7.5 the bounded disc is the exact disc")
 {
     auto profile = std::make_shared<ApertureProfile>(Aperture());
     ImageBuf color, radius;
-    random_layer(ROI(-5, 45, 2, 40), 0.0, 14.9, 7, color, radius);
+    random_layer(ROI(-5, 45, 2, 40), 0.0, 7.49, 7, color, radius);
     ImageBuf bounded, direct;
     REQUIRE(spread_aperture(bounded, color, radius, *profile, merge_all));
     REQUIRE(spread_direct(direct, color, radius, aperture_psf(profile)));
@@ -47,7 +47,8 @@ TEST_CASE("bounded spreading keeps every channel's energy at every radius and sh
 {
     for (const Aperture& shape : { Aperture(), hexagon() }) {
         const ApertureProfile profile(shape);
-        for (auto [rmin, rmax] : { std::pair { 14.0, 18.0 }, { 0.0, 70.0 }, { 100.0, 300.0 } }) {
+        for (auto [rmin, rmax] : { std::pair { 7.0, 9.0 }, { 14.0, 18.0 }, { 0.0, 70.0 },
+                                   { 100.0, 300.0 } }) {
             INFO(aperture_shape_name(shape.shape) << " radii " << rmin << ".." << rmax);
             ImageBuf color, radius;
             random_layer(ROI(3, 83, -7, 60), rmin, rmax, unsigned(rmax), color, radius);
@@ -61,9 +62,10 @@ TEST_CASE("bounded spreading keeps every channel's energy at every radius and sh
 
 TEST_CASE("merged blocks leave a uniform field uniform")
 {
-    // Blocks of 4 pixels at radius 40: light moves by up to 2 pixels. A
-    // field spread from every block's centre still covers evenly, up to a
-    // ripple of 0.7% where the disc's edges fall between blocks.
+    // Blocks of 8 pixels at radius 40. A block spreads the exact footprint
+    // of a uniform block (each of its pixels' shapes on the pixel's own
+    // centre), so a uniform field comes out as uniform as exact spreading
+    // makes it: no ripple where the disc's edges fall between blocks.
     const ROI roi(0, 300, 0, 300);
     ImageBuf color = zero_image(roi, 4);
     OIIO::ImageBufAlgo::fill(color, { 1.0f, 0.5f, 0.25f, 1.0f });
@@ -72,17 +74,17 @@ TEST_CASE("merged blocks leave a uniform field uniform")
                             merge_all));
     const ROI inside(60, 240, 60, 240, 0, 1, 0, 4);
     const auto stats = OIIO::ImageBufAlgo::computePixelStats(out, inside);
-    CHECK(stats.min[3] == Approx(1.0).epsilon(0.01));
-    CHECK(stats.max[3] == Approx(1.0).epsilon(0.01));
-    CHECK(stats.min[0] == Approx(1.0).epsilon(0.01));
-    CHECK(stats.max[2] == Approx(0.25).epsilon(0.01));
+    CHECK(stats.min[3] == Approx(1.0).epsilon(1e-5));
+    CHECK(stats.max[3] == Approx(1.0).epsilon(1e-5));
+    CHECK(stats.min[0] == Approx(1.0).epsilon(1e-5));
+    CHECK(stats.max[2] == Approx(0.25).epsilon(1e-5));
 }
 
 TEST_CASE("a merged footprint changes continuously where the block size changes")
 {
-    // Blocks of 2 take over from single pixels between radius 15 and 16,
-    // blocks of 4 from blocks of 2 between 30 and 32: an impulse's
-    // footprint must not jump there.
+    // Blocks of 2 take over from single pixels between radius 7.5 and 8,
+    // blocks of 4 from blocks of 2 between 15 and 16, and so on: an
+    // impulse's footprint must not jump there.
     const ApertureProfile profile{Aperture()};
     auto spread_at = [&](float r) {
         ImageBuf out;
@@ -92,6 +94,7 @@ TEST_CASE("a merged footprint changes continuously where the block size changes"
     };
     // Smoothly, a 0.01 px step moves about 2·0.01/r of the energy; moving
     // the centre by 1/2 pixel over 1 pixel of radius adds about as much.
+    CHECK(largest_footprint_step(spread_at, 7.3f, 0.01f, 80) < 0.01);
     CHECK(largest_footprint_step(spread_at, 14.8f, 0.01f, 140) < 0.01);
     CHECK(largest_footprint_step(spread_at, 29.8f, 0.01f, 240) < 0.01);
 }

@@ -108,7 +108,7 @@ std::string parse_command_line(int argc, const char* argv[], CommandLine& cl,
                   "Anamorphic squeeze: < 1 narrows the bokeh horizontally (default: 1)");
     shot_args.add(ap, "--spread METHOD", "spread",
                   "Disc, polygon and mask: bounded (default: constant time, large "
-                  "footprints merged in blocks of at most r/8 pixels, highlights exact) or "
+                  "footprints merged in blocks of at most r/4 pixels, highlights exact) or "
                   "exact (every pixel on its own: time grows with the blur)");
     shot_args.add(ap, "--psf-image FILE", "psf-image",
                   "The hybrid method: pixels whose bokeh is visible (bright highlights) are "

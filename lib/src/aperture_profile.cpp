@@ -135,21 +135,21 @@ void ApertureProfile::integrals(double y, double& area, double& moment) const
     moment = m_moment[i] + segment_moment(int(i), f);
 }
 
-double ApertureProfile::rows(double r, double centre, std::vector<RowSpan>& spans) const
+double ApertureProfile::rows(double r, std::vector<RowSpan>& spans) const
 {
     // Each row [j - 1/2, j + 1/2] gets one interval whose length is the
     // outline's area in that row, centred on the area's centre, so a row's
     // energy is exact whatever its shape.
     r = std::max(min_radius, r);
     spans.clear();
-    const int first = int(std::floor(centre + m_ymin * r + 0.5));
-    const int last = int(std::floor(centre + m_ymax * r + 0.5));
+    const int first = int(std::floor(m_ymin * r + 0.5));
+    const int last = int(std::floor(m_ymax * r + 0.5));
     double area = 0.0;
     double below_area, below_moment;
-    integrals((first - 0.5 - centre) / r, below_area, below_moment);
+    integrals((first - 0.5) / r, below_area, below_moment);
     for (int j = first; j <= last; ++j) {
         double above_area, above_moment;
-        integrals((j + 0.5 - centre) / r, above_area, above_moment);
+        integrals((j + 0.5) / r, above_area, above_moment);
         const double length = (above_area - below_area) * r * r;
         const double moment = (above_moment - below_moment) * r * r * r;
         below_area = above_area;
@@ -219,18 +219,18 @@ bool MaskProfile::load(const std::string& filename, double aspect, std::string& 
     return true;
 }
 
-double MaskProfile::rows(double r, double centre, std::vector<RowSpan>& spans) const
+double MaskProfile::rows(double r, std::vector<RowSpan>& spans) const
 {
     r = std::max(min_radius, r);
     spans.clear();
     const int sub = 8;
     const int mask_rows = int(m_runs.size());
-    const int reach = int(std::ceil(r * m_extent + centre)) + 1;
+    const int reach = int(std::ceil(r * m_extent)) + 1;
     double area = 0.0;
     for (int j = -reach; j <= reach; ++j)
         for (int s = 0; s < sub; ++s) {
             // The sub-row's centre, in mask pixels.
-            const double y = (j - 0.5 + (s + 0.5) / sub - centre) / (r * m_sy) + m_cy;
+            const double y = (j - 0.5 + (s + 0.5) / sub) / (r * m_sy) + m_cy;
             const int my = int(std::floor(y));
             if (my < 0 || my >= mask_rows)
                 continue;
@@ -246,7 +246,7 @@ double MaskProfile::rows(double r, double centre, std::vector<RowSpan>& spans) c
 Psf aperture_psf(std::shared_ptr<const RowProfile> profile)
 {
     return [profile](double r) {
-        const ProgramFamily family(profile, 0.0, 1.0 / radius_bins_per_pixel, r);
+        const ProgramFamily family(profile, 1, 1.0 / radius_bins_per_pixel, r);
         const ProgramBlend blend = family.pick(r);
         return family.program(blend.k).footprint(blend.t);
     };

@@ -7,8 +7,7 @@
 namespace defocus {
 
 FootprintProgram::FootprintProgram(const std::vector<RowSpan>& smaller, double smaller_area,
-                                   const std::vector<RowSpan>& larger, double larger_area,
-                                   double centre)
+                                   const std::vector<RowSpan>& larger, double larger_area)
 {
     struct Delta {
         int row, column;
@@ -17,10 +16,10 @@ FootprintProgram::FootprintProgram(const std::vector<RowSpan>& smaller, double s
     std::vector<Delta> all;
     // A span's edges as four deltas of one size, each edge split over the
     // two columns it falls between in proportion to its coverage. The
-    // anchor pixel covers [0, 1); the shape's centre is at 0.5 + centre.
+    // anchor pixel covers [0, 1); the shape's centre is at its centre, 0.5.
     auto add = [&](const std::vector<RowSpan>& spans, double area, int size) {
         for (const RowSpan& s : spans) {
-            const double a = 0.5 + centre + s.left, b = 0.5 + centre + s.right;
+            const double a = 0.5 + s.left, b = 0.5 + s.right;
             const double ia = std::floor(a), ib = std::floor(b);
             const double fa = a - ia, fb = b - ib;
             const double w = s.weight / area;
@@ -92,10 +91,10 @@ Footprint FootprintProgram::footprint(double t) const
     return fp;
 }
 
-ProgramFamily::ProgramFamily(std::shared_ptr<const RowProfile> profile, double centre,
+ProgramFamily::ProgramFamily(std::shared_ptr<const RowProfile> profile, int block,
                              double bin_width, double max_radius)
     : m_profile(std::move(profile))
-    , m_centre(centre)
+    , m_block(block)
     , m_bin_width(bin_width)
     , m_bins_per_pixel(1.0 / bin_width)
     , m_min_bin(0.5 / bin_width)
@@ -107,14 +106,34 @@ ProgramFamily::ProgramFamily(std::shared_ptr<const RowProfile> profile, double c
 
 ProgramFamily::~ProgramFamily() = default;
 
+double ProgramFamily::block_spans(double r, std::vector<RowSpan>& spans) const
+{
+    std::vector<RowSpan> pixel;
+    const double area = m_profile->rows(r, pixel);
+    if (m_block == 1) {
+        spans = std::move(pixel);
+        return area;
+    }
+    spans.clear();
+    for (int dy = 1 - m_block / 2; dy <= m_block / 2; ++dy)
+        for (int dx = 1 - m_block / 2; dx <= m_block / 2; ++dx)
+            for (RowSpan span : pixel) {
+                span.row += dy;
+                span.left += dx;
+                span.right += dx;
+                spans.push_back(span);
+            }
+    return area * m_block * m_block;
+}
+
 const FootprintProgram& ProgramFamily::build(int k) const
 {
     std::lock_guard<std::mutex> lock(m_mutex);
     if (!m_owned[k]) {
         std::vector<RowSpan> smaller, larger;
-        const double a0 = m_profile->rows(k * m_bin_width, m_centre, smaller);
-        const double a1 = m_profile->rows((k + 1) * m_bin_width, m_centre, larger);
-        m_owned[k] = std::make_unique<FootprintProgram>(smaller, a0, larger, a1, m_centre);
+        const double a0 = block_spans(k * m_bin_width, smaller);
+        const double a1 = block_spans((k + 1) * m_bin_width, larger);
+        m_owned[k] = std::make_unique<FootprintProgram>(smaller, a0, larger, a1);
         m_built[k].store(m_owned[k].get(), std::memory_order_release);
     }
     return *m_owned[k];

@@ -35,7 +35,7 @@ struct DeltaCluster {
 class FootprintProgram {
 public:
     FootprintProgram(const std::vector<RowSpan>& smaller, double smaller_area,
-                     const std::vector<RowSpan>& larger, double larger_area, double centre);
+                     const std::vector<RowSpan>& larger, double larger_area);
 
     int first_row() const { return m_first_row; }
     int last_row() const { return m_first_row + int(m_row_begin.size()) - 2; }
@@ -80,9 +80,9 @@ struct ProgramBlend {
 /// are asked for; that is thread-safe.
 class ProgramFamily {
 public:
-    /// `centre`: the shape's centre right of and below the anchor pixel's
-    /// centre, in pixels (0: a pixel, 0.5: a pixel corner).
-    ProgramFamily(std::shared_ptr<const RowProfile> profile, double centre, double bin_width,
+    /// Programs for blocks of `block` x `block` pixels (1: single pixels),
+    /// anchored on pixel block / 2 - 1 of the block in each direction.
+    ProgramFamily(std::shared_ptr<const RowProfile> profile, int block, double bin_width,
                   double max_radius);
     ~ProgramFamily();
 
@@ -101,9 +101,13 @@ public:
 
 private:
     const FootprintProgram& build(int k) const;
+    /// The shape of every pixel of a block, each on its own centre: the
+    /// exact spread of a uniform block as one footprint; returns its area.
+    double block_spans(double r, std::vector<RowSpan>& spans) const;
 
     std::shared_ptr<const RowProfile> m_profile;
-    double m_centre, m_bin_width, m_bins_per_pixel, m_min_bin, m_max_bin;
+    int m_block;
+    double m_bin_width, m_bins_per_pixel, m_min_bin, m_max_bin;
     mutable std::mutex m_mutex;
     mutable std::vector<std::atomic<const FootprintProgram*>> m_built;  ///< per program
     mutable std::vector<std::unique_ptr<FootprintProgram>> m_owned;

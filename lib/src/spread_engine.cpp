@@ -20,7 +20,7 @@ using OIIO::ROI;
 
 namespace {
 
-constexpr double block_ratio = 8.0;        ///< a block is at most r / 8 pixels across
+constexpr double block_ratio = 4.0;        ///< a block is at most r / 4 pixels across
 constexpr int max_level = 5;               ///< blocks of up to 32 x 32 pixels
 constexpr double transition = 1.0 / 16.0;  ///< relative radius range spread at two sizes
 /// The largest radius a bounded spread takes on the dense path: below
@@ -152,11 +152,9 @@ double smallest_merged_radius()
 
 ShapePrograms::ShapePrograms(std::shared_ptr<const RowProfile> profile, double max_radius)
 {
-    m_families.push_back(
-        std::make_unique<ProgramFamily>(profile, 0.0, 1.0 / radius_bins_per_pixel, max_radius));
-    for (int level = 1; level <= max_level; ++level)
+    for (int level = 0; level <= max_level; ++level)
         m_families.push_back(std::make_unique<ProgramFamily>(
-            profile, 0.5, (1 << level) / radius_bins_per_pixel, max_radius));
+            profile, 1 << level, (1 << level) / radius_bins_per_pixel, max_radius));
 }
 
 /// One row of pixels or blocks to spread, as runs.
@@ -625,6 +623,30 @@ SpreadEngine::Sparse::Row block_row(const SpreadSource& source, SpreadMethod met
     for (int bx = floor_div(roi.xbegin, s); bx * s < roi.xend; ++bx) {
         const size_t block_begin = entries.size();
         const int x0 = std::max(roi.xbegin, bx * s), x1 = std::min(roi.xend, bx * s + s);
+        // Consecutive pixels on one program are summed in registers and
+        // added to their entry when the program changes: mostly once a
+        // block.
+        int k = -1;
+        float t = 0.0f;
+        bool mixed = false;
+        d4 smaller = splat(0.0), larger = splat(0.0);
+        auto flush = [&] {
+            if (k < 0)
+                return;
+            Entry* same = nullptr;
+            for (size_t e = block_begin; !same && e < entries.size(); ++e)
+                if (entries[e].k == k)
+                    same = &entries[e];
+            if (!same) {
+                entries.push_back({ bx, k, t, false, { 0, 0, 0, 0 }, { 0, 0, 0, 0 } });
+                same = &entries.back();
+            }
+            same->blended |= mixed || same->t != t;
+            store4(same->smaller, load4(same->smaller) + smaller);
+            store4(same->larger, load4(same->larger) + larger);
+            smaller = larger = splat(0.0);
+            mixed = false;
+        };
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x) {
                 const size_t p = size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin);
@@ -641,22 +663,18 @@ SpreadEngine::Sparse::Row block_row(const SpreadSource& source, SpreadMethod met
                 for (int i = 0; i < n; ++i) {
                     if (c[i].level != level_index || (level_index == 0 && r <= dense_limit))
                         continue;
-                    Entry* same = entries.size() > block_begin && entries.back().k == b.k
-                                      ? &entries.back()
-                                      : nullptr;
-                    for (size_t e = block_begin; !same && e < entries.size(); ++e)
-                        if (entries[e].k == b.k)
-                            same = &entries[e];
-                    if (!same) {
-                        entries.push_back({ bx, b.k, b.t, false, { 0, 0, 0, 0 }, { 0, 0, 0, 0 } });
-                        same = &entries.back();
+                    if (b.k != k) {
+                        flush();
+                        k = b.k;
+                        t = b.t;
                     }
-                    same->blended |= same->t != b.t;
+                    mixed |= b.t != t;
                     const d4 value = load4(v) * splat(c[i].weight);
-                    store4(same->smaller, load4(same->smaller) + value * splat(1.0 - b.t));
-                    store4(same->larger, load4(same->larger) + value * splat(b.t));
+                    smaller += value * splat(1.0 - b.t);
+                    larger += value * splat(b.t);
                 }
             }
+        flush();
     }
     std::stable_sort(entries.begin(), entries.end(),
                      [](const Entry& a, const Entry& e) { return a.k < e.k; });

@@ -11,13 +11,16 @@
 //    source row, into a short ring of rows that the tile's width keeps in
 //    cache;
 //  - sparse: pixels of large footprint are summed in blocks of s x s
-//    pixels (s = 2, 4, ... 32, at most r / 8), each block spread once from
-//    its centre, and gathered into a row just before it is integrated.
-//    Moving a pixel by up to s / 2 <= r / 16 under a blur of radius r is
-//    invisible except on highlights, whose bokeh shows its outline, so
-//    those are spread exactly, on their own (the paper's hybrid idea:
-//    the exact shape only where it shows). Radii near a change of block
-//    size are spread both ways, blended, so footprints change continuously.
+//    pixels (s = 2, 4, ... 32, at most r / 4), each block spread once with
+//    the footprint of a uniform block (every pixel's shape on its own
+//    centre, summed), and gathered into a row just before it is
+//    integrated. A uniform area comes out as exact spreading makes it;
+//    light varying within a block is spread as if even over it, which
+//    under a blur of radius r >= 4 s is invisible except on highlights,
+//    whose bokeh shows its outline, so those are spread exactly, on their
+//    own (the paper's hybrid idea: the exact shape only where it shows).
+//    Radii near a change of block size are spread both ways, blended, so
+//    footprints change continuously.
 // The work per pixel is bounded whatever the blur. Rows are handed to a
 // sink as they are made, so that compositing needs no layer-sized buffer.
 #pragma once
@@ -49,9 +52,9 @@ class ShapePrograms {
 public:
     ShapePrograms(std::shared_ptr<const RowProfile> profile, double max_radius);
 
-    /// Centred on a pixel.
+    /// Single pixels.
     const ProgramFamily& pixels() const { return *m_families.front(); }
-    /// Centred on a block of 2^level pixels (a pixel corner).
+    /// Uniform blocks of 2^level x 2^level pixels (see ProgramFamily).
     const ProgramFamily& blocks(int level) const { return *m_families[level]; }
 
 private:

@@ -26,10 +26,9 @@ public:
     virtual ~RowProfile() = default;
 
     /// The exact spans of the shape at CoC radius r (at least half a pixel,
-    /// so that an in-focus pixel stays within itself), centred `centre`
-    /// pixels right of and below the anchor pixel's centre (0: on a pixel,
-    /// 0.5: on a pixel corner), and their total weighted length: the area.
-    virtual double rows(double r, double centre, std::vector<RowSpan>& spans) const = 0;
+    /// so that an in-focus pixel stays within itself), centred on the
+    /// anchor pixel's centre, and their total weighted length: the area.
+    virtual double rows(double r, std::vector<RowSpan>& spans) const = 0;
 
     /// How far the shape reaches from its centre per unit of radius.
     virtual double extent() const = 0;
@@ -44,7 +43,7 @@ class ApertureProfile final : public RowProfile {
 public:
     explicit ApertureProfile(const Aperture& aperture);
 
-    double rows(double r, double centre, std::vector<RowSpan>& spans) const override;
+    double rows(double r, std::vector<RowSpan>& spans) const override;
     double extent() const override { return m_extent; }
 
 private:
@@ -69,7 +68,7 @@ public:
     /// False with `error` naming the file and the problem.
     bool load(const std::string& filename, double aspect, std::string& error);
 
-    double rows(double r, double centre, std::vector<RowSpan>& spans) const override;
+    double rows(double r, std::vector<RowSpan>& spans) const override;
     double extent() const override { return m_extent; }
 
 private:
