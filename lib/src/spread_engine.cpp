@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <climits>
 #include <cstring>
 #include <mutex>
 
@@ -599,112 +600,165 @@ void finish_row(double* row, double* column_carry, double* row_carry, int cells)
     store4(row_carry, sum);
 }
 
-/// One block row's pixels of one sparse level, summed per block and
-/// program, as runs.
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
-SpreadEngine::Sparse::Row block_row(const SpreadSource& source, SpreadMethod method,
-                                    const SpreadEngine::Sparse& level, int level_index, int by)
-{
-    struct Entry {
-        int bx, k;
-        float t;       ///< the blend of its pixels, when they all share one
-        bool blended;  ///< when they do not
-        double smaller[4], larger[4];
-    };
-    const ROI& roi = source.roi;
-    const int s = level.block;
-    const int y0 = std::max(roi.ybegin, by * s), y1 = std::min(roi.yend, by * s + s);
-    thread_local std::vector<Entry> entries;  // reused: a row's entries are many
-    entries.clear();
-    float cached_radius = -1.0f;
-    ProgramBlend b { 0, 0.0f };
-    Component c[2];
-    int n = 0;
-    for (int bx = floor_div(roi.xbegin, s); bx * s < roi.xend; ++bx) {
-        const size_t block_begin = entries.size();
-        const int x0 = std::max(roi.xbegin, bx * s), x1 = std::min(roi.xend, bx * s + s);
-        // Consecutive pixels on one program are summed in registers and
-        // added to their entry when the program changes: mostly once a
-        // block.
-        int k = -1;
-        float t = 0.0f;
-        bool mixed = false;
-        d4 smaller = splat(0.0), larger = splat(0.0);
-        auto flush = [&] {
-            if (k < 0)
-                return;
-            Entry* same = nullptr;
-            for (size_t e = block_begin; !same && e < entries.size(); ++e)
-                if (entries[e].k == k)
-                    same = &entries[e];
-            if (!same) {
-                entries.push_back({ bx, k, t, false, { 0, 0, 0, 0 }, { 0, 0, 0, 0 } });
-                same = &entries.back();
-            }
-            same->blended |= mixed || same->t != t;
-            store4(same->smaller, load4(same->smaller) + smaller);
-            store4(same->larger, load4(same->larger) + larger);
-            smaller = larger = splat(0.0);
-            mixed = false;
-        };
-        for (int y = y0; y < y1; ++y)
-            for (int x = x0; x < x1; ++x) {
-                const size_t p = size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin);
-                const float* v = source.color + p * 4;
-                if (is_zero(v))
-                    continue;
-                const float r = source.radius[p];
-                const bool exact = source.keep_exact && source.keep_exact[p];
-                if (r != cached_radius || exact) {
-                    cached_radius = exact ? -1.0f : r;
-                    n = components(method, r, exact, c);
-                    b = level.family->pick(r);
-                }
-                for (int i = 0; i < n; ++i) {
-                    if (c[i].level != level_index || (level_index == 0 && r <= dense_limit))
-                        continue;
-                    if (b.k != k) {
-                        flush();
-                        k = b.k;
-                        t = b.t;
-                    }
-                    mixed |= b.t != t;
-                    const d4 value = load4(v) * splat(c[i].weight);
-                    smaller += value * splat(1.0 - b.t);
-                    larger += value * splat(b.t);
-                }
-            }
-        flush();
+/// The pixels of one block row of one sparse level, summed per block and
+/// program as they come, pixel row by pixel row; then made into runs.
+class BlockRowSums {
+public:
+    /// Starts a block row of `blocks` blocks from block first_block.
+    void start(int first_block, int blocks)
+    {
+        m_first = first_block;
+        m_sums.assign(size_t(blocks), Sum {});
+        m_others.clear();
     }
-    std::stable_sort(entries.begin(), entries.end(),
-                     [](const Entry& a, const Entry& e) { return a.k < e.k; });
-    // Runs of consecutive blocks on one program, folded when all of their
-    // pixels blend its sizes alike.
-    SpreadEngine::Sparse::Row row;
-    row.color.reserve(entries.size() * 8);
-    for (size_t i = 0; i < entries.size();) {
-        size_t j = i + 1;
-        while (j < entries.size() && entries[j].k == entries[i].k
-               && entries[j].bx == entries[j - 1].bx + 1)
-            ++j;
-        const bool folded = std::all_of(entries.begin() + i, entries.begin() + j, [&](const Entry& e) {
-            return !e.blended && e.t == entries[i].t;
+
+    /// Adds `value` to block `b` on program k, blending its sizes by t.
+    DEFOCUS_KERNEL void add(int b, int k, float t, const d4& value)
+    {
+        Sum* sum = &m_sums[size_t(b - m_first)];
+        if (sum->k != k && sum->k >= 0) {  // rare: a block across a change of program
+            auto other = std::find_if(m_others.begin(), m_others.end(),
+                                      [&](const Sum& o) { return o.b == b && o.k == k; });
+            if (other == m_others.end()) {
+                m_others.push_back(Sum {});
+                other = m_others.end() - 1;
+            }
+            sum = &*other;
+        }
+        if (sum->k < 0) {
+            sum->b = b;
+            sum->k = k;
+            sum->t = t;
+        }
+        sum->blended |= sum->t != t;
+        store4(sum->smaller, load4(sum->smaller) + value * splat(1.0 - t));
+        store4(sum->larger, load4(sum->larger) + value * splat(t));
+    }
+
+    /// The row's blocks as runs of consecutive blocks on one program,
+    /// folded when all of their pixels blend its sizes alike.
+    ItemRow runs(const SpreadEngine::Sparse& level)
+    {
+        std::vector<Sum>& all = m_others;
+        for (const Sum& sum : m_sums)
+            if (sum.k >= 0)
+                all.push_back(sum);
+        std::sort(all.begin(), all.end(), [](const Sum& a, const Sum& e) {
+            return a.k != e.k ? a.k < e.k : a.b < e.b;
         });
-        const int count = int(j - i);
-        double* out = row.add_run(level.anchor(entries[i].bx), count, entries[i].k, entries[i].t,
-                                  !folded);
-        for (size_t e = i; e < j; ++e, out += 4)
-            for (int ch = 0; ch < 4; ++ch) {
-                out[ch] = folded ? entries[e].smaller[ch] + entries[e].larger[ch]
-                                 : entries[e].smaller[ch];
-                if (!folded)
-                    out[size_t(count) * 4 + ch] = entries[e].larger[ch];
-            }
-        i = j;
+        ItemRow row;
+        row.color.reserve(all.size() * 8);
+        for (size_t i = 0; i < all.size();) {
+            size_t j = i + 1;
+            while (j < all.size() && all[j].k == all[i].k && all[j].b == all[j - 1].b + 1)
+                ++j;
+            const bool folded = std::all_of(all.begin() + i, all.begin() + j, [&](const Sum& e) {
+                return !e.blended && e.t == all[i].t;
+            });
+            const int count = int(j - i);
+            double* out = row.add_run(level.anchor(all[i].b), count, all[i].k, all[i].t, !folded);
+            for (size_t e = i; e < j; ++e, out += 4)
+                for (int ch = 0; ch < 4; ++ch) {
+                    out[ch] = folded ? all[e].smaller[ch] + all[e].larger[ch] : all[e].smaller[ch];
+                    if (!folded)
+                        out[size_t(count) * 4 + ch] = all[e].larger[ch];
+                }
+            i = j;
+        }
+        std::sort(row.runs.begin(), row.runs.end(),
+                  [](const ProgramRun& a, const ProgramRun& b) { return a.x < b.x; });
+        return row;
     }
-    std::sort(row.runs.begin(), row.runs.end(),
-              [](const ProgramRun& a, const ProgramRun& b) { return a.x < b.x; });
-    return row;
+
+private:
+    struct Sum {
+        int b = 0, k = -1;     ///< block and program; k < 0: no pixel yet
+        float t = 0.0f;        ///< the blend of its pixels, when they all share one
+        bool blended = false;  ///< when they do not
+        double smaller[4] = { 0, 0, 0, 0 }, larger[4] = { 0, 0, 0, 0 };
+    };
+    int m_first = 0;
+    std::vector<Sum> m_sums;    ///< per block, its first program
+    std::vector<Sum> m_others;  ///< other programs of a block
+};
+
+/// What one pass over a layer finds: the largest radius on the dense path
+/// and on each sparse level, and the sparse levels' block rows, summed.
+struct LayerSurvey {
+    float dense_max = -1.0f;
+    std::vector<float> sparse_max;
+    std::vector<std::vector<ItemRow>> block_rows;  ///< per level, per block row
+};
+
+/// Surveys source rows [y0, y1), which hold whole block rows of every
+/// level: each pixel's components once, dense ones noted, sparse ones
+/// summed into their level's blocks.
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+void survey_rows(const SpreadSource& source, SpreadMethod method,
+                 const std::vector<std::unique_ptr<SpreadEngine::Sparse>>& levels, int y0, int y1,
+                 LayerSurvey& found, std::mutex& merge)
+{
+    const ROI& roi = source.roi;
+    const int nlevels = int(levels.size());
+    float dense = -1.0f;
+    std::vector<float> sparse(nlevels, -1.0f);
+    thread_local std::vector<BlockRowSums> sums;  // reused: their rows are long
+    sums.resize(nlevels);
+    std::vector<int> open(nlevels, INT_MIN);  // the block row each level's sums hold
+    auto finish = [&](int l) {
+        if (open[l] == INT_MIN)
+            return;
+        const SpreadEngine::Sparse& level = *levels[l];
+        found.block_rows[l][open[l] - level.first_block_row] = sums[l].runs(level);
+        open[l] = INT_MIN;
+    };
+    // Neighbours mostly share a radius: components() and pick() once per
+    // change.
+    float cached_radius = NAN;
+    Component c[2];
+    ProgramBlend blend[2];
+    int n = 0;
+    for (int y = y0; y < y1; ++y) {
+        const size_t row = size_t(y - roi.ybegin) * roi.width();
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const size_t p = row + (x - roi.xbegin);
+            const float* v = source.color + p * 4;
+            if (is_zero(v))
+                continue;
+            const float r = source.radius[p];
+            const bool keep = source.keep_exact && source.keep_exact[p];
+            if (keep || r != cached_radius) {
+                cached_radius = keep ? NAN : r;
+                n = components(method, r, keep, c);
+                for (int i = 0; i < n; ++i)
+                    if (method != SpreadMethod::Box)
+                        blend[i] = levels[c[i].level]->family->pick(r);
+            }
+            for (int i = 0; i < n; ++i) {
+                const int l = c[i].level;
+                if (method == SpreadMethod::Box || (l == 0 && r <= dense_limit)) {
+                    dense = std::max(dense, r);
+                    continue;
+                }
+                sparse[l] = std::max(sparse[l], r);
+                const int by = floor_shift(y, l);
+                if (open[l] != by) {
+                    finish(l);
+                    open[l] = by;
+                    const int first = floor_shift(roi.xbegin, l);
+                    sums[l].start(first, floor_shift(roi.xend - 1, l) - first + 1);
+                }
+                sums[l].add(floor_shift(x, l), blend[i].k, blend[i].t,
+                            load4(v) * splat(c[i].weight));
+            }
+        }
+    }
+    for (int l = 0; l < nlevels; ++l)
+        finish(l);
+    std::lock_guard<std::mutex> lock(merge);
+    found.dense_max = std::max(found.dense_max, dense);
+    for (int l = 0; l < nlevels; ++l)
+        found.sparse_max[l] = std::max(found.sparse_max[l], sparse[l]);
 }
 
 }  // namespace
@@ -716,49 +770,30 @@ SpreadEngine::SpreadEngine(const SpreadSource& source, SpreadMethod method,
     , m_shape(shape)
 {
     const ROI& roi = source.roi;
-    // Which paths and levels the layer's pixels take, and their largest
-    // radius on each.
-    const int levels = max_level + 1;
-    std::vector<float> sparse_max(levels, -1.0f);
-    // Per source row, a bit per sparse level it has pixels of.
-    std::vector<uint8_t> row_levels(roi.height(), 0);
+    // Every level a pixel might take, and the block rows it would fill.
+    std::vector<std::unique_ptr<Sparse>> levels;
+    LayerSurvey found;
+    for (int l = 0; method != SpreadMethod::Box && l <= max_level; ++l) {
+        auto level = std::make_unique<Sparse>();
+        level->block = 1 << l;
+        level->shift = l;
+        level->family = l == 0 ? &shape->pixels() : &shape->blocks(l);
+        level->first_block_row = floor_shift(roi.ybegin, l);
+        found.block_rows.emplace_back(floor_shift(roi.yend - 1, l) - level->first_block_row + 1);
+        levels.push_back(std::move(level));
+    }
+    found.sparse_max.assign(levels.size(), -1.0f);
+    // One pass, in stripes of whole block rows of every level.
+    const int stripe = 1 << max_level;
+    const int first_stripe = floor_shift(roi.ybegin, max_level);
+    const int stripes = floor_shift(roi.yend - 1, max_level) - first_stripe + 1;
     std::mutex merge;
-    OIIO::parallel_for_chunked(roi.ybegin, roi.yend, 0, [&](int64_t y0, int64_t y1) {
-        float dense = -1.0f;
-        std::vector<float> sparse(levels, -1.0f);
-        // Neighbours mostly share a radius: components() once per change.
-        float cached_radius = NAN;
-        Component cached[2];
-        int cached_count = 0;
-        for (int64_t y = y0; y < y1; ++y) {
-            const size_t row = size_t(y - roi.ybegin) * roi.width();
-            for (int x = 0; x < roi.width(); ++x) {
-                if (is_zero(source.color + (row + x) * 4))
-                    continue;
-                const float r = source.radius[row + x];
-                Component exact[2];
-                const bool keep = source.keep_exact && source.keep_exact[row + x];
-                if (!keep && r != cached_radius) {
-                    cached_radius = r;
-                    cached_count = components(method, r, false, cached);
-                }
-                const Component* c = keep ? exact : cached;
-                const int n = keep ? components(method, r, true, exact) : cached_count;
-                for (int i = 0; i < n; ++i) {
-                    if (method == SpreadMethod::Box || (c[i].level == 0 && r <= dense_limit)) {
-                        dense = std::max(dense, r);
-                    } else {
-                        sparse[c[i].level] = std::max(sparse[c[i].level], r);
-                        row_levels[y - roi.ybegin] |= uint8_t(1u << c[i].level);
-                    }
-                }
-            }
-        }
-        std::lock_guard<std::mutex> lock(merge);
-        m_dense.max_radius = std::max(m_dense.max_radius, dense);
-        for (int l = 0; l < levels; ++l)
-            sparse_max[l] = std::max(sparse_max[l], sparse[l]);
+    OIIO::parallel_for(int64_t(0), int64_t(stripes), [&](int64_t i) {
+        const int y0 = std::max(roi.ybegin, (first_stripe + int(i)) * stripe);
+        const int y1 = std::min(roi.yend, (first_stripe + int(i) + 1) * stripe);
+        survey_rows(source, method, levels, y0, y1, found, merge);
     }, by_rows(nthreads));
+    m_dense.max_radius = found.dense_max;
 
     // The last column of a footprint's deltas (and for the box the last
     // row) only ends it: the pixels it lights stop one before.
@@ -780,27 +815,15 @@ SpreadEngine::SpreadEngine(const SpreadSource& source, SpreadMethod method,
         grow(roi, reach, method == SpreadMethod::Box);
     }
 
-    for (int l = 0; l < levels; ++l) {
-        if (sparse_max[l] < 0.0f)
+    for (size_t l = 0; l < levels.size(); ++l) {
+        if (found.sparse_max[l] < 0.0f)
             continue;
-        auto level = std::make_unique<Sparse>();
-        level->block = 1 << l;
-        level->shift = l;
-        level->family = l == 0 ? &shape->pixels() : &shape->blocks(l);
+        std::unique_ptr<Sparse>& level = levels[l];
+        level->rows = std::move(found.block_rows[l]);
         // Programs of larger radii reach at least as far.
-        level->reach = program_reach(level->family->program(level->family->pick(sparse_max[l]).k));
+        level->reach =
+            program_reach(level->family->program(level->family->pick(found.sparse_max[l]).k));
         const int s = level->block;
-        level->first_block_row = floor_div(roi.ybegin, s);
-        level->rows.resize(floor_div(roi.yend - 1, s) - level->first_block_row + 1);
-        OIIO::parallel_for(int64_t(0), int64_t(level->rows.size()), [&](int64_t i) {
-            const int by = level->first_block_row + int(i);
-            const int y0 = std::max(roi.ybegin, by * s), y1 = std::min(roi.yend, by * s + s);
-            for (int y = y0; y < y1; ++y)
-                if (row_levels[y - roi.ybegin] & (1u << l)) {
-                    level->rows[i] = block_row(source, method, *level, l, by);
-                    break;
-                }
-        }, by_rows(nthreads));
         const int first = level->first_block_row, last = first + int(level->rows.size()) - 1;
         const ROI anchors(level->anchor(floor_div(roi.xbegin, s)),
                           level->anchor(floor_div(roi.xend - 1, s)) + 1, level->anchor(first),
