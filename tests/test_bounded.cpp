@@ -62,7 +62,7 @@ TEST_CASE("bounded spreading keeps every channel's energy at every radius and sh
 
 TEST_CASE("merged blocks leave a uniform field uniform")
 {
-    // Blocks of 8 pixels at radius 40. A block spreads the exact footprint
+    // Blocks of 4 pixels at radius 40. A block spreads the exact footprint
     // of a uniform block (each of its pixels' shapes on the pixel's own
     // centre), so a uniform field comes out as uniform as exact spreading
     // makes it: no ripple where the disc's edges fall between blocks.
@@ -83,7 +83,8 @@ TEST_CASE("merged blocks leave a uniform field uniform")
 TEST_CASE("a merged footprint changes continuously where the block size changes")
 {
     // Blocks of 2 take over from single pixels between radius 7.5 and 8,
-    // blocks of 4 from blocks of 2 between 15 and 16, and so on: an
+    // blocks of 4 from blocks of 2 between 15 and 16, blocks of 8 (whose
+    // footprint is no longer exact) from blocks of 4 between 60 and 64: an
     // impulse's footprint must not jump there.
     const ApertureProfile profile{Aperture()};
     auto spread_at = [&](float r) {
@@ -96,7 +97,7 @@ TEST_CASE("a merged footprint changes continuously where the block size changes"
     // the centre by 1/2 pixel over 1 pixel of radius adds about as much.
     CHECK(largest_footprint_step(spread_at, 7.3f, 0.01f, 80) < 0.01);
     CHECK(largest_footprint_step(spread_at, 14.8f, 0.01f, 140) < 0.01);
-    CHECK(largest_footprint_step(spread_at, 29.8f, 0.01f, 240) < 0.01);
+    CHECK(largest_footprint_step(spread_at, 59.6f, 0.01f, 460) < 0.01);
 }
 
 TEST_CASE("a highlight keeps its exact bokeh among merged pixels")

@@ -34,8 +34,12 @@ struct DeltaCluster {
 /// and their row intervals have total weight 1.
 class FootprintProgram {
 public:
+    /// From a pixel's spans at both sizes: the footprint of a uniform
+    /// square of `box` x `box` pixels (1: the pixel alone; else even, its
+    /// centre on the anchor pixel's lower right corner), each pixel's shape
+    /// on its own centre: the shape convolved with the box.
     FootprintProgram(const std::vector<RowSpan>& smaller, double smaller_area,
-                     const std::vector<RowSpan>& larger, double larger_area);
+                     const std::vector<RowSpan>& larger, double larger_area, int box);
 
     int first_row() const { return m_first_row; }
     int last_row() const { return m_first_row + int(m_row_begin.size()) - 2; }
@@ -66,6 +70,12 @@ private:
 /// softens a footprint's edge by at most a quarter pixel, which on the
 /// garden scene matches path-traced bokeh better than finer bins do.
 constexpr double radius_bins_per_pixel = 4.0;
+
+/// Blocks up to this many pixels wide spread a uniform block's exact
+/// footprint. Larger ones spread a uniform 2 x 2 square around their
+/// centre: an exact edge would be a block wide and cost more deltas than
+/// merging saves.
+constexpr int max_box = 4;
 
 /// Which program a radius uses, and how much of its larger size.
 struct ProgramBlend {
@@ -101,9 +111,6 @@ public:
 
 private:
     const FootprintProgram& build(int k) const;
-    /// The shape of every pixel of a block, each on its own centre: the
-    /// exact spread of a uniform block as one footprint; returns its area.
-    double block_spans(double r, std::vector<RowSpan>& spans) const;
 
     std::shared_ptr<const RowProfile> m_profile;
     int m_block;

@@ -21,12 +21,22 @@ using OIIO::ROI;
 
 namespace {
 
-constexpr double block_ratio = 4.0;        ///< a block is at most r / 4 pixels across
 constexpr int max_level = 5;               ///< blocks of up to 32 x 32 pixels
 constexpr double transition = 1.0 / 16.0;  ///< relative radius range spread at two sizes
-/// The largest radius a bounded spread takes on the dense path: below
-/// 2 * block_ratio, where blocks of 2 pixels take over.
-constexpr float dense_limit = float(2.0 * block_ratio);
+
+/// The radius from which blocks of s = 2^level pixels take over (shared
+/// with the level below just before it). Blocks up to max_box wide spread
+/// a uniform block's exact footprint, which keeps the fidelity bars from
+/// r = 4 s; larger ones spread the shape from their centre, moving
+/// light by up to s / 2, and wait until r = 8 s.
+constexpr double level_start(int level)
+{
+    return ((1 << level) <= max_box ? 4.0 : 8.0) * (1 << level);
+}
+
+/// The largest radius a bounded spread takes on the dense path: where
+/// blocks of 2 pixels take over.
+constexpr float dense_limit = float(level_start(1));
 /// The kernels are inlined into each target_clones clone of their callers,
 /// so that they are compiled for that clone's instruction set.
 #define DEFOCUS_KERNEL inline __attribute__((always_inline))
@@ -90,7 +100,7 @@ struct Component {
 };
 
 /// The levels a pixel is spread at, and their shares. Level L > 0 takes
-/// radii from block_ratio * 2^L; just below that, radii are shared between
+/// radii from level_start(L); just below that, radii are shared between
 /// levels L - 1 and L, so that footprints change continuously.
 int components(SpreadMethod method, float r, bool keep_exact, Component out[2])
 {
@@ -99,9 +109,9 @@ int components(SpreadMethod method, float r, bool keep_exact, Component out[2])
         return 1;
     }
     int level = 1;
-    while (level < max_level && r >= block_ratio * (2 << level) * (1.0 - transition))
+    while (level < max_level && r >= level_start(level + 1) * (1.0 - transition))
         ++level;
-    const double u = (r / (block_ratio * (1 << level)) - (1.0 - transition)) / transition;
+    const double u = (r / level_start(level) - (1.0 - transition)) / transition;
     if (u <= 0.0) {  // where the transition starts: the smaller size alone
         out[0] = { level - 1, 1.0f };
         return 1;
@@ -148,7 +158,7 @@ Reach program_reach(const FootprintProgram& p)
 
 double smallest_merged_radius()
 {
-    return 2.0 * block_ratio * (1.0 - transition);  // where level 1 starts
+    return level_start(1) * (1.0 - transition);
 }
 
 ShapePrograms::ShapePrograms(std::shared_ptr<const RowProfile> profile, double max_radius)

@@ -11,14 +11,16 @@
 //    source row, into a short ring of rows that the tile's width keeps in
 //    cache;
 //  - sparse: pixels of large footprint are summed in blocks of s x s
-//    pixels (s = 2, 4, ... 32, at most r / 4), each block spread once with
-//    the footprint of a uniform block (every pixel's shape on its own
-//    centre, summed), and gathered into a row just before it is
-//    integrated. A uniform area comes out as exact spreading makes it;
-//    light varying within a block is spread as if even over it, which
-//    under a blur of radius r >= 4 s is invisible except on highlights,
-//    whose bokeh shows its outline, so those are spread exactly, on their
-//    own (the paper's hybrid idea: the exact shape only where it shows).
+//    pixels (s = 2, 4, ... 32), each block spread once, and gathered into
+//    a row just before it is integrated. Blocks of up to 4 (from r = 4 s)
+//    spread the footprint of a uniform block (every pixel's shape on its
+//    own centre, summed), so a uniform area comes out as exact spreading
+//    makes it; larger ones (from r = 8 s) a slightly softened shape from
+//    their centre (see level_start). Light varying within a block is
+//    spread as if even over it, which under such blurs is invisible
+//    except on highlights, whose bokeh shows its outline, so those are
+//    spread exactly, on their own (the paper's hybrid idea: the exact
+//    shape only where it shows).
 //    Radii near a change of block size are spread both ways, blended, so
 //    footprints change continuously.
 // The work per pixel is bounded whatever the blur. Rows are handed to a

@@ -47,9 +47,10 @@ constexpr double exact_highlight_threshold = 2.0;
 /// CoC radius below 7.5, and highlights (see exact_highlight_threshold),
 /// are spread exactly, as spread_scanline does. Larger footprints are
 /// merged: the pixels of one size in a block of s x s pixels (s = 2, 4, ...
-/// 32, at most r/4) are spread once with the footprint of a uniform block
-/// (each pixel's shape on its own centre), so the work per pixel is
-/// bounded whatever the radius and a uniform area stays exact. Radii just below a change of
+/// 32, at most r/4) are spread once, blocks of up to 4 with the footprint
+/// of a uniform block (each pixel's shape on its own centre, so a uniform
+/// area stays exact), larger ones from their centre; the work per pixel
+/// is bounded whatever the radius. Radii just below a change of
 /// block size are spread both ways, blended, so footprints change
 /// continuously. Energy is conserved exactly; dst covers every pixel the
 /// footprints reach.
