@@ -1,4 +1,3 @@
-#include "parallel_rows.h"
 #include "spread_common.h"
 
 #include <defocus/hybrid.h>
@@ -10,6 +9,7 @@
 
 #include <OpenImageIO/parallel.h>
 
+#include "parallel_rows.h"
 #include "zeroed_image.h"
 
 namespace defocus {

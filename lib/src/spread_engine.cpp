@@ -1,4 +1,3 @@
-#include "parallel_rows.h"
 #include "spread_engine.h"
 
 // The 4-double vector helpers below are inlined into each clone of the
@@ -6,14 +5,16 @@
 #pragma GCC diagnostic ignored "-Wpsabi"
 
 #include <algorithm>
-#include <cmath>
 #include <climits>
+#include <cmath>
 #include <cstring>
 #include <mutex>
 
 #include <OpenImageIO/parallel.h>
 
 #include <defocus/footprint.h>
+
+#include "parallel_rows.h"
 
 namespace defocus {
 
@@ -649,6 +650,7 @@ public:
     /// folded when all of their pixels blend its sizes alike.
     ItemRow runs(const SpreadEngine::Sparse& level)
     {
+        // Every sum, in m_others' storage (start() clears it).
         std::vector<Sum>& all = m_others;
         for (const Sum& sum : m_sums)
             if (sum.k >= 0)
