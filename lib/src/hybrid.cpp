@@ -133,19 +133,25 @@ std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius
     }, by_rows(nthreads));
     std::vector<uint8_t> selected(size_t(w) * h, 0);
     parallel_for(0, h, [&](int y) {
+        // Locals, not the captures: a store through a byte pointer may
+        // alias anything, so captured values would be reloaded every pixel.
+        const double* table = sat.get();
+        const double contrast = threshold;
+        const int channels = pixels.nchannels();
+        uint8_t* out = selected.data() + size_t(y) * w;
         const float* c = pixels(roi.xbegin, roi.ybegin + y);
         const float* r = radii(roi.xbegin, roi.ybegin + y);
-        for (int x = 0; x < w; ++x, c += pixels.nchannels()) {
+        for (int x = 0; x < w; ++x, c += channels) {
             const double l = luminance(c);
             if (r[x] < 1.0f || l <= 0.0)
                 continue;
             const int k = int(std::ceil(r[x]));
             const int x0 = std::max(0, x - k), x1 = std::min(w, x + k + 1);
             const int y0 = std::max(0, y - k), y1 = std::min(h, y + k + 1);
-            const double sum = sat[size_t(y1) * (w + 1) + x1] - sat[size_t(y0) * (w + 1) + x1]
-                               - sat[size_t(y1) * (w + 1) + x0] + sat[size_t(y0) * (w + 1) + x0];
+            const double sum = table[size_t(y1) * (w + 1) + x1] - table[size_t(y0) * (w + 1) + x1]
+                               - table[size_t(y1) * (w + 1) + x0] + table[size_t(y0) * (w + 1) + x0];
             const double mean = sum / (double(x1 - x0) * (y1 - y0));
-            selected[size_t(y) * w + x] = l > threshold * mean;
+            out[x] = l > contrast * mean;
         }
     }, by_rows(nthreads));
     return selected;

@@ -650,17 +650,26 @@ public:
     /// folded when all of their pixels blend its sizes alike.
     ItemRow runs(const SpreadEngine::Sparse& level)
     {
-        // Every sum, in m_others' storage (start() clears it).
-        std::vector<Sum>& all = m_others;
-        for (const Sum& sum : m_sums)
-            if (sum.k >= 0)
-                all.push_back(sum);
-        std::sort(all.begin(), all.end(), [](const Sum& a, const Sum& e) {
-            return a.k != e.k ? a.k < e.k : a.b < e.b;
-        });
+        // Mostly every block has one program: its sums are in block order.
+        // Otherwise every sum, ordered by program, in m_others' storage
+        // (start() clears it).
+        const bool mixed = !m_others.empty();
+        if (mixed) {
+            for (const Sum& sum : m_sums)
+                if (sum.k >= 0)
+                    m_others.push_back(sum);
+            std::sort(m_others.begin(), m_others.end(), [](const Sum& a, const Sum& e) {
+                return a.k != e.k ? a.k < e.k : a.b < e.b;
+            });
+        }
+        const std::vector<Sum>& all = mixed ? m_others : m_sums;
         ItemRow row;
         row.color.reserve(all.size() * 8);
         for (size_t i = 0; i < all.size();) {
+            if (all[i].k < 0) {
+                ++i;
+                continue;
+            }
             size_t j = i + 1;
             while (j < all.size() && all[j].k == all[i].k && all[j].b == all[j - 1].b + 1)
                 ++j;
@@ -677,8 +686,9 @@ public:
                 }
             i = j;
         }
-        std::sort(row.runs.begin(), row.runs.end(),
-                  [](const ProgramRun& a, const ProgramRun& b) { return a.x < b.x; });
+        if (mixed)
+            std::sort(row.runs.begin(), row.runs.end(),
+                      [](const ProgramRun& a, const ProgramRun& b) { return a.x < b.x; });
         return row;
     }
 
