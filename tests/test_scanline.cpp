@@ -2,6 +2,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <filesystem>
 
 #include <OpenImageIO/imagebufalgo.h>
 
@@ -128,19 +129,24 @@ TEST_CASE("an in-focus pixel stays itself under a disc, exact or bounded")
 
 namespace {
 
-/// A 64x64 mask image: a ring (radii 0.55 and 1 of the half-size), or a
-/// plain disc, written for a test.
-std::string write_mask(const std::string& name, double inner)
+/// A size x size mask image: a ring (radii 0.55 and 1 of the half-size),
+/// or a plain disc, written for a test.
+std::string write_mask(const std::string& name, double inner, int size = 64)
 {
     const std::string path = scratch_dir("mask_" + name) + "/" + name + ".exr";
-    ImageBuf mask = zero_image(ROI(0, 64, 0, 64), 1);
-    for (int y = 0; y < 64; ++y)
-        for (int x = 0; x < 64; ++x) {
-            const double r = std::hypot(x + 0.5 - 32.0, y + 0.5 - 32.0) / 32.0;
+    ImageBuf mask = zero_image(ROI(0, size, 0, size), 1);
+    const double half = 0.5 * size;
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            const double r = std::hypot(x + 0.5 - half, y + 0.5 - half) / half;
             const float v = r <= 1.0 && r >= inner ? 1.0f : 0.0f;
             mask.setpixel(x, y, &v);
         }
-    REQUIRE(mask.write(path));
+    // Written beside and renamed over, as the tools write: OpenImageIO
+    // does not see the file change.
+    const std::string written = path + ".new.exr";
+    REQUIRE(mask.write(written));
+    std::filesystem::rename(written, path);
     return path;
 }
 
@@ -199,4 +205,18 @@ TEST_CASE("a disc drawn as a mask lights the disc's area, continuously in size")
         return step;
     }, 5.0f, 0.01f, 50);
     CHECK(largest_step < 0.03);
+}
+
+TEST_CASE("a mask rewritten larger under the same name is read as it is now")
+{
+    // OpenImageIO's shared cache remembers a file's first size; reading
+    // through it overran the buffer (a crash) or gave the old mask.
+    const auto ring = load_mask(write_mask("rewritten", 0.55, 16), 21.0);
+    const auto disc = load_mask(write_mask("rewritten", 0.0, 128), 21.0);
+    ImageBuf out;
+    REQUIRE(spread_scanline(out, impulse(), constant_radius(ROI(0, 1, 0, 1), 20.0f), *disc));
+    CHECK(lit_area(out) == Approx(M_PI * 400.0).epsilon(0.02));
+    float centre[4];
+    out.getpixel(0, 0, centre);
+    CHECK(centre[0] > 1e-4f);  // a disc: no hole
 }

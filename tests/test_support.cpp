@@ -10,9 +10,20 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 
+#include <defocus/image_input.h>
+
 namespace defocus_test {
 
 using namespace OIIO;
+
+ImageBuf read_image(const std::string& file)
+{
+    ImageBuf image;
+    std::string error;
+    if (!defocus::read_image_file(file, "the image", image, error))
+        return ImageBuf();
+    return image;
+}
 
 ImageBuf zero_image(const ROI& roi, int nchannels)
 {

@@ -14,6 +14,11 @@ namespace defocus_test {
 using OIIO::ImageBuf;
 using OIIO::ROI;
 
+/// The first subimage of `file` as float, as it is on disk now (the tools
+/// rewrite files under one name, which OpenImageIO's shared cache would
+/// not see; see defocus::read_image_file). Empty when unreadable.
+ImageBuf read_image(const std::string& file);
+
 /// A float image of `nchannels` over `roi`, all zero.
 ImageBuf zero_image(const ROI& roi, int nchannels);
 

@@ -6,6 +6,8 @@
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/image_input.h>
+
 #include "footprint_program.h"
 
 namespace defocus {
@@ -165,12 +167,9 @@ double ApertureProfile::rows(double r, std::vector<RowSpan>& spans) const
 
 bool MaskProfile::load(const std::string& filename, double aspect, std::string& error)
 {
-    OIIO::ImageBuf image(filename);
-    if (!image.read(0, 0, true, OIIO::TypeFloat)) {
-        error = OIIO::Strutil::fmt::format("{}: cannot read the aperture mask: {}", filename,
-                                           OIIO::Strutil::replace(image.geterror(), "\n", " ", true));
+    OIIO::ImageBuf image;
+    if (!read_image_file(filename, "the aperture mask", image, error))
         return false;
-    }
     const OIIO::ROI roi = image.roi();
     const int nc = image.nchannels();
     std::vector<float> luma(roi.npixels());

@@ -8,6 +8,8 @@
 #include <OpenImageIO/parallel.h>
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/image_input.h>
+
 #include "float_pixels.h"
 #include "parallel_rows.h"
 
@@ -26,12 +28,9 @@ double luminance(const float* c)
 
 bool PsfImage::load(const std::string& filename, std::string& error)
 {
-    ImageBuf image(filename);
-    if (!image.read(0, 0, true, TypeFloat)) {
-        error = Strutil::fmt::format("{}: cannot read the PSF image: {}", filename,
-                                     Strutil::replace(image.geterror(), "\n", " ", true));
+    ImageBuf image;
+    if (!read_image_file(filename, "the PSF image", image, error))
         return false;
-    }
     const ROI roi = image.roi();
     const int nc = image.nchannels();
     m_width = roi.width();
