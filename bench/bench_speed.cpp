@@ -35,9 +35,9 @@
 #include <OpenImageIO/sysutil.h>
 #include <OpenImageIO/timer.h>
 
-#include <defocus/layered_dof.h>
-#include <defocus/scene_io.h>
-#include <defocus/spread.h>
+#include <defocus/composite/layered_dof.h>
+#include <defocus/io/scene_io.h>
+#include <defocus/spread/spread.h>
 
 #include "memory_floor.h"
 

@@ -10,10 +10,10 @@
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 
-#include <defocus/frames.h>
-#include <defocus/option_value.h>
+#include <defocus/io/frames.h>
 #include <defocus/render_frame.h>
-#include <defocus/shot_file.h>
+#include <defocus/shot/option_value.h>
+#include <defocus/shot/shot_file.h>
 
 OIIO_PLUGIN_NAMESPACE_BEGIN
 

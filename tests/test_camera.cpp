@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include <defocus/camera.h>
+#include <defocus/shot/camera.h>
 
 using namespace defocus;
 

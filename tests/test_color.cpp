@@ -8,7 +8,7 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 
-#include <defocus/color.h>
+#include <defocus/color/color.h>
 
 #include "test_support.h"
 

@@ -7,8 +7,8 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 
-#include <defocus/hybrid.h>
-#include <defocus/layered_dof.h>
+#include <defocus/composite/layered_dof.h>
+#include <defocus/spread/hybrid.h>
 
 #include "test_support.h"
 

@@ -5,8 +5,8 @@
 
 #include <OpenImageIO/imagebufalgo.h>
 
-#include <defocus/layered_dof.h>
-#include <defocus/layering.h>
+#include <defocus/composite/layered_dof.h>
+#include <defocus/layers/layering.h>
 
 #include "test_support.h"
 

@@ -6,9 +6,9 @@
 
 #include <OpenImageIO/imagebufalgo.h>
 
-#include <defocus/focus_map.h>
-#include <defocus/layered_dof.h>
-#include <defocus/spread.h>
+#include <defocus/composite/layered_dof.h>
+#include <defocus/focus/focus_map.h>
+#include <defocus/spread/spread.h>
 
 #include "test_support.h"
 

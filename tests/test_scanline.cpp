@@ -6,7 +6,7 @@
 
 #include <OpenImageIO/imagebufalgo.h>
 
-#include <defocus/spread.h>
+#include <defocus/spread/spread.h>
 
 #include "test_support.h"
 

@@ -9,7 +9,7 @@
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 
-#include <defocus/scene_io.h>
+#include <defocus/io/scene_io.h>
 
 #include "test_support.h"
 

@@ -16,9 +16,9 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/strutil.h>
 
-#include <defocus/camera.h>
-#include <defocus/color.h>
-#include <defocus/scene_io.h>
+#include <defocus/color/color.h>
+#include <defocus/io/scene_io.h>
+#include <defocus/shot/camera.h>
 
 #include "test_support.h"
 

@@ -6,11 +6,11 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/strutil.h>
 
-#include <defocus/focus_at.h>
-#include <defocus/frames.h>
-#include <defocus/keyframes.h>
-#include <defocus/shot.h>
-#include <defocus/shot_file.h>
+#include <defocus/focus/focus_at.h>
+#include <defocus/io/frames.h>
+#include <defocus/shot/keyframes.h>
+#include <defocus/shot/shot.h>
+#include <defocus/shot/shot_file.h>
 
 #include "test_support.h"
 

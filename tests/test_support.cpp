@@ -10,7 +10,7 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 
-#include <defocus/image_input.h>
+#include <defocus/io/image_input.h>
 
 namespace defocus_test {
 

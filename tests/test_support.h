@@ -7,7 +7,7 @@
 
 #include <OpenImageIO/imagebuf.h>
 
-#include <defocus/camera.h>
+#include <defocus/shot/camera.h>
 
 namespace defocus_test {
 

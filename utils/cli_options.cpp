@@ -6,7 +6,7 @@
 #include <regex>
 #include <set>
 
-#include <defocus/option_value.h>
+#include <defocus/shot/option_value.h>
 
 namespace defocus {
 

@@ -9,7 +9,7 @@
 
 #include <OpenImageIO/argparse.h>
 
-#include <defocus/shot.h>
+#include <defocus/shot/shot.h>
 
 namespace defocus {
 

@@ -15,10 +15,10 @@
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/timer.h>
 
-#include <defocus/frames.h>
-#include <defocus/image_output.h>
+#include <defocus/io/frames.h>
+#include <defocus/io/image_output.h>
 #include <defocus/render_frame.h>
-#include <defocus/shot_file.h>
+#include <defocus/shot/shot_file.h>
 
 #include "cli_options.h"
 #include "frame_scheduler.h"

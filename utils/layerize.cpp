@@ -11,11 +11,11 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/strutil.h>
 
-#include <defocus/focus_at.h>
-#include <defocus/image_output.h>
-#include <defocus/layered_dof.h>
-#include <defocus/layering.h>
-#include <defocus/scene_io.h>
+#include <defocus/composite/layered_dof.h>
+#include <defocus/focus/focus_at.h>
+#include <defocus/io/image_output.h>
+#include <defocus/io/scene_io.h>
+#include <defocus/layers/layering.h>
 
 #include "cli_options.h"
 

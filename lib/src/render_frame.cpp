@@ -5,11 +5,11 @@
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/timer.h>
 
-#include <defocus/focus_at.h>
-#include <defocus/focus_map.h>
-#include <defocus/frames.h>
-#include <defocus/layering.h>
-#include <defocus/scene_io.h>
+#include <defocus/focus/focus_at.h>
+#include <defocus/focus/focus_map.h>
+#include <defocus/io/frames.h>
+#include <defocus/io/scene_io.h>
+#include <defocus/layers/layering.h>
 
 namespace defocus {
 

@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include <defocus/color.h>
+#include <defocus/color/color.h>
 
 int main()
 {

@@ -13,10 +13,10 @@
 
 #include <OpenImageIO/imagebuf.h>
 
-#include <defocus/color_plan.h>
-#include <defocus/layered_dof.h>
+#include <defocus/color/color_plan.h>
+#include <defocus/composite/layered_dof.h>
 #include <defocus/scene.h>
-#include <defocus/shot.h>
+#include <defocus/shot/shot.h>
 
 namespace defocus {
 

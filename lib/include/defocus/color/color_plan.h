@@ -1,0 +1,35 @@
+// Which colour spaces a render works in: the input's, the working space
+// the layers are spread in, and the output's.
+#pragma once
+
+#include <string>
+
+#include <OpenImageIO/imageio.h>
+
+#include <defocus/color/color.h>
+
+namespace defocus {
+
+struct ColorPlan {
+    ColorManagement config;
+    bool loaded = false;  ///< false: no config, and none was needed
+    std::string input, working, output;
+    bool convert_input = false;  ///< the input is not linear: convert it to `working`
+    /// Why the input space is a guess ("" when it was named or tagged
+    /// precisely): display-referred output then may not be what was meant.
+    std::string guess;
+    std::string summary;         ///< one line for -v
+};
+
+/// Plans the colour of a render of an input with `input_spec`. Loads
+/// `config_file` (see ColorManagement::load). `input_space` ("" = the
+/// file's oiio:ColorSpace when the config knows it, OIIO's generic
+/// "Linear" as lin_rec709, else scene_linear; the last two are guesses) and
+/// `output_space` ("" = the input's) must be spaces of the config. Without
+/// any config the input is taken as linear, unless a config or a space was
+/// named: then that is an error.
+bool plan_color(ColorPlan& plan, const std::string& config_file,
+                const std::string& input_space, const std::string& output_space,
+                const OIIO::ImageSpec& input_spec, std::string& error);
+
+}  // namespace defocus

@@ -1,0 +1,79 @@
+// Depth of field of a layered scene: spread each layer with its own
+// per-pixel CoC, composite back to front with "over" on the spread alpha.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <OpenImageIO/imagebuf.h>
+
+#include <defocus/scene.h>
+#include <defocus/shot/aperture.h>
+#include <defocus/shot/camera.h>
+#include <defocus/spread/hybrid.h>
+
+namespace defocus {
+
+/// The CoC radius |c|/2 in pixels of every pixel of `depth` (one float
+/// channel) over `roi`.
+bool coc_radius(OIIO::ImageBuf& dst, const OIIO::ImageBuf& depth,
+                const CircleOfConfusion& coc, OIIO::ROI roi = {},
+                int nthreads = 0);
+
+/// The data window of a result.
+enum class OutputWindow {
+    Input,    ///< the input's data window, as oiiotool's filters keep it
+    Display,  ///< the display window
+    Grown,    ///< the input's data window grown by the blur: all of the light
+};
+
+/// "input", "display" or "grown"; false for any other name.
+bool parse_output_window(const std::string& name, OutputWindow& window);
+const char* output_window_name(OutputWindow window);
+
+struct RenderSettings {
+    Camera camera;
+    Aperture aperture;
+    /// The hybrid method: when set, the pixels whose bokeh is visible (see
+    /// visible_bokeh, with hybrid_threshold) are spread directly with this
+    /// PSF image, the others with the aperture's fast filter.
+    std::shared_ptr<const PsfImage> psf_image;
+    double hybrid_threshold = 4.0;
+    /// Shapes (disc, polygon, mask) spread exactly, every pixel on its own
+    /// (spread_scanline), rather than in bounded time (spread_aperture).
+    bool exact_shape = false;
+    OutputWindow window = OutputWindow::Input;
+};
+
+/// What one layer holds, for -v and layerize --info.
+struct LayerReport {
+    std::string name;
+    int64_t pixels = 0;  ///< pixels with alpha > 0
+    double depth_min = 0, depth_max = 0;
+    double coc_min = 0, coc_max = 0;  ///< signed CoC diameters, pixels
+    double mean_inverse_depth = 0;    ///< alpha-weighted; orders the layers
+    int64_t psf_pixels = 0;           ///< spread with the PSF image (hybrid)
+};
+
+/// Pixel count and depth and CoC ranges of a layer's covered pixels.
+LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc,
+                           int nthreads = 0);
+
+/// Where render_layered_dof() spends its time, in seconds.
+struct RenderTimings {
+    double spread = 0.0;  ///< CoC radii, spreading and compositing, all layers
+};
+
+/// Renders the defocused, flattened premultiplied RGBA of a sanitized
+/// scene (see sanitize()) whose content is all in layers (see
+/// decompose_layers()). Layers are taken back to front by their
+/// alpha-weighted mean inverse depth; `report`, when given, lists them in
+/// that order. The result keeps the scene's display window.
+bool render_layered_dof(OIIO::ImageBuf& dst, const Scene& scene,
+                        const RenderSettings& settings,
+                        std::vector<LayerReport>* report = nullptr,
+                        RenderTimings* timings = nullptr, int nthreads = 0);
+
+}  // namespace defocus

@@ -1,0 +1,30 @@
+// Focusing on a pixel: the focus distance is the depth of what is seen
+// there.
+#pragma once
+
+#include <string>
+
+#include <defocus/scene.h>
+#include <defocus/shot/camera.h>
+#include <defocus/shot/shot.h>
+
+namespace defocus {
+
+/// The depth of the front-most opaque surface at display-window pixel
+/// (x, y) (0,0 = the display window's top left), as the median over the
+/// `window` x `window` pixels around it. A pixel's front-most opaque
+/// surface is where its layers, flat renders and deep samples, composited
+/// front to back, first reach half coverage. Works on a sanitized scene
+/// before slicing. False with `error` when (x, y) is outside the display
+/// window or nothing there is opaque at a finite depth.
+bool focus_distance_at(const Scene& scene, double x, double y, double& distance,
+                       std::string& error, int window = 5);
+
+/// The camera of a shot at `frame` over a read scene: camera_at(), with the
+/// focus measured by focus_distance_at() when the shot focuses at a pixel,
+/// then validated. False with `error` naming `scene.source` and the
+/// problem.
+bool shot_camera(const Shot& shot, const Scene& scene, int frame, Camera& camera,
+                 std::string& error);
+
+}  // namespace defocus

@@ -1,0 +1,38 @@
+// Frame sequences in oiiotool's syntax: file patterns with '#' (four
+// digits), '@' (one digit each), "%0Nd" or an embedded range
+// ("shot.1-10#.exr"), and frame lists such as "1001-1100", "1-99x2",
+// "1,5,9-12".
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <defocus/shot/shot.h>
+
+namespace defocus {
+
+/// True when `path` is a frame pattern rather than one file.
+bool is_frame_pattern(const std::string& path);
+
+/// The file of `frame` in a frame pattern; `path` itself when it is not a
+/// pattern.
+std::string frame_path(const std::string& path, int frame);
+
+/// The files a shot reads for `frame`: its inputs with their patterns
+/// filled in.
+std::vector<std::string> frame_inputs(const Shot& shot, int frame);
+
+/// The read options of `frame`: a --depth file pattern filled in.
+ReadOptions frame_read_options(const Shot& shot, int frame);
+
+/// True when a shot is a sequence: it has a frame list or a frame pattern
+/// among its inputs.
+bool is_sequence(const Shot& shot);
+
+/// The frames a shot renders, in order: its frame list; else the range
+/// embedded in an input pattern; else the frames of the first input
+/// pattern found on disk; else one frame (a still). False with `error` when the list is malformed,
+/// a pattern finds no files, or a still has keyframes (they need frames).
+bool shot_frames(const Shot& shot, std::vector<int>& frames, std::string& error);
+
+}  // namespace defocus

@@ -1,0 +1,32 @@
+// What lies beyond the frame's data window when a blur reaches past it.
+#pragma once
+
+#include <string>
+
+#include <defocus/scene.h>
+#include <defocus/shot/camera.h>
+
+namespace defocus {
+
+enum class EdgeMode {
+    Auto,    ///< extend where the data window does not cover the blur's reach
+    Extend,  ///< the edge pixels continue outwards
+    Black,   ///< nothing: light fades towards the edges of the data window
+};
+
+/// "auto", "extend" or "black"; false for any other name.
+bool parse_edge_mode(const std::string& name, EdgeMode& mode);
+const char* edge_mode_name(EdgeMode mode);
+
+/// Extends the layers beyond the frame's data window (scene.spec's) by
+/// repeating their outermost pixels, colour and depth, so that a blurred
+/// frame does not lose light at its borders: a uniform field stays uniform
+/// to the corners. Only the sides where a layer touches the data window are
+/// extended, by the reach of its largest blur. Auto does so only where the
+/// render was cut off by the frame: on the sides where the data window
+/// reaches the display window but not that far past it (overscan); a data
+/// window inside the display window bounds the content, with nothing
+/// beyond. Returns the most pixels added on any side (0: none).
+int extend_edges(Scene& scene, const CircleOfConfusion& coc, EdgeMode mode, int nthreads = 0);
+
+}  // namespace defocus

@@ -1,0 +1,87 @@
+// Cutting flat renders and deep images into depth layers, so that the
+// layered framework (spread each layer, composite back to front) applies.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <defocus/scene.h>
+#include <defocus/shot/camera.h>
+
+namespace defocus {
+
+struct LayeringOptions {
+    /// Number of depth layers; 0 chooses boundaries automatically so that
+    /// no layer spans more than `max_coc_span` pixels of CoC.
+    int layers = 0;
+    double max_coc_span = 24.0;
+    /// Width in pixels of CoC of the band around each boundary in which
+    /// content belongs to both neighbouring layers (0: hard slicing).
+    double soft_band = 1.5;
+};
+
+/// Layer boundaries in signed CoC, that is in 1/z: layer k holds the
+/// content between boundary(k) and boundary(k + 1), nearest first.
+class LayerBounds {
+public:
+    /// One layer spanning [coc_near, coc_far].
+    LayerBounds(double coc_near = 0.0, double coc_far = 0.0);
+    /// Layers between the given ascending boundaries (first and last are
+    /// the nearest and farthest content).
+    LayerBounds(std::vector<double> boundaries, double soft_band);
+
+    int count() const { return int(m_bounds.size()) - 1; }
+    double boundary(int i) const { return m_bounds[i]; }
+
+    /// The layers a point with signed CoC `c` belongs to: `front` with
+    /// weight `front_weight`, and front + 1 with the rest. Content within
+    /// half the soft band of a boundary belongs to both, in proportion to
+    /// its distance, so a surface that crosses a boundary shows no seam.
+    struct Share {
+        int front;
+        float front_weight;
+    };
+    Share share(double c) const;
+
+private:
+    std::vector<double> m_bounds;
+    double m_band = 0.0;
+};
+
+/// The layer bounds for a scene's flat and deep content under a camera.
+/// With options.layers = N: N layers spaced uniformly in CoC. Otherwise
+/// each boundary is placed at the emptiest CoC (least alpha-weighted
+/// content) within max_coc_span of the previous one, so that boundaries
+/// fall in the gaps between objects and rarely cut a surface.
+LayerBounds choose_layer_bounds(const Scene& scene, const CircleOfConfusion& coc,
+                                const LayeringOptions& options);
+
+/// The weights that split premultiplied colour and alpha `a` between two
+/// adjacent layers so that the front part composited over the back part
+/// gives back the original exactly: front w, back (1 - w) / (1 - w·a).
+struct SplitWeights {
+    float front, back;
+};
+SplitWeights split_weights(float front_weight, float a);
+
+/// Cuts scene.flat and scene.deep into depth layers and appends them to
+/// scene.layers, cropped to their content; afterwards scene.flat and
+/// scene.deep are empty. Deep pixels follow OpenEXR's "Interpreting
+/// OpenEXR Deep Pixels": samples sorted by Z then ZBack, volume samples
+/// split at layer planes with the alpha-split formula, and each layer's
+/// share of a pixel composited front to back with an alpha-weighted Z.
+/// A flat render's hidden background, the part of a layer behind nearer
+/// layers that one render cannot see, is filled from the layer's visible
+/// surroundings (see fill_hidden_background). Returns the bounds used.
+LayerBounds decompose_layers(Scene& scene, const CircleOfConfusion& coc,
+                              const LayeringOptions& options, int nthreads = 0);
+
+/// Push-pull hole filling (Gortler et al. 1996): the pixels of `layer`
+/// flagged in `holes` (hidden behind nearer layers) take the average of
+/// the layer's observed pixels around them, covered or empty, found on the
+/// coarsest pyramid level needed, up to `max_distance` pixels away.
+/// Premultiplied colour and alpha are filled, and the alpha-weighted depth.
+void fill_hidden_background(Layer& layer, const std::vector<bool>& holes,
+                            double max_distance, int nthreads = 0);
+
+}  // namespace defocus

@@ -1,0 +1,106 @@
+// A shot: everything that says how to render a scene, frame by frame. It is
+// what a .dof scene file holds and what the defocus command's options set.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <OpenImageIO/typedesc.h>
+
+#include <defocus/composite/layered_dof.h>
+#include <defocus/io/scene_io.h>
+#include <defocus/layers/edges.h>
+#include <defocus/layers/layering.h>
+#include <defocus/shot/aperture.h>
+#include <defocus/shot/camera.h>
+#include <defocus/shot/keyframes.h>
+
+namespace defocus {
+
+enum class OutputKind {
+    Image,     ///< the defocused image
+    FocusMap,  ///< where the focus falls, in false colour (see focus_map)
+};
+
+struct Shot {
+    /// Files or frame patterns (oiiotool's '#', '@', "%04d"), the layers of
+    /// one scene.
+    std::vector<std::string> inputs;
+    /// Frames to render, e.g. "1001-1100", "1-99x2", "1,5,9-12" ("" = the
+    /// frames the input patterns find on disk, or one frame for stills).
+    std::string frames;
+    ReadOptions read;
+    LayeringOptions layering;
+
+    /// Focus distance, or the pixel (X,Y in the display window) whose
+    /// depth is the focus distance: exactly one is set.
+    Keyframes focus, focus_at;
+    Keyframes focal_length_mm { 50.0 }, fstop { 2.8 };
+    double sensor_width_mm = 36.0;
+    LensModel lens         = LensModel::ThinLens;
+    double max_blur_px     = 512.0;
+
+    Aperture aperture;
+    /// Shapes (disc, polygon, mask) spread exactly, every pixel on its own,
+    /// rather than in bounded time with large footprints merged.
+    bool exact_shape = false;
+    std::string psf_image;  ///< the hybrid method's PSF image ("" = off)
+    double hybrid_threshold = 4.0;
+
+    std::string color_config;  ///< "" = $OCIO, else the shipped config
+    std::string input_space;   ///< "" = the file's oiio:ColorSpace, else linear
+    std::string output_space;  ///< "" = the input's
+
+    OutputKind output = OutputKind::Image;
+    OIIO::TypeDesc pixel_type = OIIO::TypeUnknown;  ///< unknown = the input's
+    std::string compression;                        ///< "" = the input's
+    OutputWindow window = OutputWindow::Input;
+    EdgeMode edge = EdgeMode::Auto;  ///< beyond the data window, when the blur reaches it
+};
+
+/// How a setting's value is written in a .dof file.
+enum class ShotValueKind {
+    Number,     ///< a JSON number
+    Keyframes,  ///< a number, or {"frame": number, ...}
+    Point,      ///< [x, y], or {"frame": [x, y], ...}
+    Text,       ///< a JSON string
+    Path,       ///< a JSON string naming a file, relative to the .dof file
+    FileOrName, ///< a JSON string: a file as Path when one is there, else a name
+};
+
+/// One setting of a shot: its option name (the defocus command's long
+/// option without dashes, also the name of a plugin hint "dof:NAME"), and
+/// where it sits in a .dof file.
+struct ShotSetting {
+    const char* name;
+    const char* section;  ///< the .dof object holding it
+    const char* key;      ///< its key there
+    ShotValueKind kind;
+};
+
+/// Every setting of a shot except its inputs, in .dof order.
+const std::vector<ShotSetting>& shot_settings();
+
+/// Sets the setting `name` from text as the command line writes it, e.g.
+/// ("focus", "1:1.25,24:3"), ("aperture", "polygon"), ("crop", "true").
+/// Setting one of focus and focus-at clears the other. False, with `error`
+/// naming the option (as `label`, by default "--NAME") and the problem, for
+/// an unknown name or a bad value.
+bool set_shot_setting(Shot& shot, const std::string& name, const std::string& value,
+                      std::string& error, const std::string& label = "");
+
+/// The text set_shot_setting() reads back to the same value ("" when
+/// unset).
+std::string shot_setting(const Shot& shot, const std::string& name);
+
+/// The first reason the shot cannot be rendered, or "".
+std::string validate(const Shot& shot);
+
+/// True when a setting changes over frames.
+bool is_animated(const Shot& shot);
+
+/// The camera at `frame`. Its focus distance is the focus keyframes' (when
+/// the shot focuses at a pixel, the caller measures it).
+Camera camera_at(const Shot& shot, int frame);
+
+}  // namespace defocus

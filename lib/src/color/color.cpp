@@ -1,0 +1,241 @@
+#include <defocus/color/color.h>
+
+#include <dlfcn.h>
+
+#include <cstdlib>
+
+#include <OpenColorIO/OpenColorIO.h>
+#include <OpenImageIO/color.h>
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/parallel.h>
+#include <OpenImageIO/strutil.h>
+#include <OpenImageIO/sysutil.h>
+
+namespace OCIO = OCIO_NAMESPACE;
+
+namespace defocus {
+
+using namespace OIIO;
+using Strutil::fmt::format;
+
+namespace {
+
+/// The file this code was loaded from: the program that links the library,
+/// or the OpenImageIO plugin. Both sit one folder below the prefix (bin/,
+/// lib/), in the build tree as once installed.
+std::string this_module_path()
+{
+    Dl_info info {};
+    if (dladdr(reinterpret_cast<const void*>(&this_module_path), &info) && info.dli_fname)
+        return info.dli_fname;
+    return Sysutil::this_program_path();
+}
+
+}  // namespace
+
+struct ColorManagement::Impl {
+    OCIO::ConstConfigRcPtr ocio;  ///< for queries
+    OIIO::ColorConfig oiio;       ///< for ImageBufAlgo's conversions
+};
+
+ColorManagement::ColorManagement() = default;
+ColorManagement::~ColorManagement() = default;
+ColorManagement::ColorManagement(ColorManagement&&) noexcept = default;
+ColorManagement& ColorManagement::operator=(ColorManagement&&) noexcept = default;
+
+bool ColorManagement::load(const std::string& explicit_file, std::string& error)
+{
+    const char* env = std::getenv("OCIO");
+    if (!explicit_file.empty()) {
+        m_path = explicit_file;
+        m_origin = "--colorconfig";
+    } else if (env && *env) {
+        m_path = env;
+        m_origin = "$OCIO";
+    } else {
+        // Beside the program or plugin (build tree or installed), else
+        // where it was installed, for programs of other projects.
+        m_path   = Filesystem::parent_path(this_module_path()) + "/../share/defocus/config.ocio";
+        m_origin = "shipped";
+        if (!Filesystem::exists(m_path))
+            m_path = DEFOCUS_INSTALLED_OCIO_CONFIG;
+    }
+    if (!Filesystem::exists(m_path)) {
+        error = format("{}: colour config ({}) not found", m_path, m_origin);
+        return false;
+    }
+    auto impl = std::make_unique<Impl>();
+    try {
+        impl->ocio = OCIO::Config::CreateFromFile(m_path.c_str());
+        impl->ocio->validate();
+    } catch (const OCIO::Exception& e) {
+        error = format("{}: colour config ({}) fails to load: {}", m_path, m_origin,
+                       Strutil::replace(e.what(), "\n", " ", true));
+        return false;
+    }
+    if (!impl->oiio.reset(m_path)) {
+        error = format("{}: colour config ({}) fails to load: {}", m_path, m_origin,
+                       impl->oiio.geterror());
+        return false;
+    }
+    m_impl = std::move(impl);
+    return true;
+}
+
+std::string ColorManagement::find_space(const std::string& name) const
+{
+    if (!m_impl || name.empty())
+        return "";
+    OCIO::ConstColorSpaceRcPtr cs = m_impl->ocio->getColorSpace(name.c_str());
+    return cs ? cs->getName() : "";
+}
+
+std::vector<std::string> ColorManagement::space_names() const
+{
+    std::vector<std::string> names;
+    if (!m_impl)
+        return names;
+    for (int i = 0; i < m_impl->ocio->getNumColorSpaces(); ++i)
+        names.emplace_back(m_impl->ocio->getColorSpaceNameByIndex(i));
+    return names;
+}
+
+std::string ColorManagement::require_space(const std::string& name, std::string& error) const
+{
+    const std::string found = find_space(name);
+    if (found.empty())
+        error = format("unknown colour space '{}' (spaces: {})", name,
+                       Strutil::join(space_names(), ", "));
+    return found;
+}
+
+bool ColorManagement::is_data(const std::string& space) const
+{
+    OCIO::ConstColorSpaceRcPtr cs = m_impl ? m_impl->ocio->getColorSpace(space.c_str()) : nullptr;
+    return cs && cs->isData();
+}
+
+bool ColorManagement::is_linear(const std::string& space) const
+{
+    if (!m_impl)
+        return false;
+    OCIO::ConstColorSpaceRcPtr cs = m_impl->ocio->getColorSpace(space.c_str());
+    if (!cs || cs->isData())
+        return false;
+    const std::string encoding = cs->getEncoding();
+    if (!encoding.empty())
+        return encoding == "scene-linear" || encoding == "display-linear";
+    return m_impl->oiio.isColorSpaceLinear(space);
+}
+
+std::string ColorManagement::scene_linear() const
+{
+    return find_space(OCIO::ROLE_SCENE_LINEAR);
+}
+
+std::string ColorManagement::default_display() const
+{
+    return m_impl ? m_impl->ocio->getDefaultDisplay() : "";
+}
+
+std::string ColorManagement::default_view(const std::string& display) const
+{
+    return m_impl ? m_impl->ocio->getDefaultView(display.c_str()) : "";
+}
+
+std::string ColorManagement::check_display_view(const std::string& display,
+                                            const std::string& view) const
+{
+    const OCIO::Config& c = *m_impl->ocio;
+    std::vector<std::string> displays, views;
+    for (int i = 0; i < c.getNumDisplays(); ++i)
+        displays.emplace_back(c.getDisplay(i));
+    if (std::find(displays.begin(), displays.end(), display) == displays.end())
+        return format("unknown display '{}' (displays: {})", display,
+                      Strutil::join(displays, ", "));
+    for (int i = 0; i < c.getNumViews(display.c_str()); ++i)
+        views.emplace_back(c.getView(display.c_str(), i));
+    if (std::find(views.begin(), views.end(), view) == views.end())
+        return format("unknown view '{}' of display '{}' (views: {})", view, display,
+                      Strutil::join(views, ", "));
+    return "";
+}
+
+namespace {
+
+/// Conversions to or from an encoding that is not linear must see the
+/// colour a surface has, not its colour times its coverage.
+bool needs_unpremult(const ColorManagement& config, const std::string& from,
+                     const std::string& to)
+{
+    return !(config.is_linear(from) && config.is_linear(to));
+}
+
+}  // namespace
+
+bool ColorManagement::convert(ImageBuf& image, const std::string& from, const std::string& to,
+                          std::string& error, int nthreads) const
+{
+    if (from == to)
+        return true;
+    ROI colour = image.roi();
+    colour.chbegin = 0;
+    colour.chend = std::min(3, image.nchannels());
+    if (!ImageBufAlgo::colorconvert(image, image, from, to, needs_unpremult(*this, from, to),
+                                    "", "", &m_impl->oiio, colour, nthreads)) {
+        error = format("colour conversion {} -> {}: {}", from, to, image.geterror());
+        return false;
+    }
+    return true;
+}
+
+bool ColorManagement::convert(DeepImage& image, const std::string& from, const std::string& to,
+                          std::string& error, int nthreads) const
+{
+    if (from == to)
+        return true;
+    ColorProcessorHandle processor = m_impl->oiio.createColorProcessor(from, to);
+    if (!processor) {
+        error = format("colour conversion {} -> {}: {}", from, to, m_impl->oiio.geterror());
+        return false;
+    }
+    const bool unpremult = needs_unpremult(*this, from, to);
+    parallel_for(int64_t(0), int64_t(image.samples.size()), [&](int64_t i) {
+        DeepSample& s = image.samples[i];
+        float rgba[4] = { s.r, s.g, s.b, s.a };
+        ImageBufAlgo::colorconvert(span<float>(rgba, 4), processor.get(), unpremult);
+        s.r = rgba[0], s.g = rgba[1], s.b = rgba[2];
+    }, paropt(nthreads));
+    return true;
+}
+
+bool ColorManagement::display(ImageBuf& dst, const ImageBuf& src, const std::string& from,
+                          const std::string& display, const std::string& view,
+                          std::string& error, int nthreads) const
+{
+    error = check_display_view(display, view);
+    if (!error.empty())
+        return false;
+    if (!ImageBufAlgo::ociodisplay(dst, src, display, view, from, "", true, "", "",
+                                   &m_impl->oiio, {}, nthreads)) {
+        error = format("display {} / {}: {}", display, view, dst.geterror());
+        return false;
+    }
+    return true;
+}
+
+bool convert_scene(Scene& scene, const ColorManagement& config, const std::string& from,
+                   const std::string& to, std::string& error, int nthreads)
+{
+    for (auto* list : { &scene.layers, &scene.flat })
+        for (Layer& layer : *list)
+            if (!config.convert(layer.color, from, to, error, nthreads))
+                return false;
+    for (DeepImage& image : scene.deep)
+        if (!config.convert(image, from, to, error, nthreads))
+            return false;
+    return true;
+}
+
+}  // namespace defocus

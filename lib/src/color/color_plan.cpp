@@ -1,0 +1,75 @@
+#include <defocus/color/color_plan.h>
+
+#include <OpenImageIO/strutil.h>
+
+namespace defocus {
+
+using OIIO::Strutil::fmt::format;
+
+bool plan_color(ColorPlan& plan, const std::string& config_file,
+                const std::string& input_space, const std::string& output_space,
+                const OIIO::ImageSpec& input_spec, std::string& error)
+{
+    const bool asked = !config_file.empty() || !input_space.empty()
+                       || !output_space.empty();
+    std::string load_error;
+    plan.loaded = plan.config.load(config_file, load_error);
+    if (!plan.loaded) {
+        if (asked) {
+            error = load_error;
+            return false;
+        }
+        plan.summary = "colour: no config (" + load_error + "); the input is taken as linear";
+        return true;
+    }
+    const ColorManagement& c = plan.config;
+    if (!input_space.empty()) {
+        plan.input = c.require_space(input_space, error);
+        if (plan.input.empty()) {
+            error = "--iscolorspace: " + error;
+            return false;
+        }
+    }
+    const std::string tag = input_spec.get_string_attribute("oiio:ColorSpace");
+    if (input_space.empty()) {
+        // OIIO tags every EXR "Linear", whatever its primaries; most such
+        // renders (Blender's, most renderers' defaults) are linear Rec.709.
+        if (OIIO::Strutil::iequals(tag, "linear")) {
+            plan.input = c.find_space("lin_rec709");
+            plan.guess = format("the file's generic '{}' tag taken as linear Rec.709", tag);
+        } else {
+            plan.input = c.find_space(tag);
+        }
+    }
+    if (!plan.input.empty() && c.is_data(plan.input)) {
+        error = format("--iscolorspace: '{}' is data, not colour: the input must be in "
+                       "a colour space",
+                       plan.input);
+        return false;
+    }
+    if (plan.input.empty()) {
+        plan.input = c.scene_linear();  // linear, as far as anyone can tell
+        plan.guess = tag.empty() ? "no colour space tag: taken as the config's scene_linear"
+                                 : format("tag '{}' unknown to the config: taken as its "
+                                          "scene_linear", tag);
+    }
+    plan.output = plan.input;
+    if (!output_space.empty()) {
+        plan.output = c.require_space(output_space, error);
+        if (plan.output.empty()) {
+            error = "--tocolorspace: " + error;
+            return false;
+        }
+    }
+    // Spreading commutes with the 3x3 matrix between two linear spaces, so
+    // a linear input is spread as it is.
+    plan.convert_input = !c.is_linear(plan.input);
+    plan.working       = plan.convert_input ? c.scene_linear() : plan.input;
+    plan.summary = format("colour: config {} ({}); input '{}'{}, spread in '{}', output '{}'",
+                          c.path(), c.origin(), plan.input,
+                          plan.guess.empty() ? "" : " (a guess: " + plan.guess + ")",
+                          plan.working, plan.output);
+    return true;
+}
+
+}  // namespace defocus

@@ -1,0 +1,366 @@
+#include <defocus/composite/layered_dof.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <new>
+#include <numeric>
+
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/parallel.h>
+#include <OpenImageIO/timer.h>
+
+#include <defocus/spread/spread.h>
+
+#include "spread/spread_engine.h"
+#include "util/float_pixels.h"
+#include "util/parallel_rows.h"
+#include "util/zeroed_image.h"
+
+namespace defocus {
+
+using namespace OIIO;
+
+bool coc_radius(ImageBuf& dst, const ImageBuf& depth,
+                const CircleOfConfusion& coc, ROI roi, int nthreads)
+{
+    if (!roi.defined())
+        roi = depth.roi();
+    roi.chbegin = 0;
+    roi.chend = 1;
+    ImageSpec spec(roi, TypeFloat);
+    spec.channelnames = { "radius" };
+    dst.reset(spec, InitializePixels::No);  // every pixel is written below
+    const FloatPixels z(depth, roi);
+    parallel_for(roi.ybegin, roi.yend, [&](int y) {
+        const float* in = z(roi.xbegin, y);
+        float* out = static_cast<float*>(dst.pixeladdr(roi.xbegin, y));
+        for (int x = 0; x < roi.width(); ++x, in += z.nchannels())
+            out[x] = float(coc.radius(*in));
+    }, by_rows(nthreads));
+    return true;
+}
+
+namespace {
+
+/// Per-row partial sums of describe_layer(), reduced after the parallel pass.
+struct RowDepth {
+    int64_t pixels = 0;
+    double zmin = INFINITY, zmax = -INFINITY;
+    double weight = 0, weighted_inverse = 0;
+};
+
+}  // namespace
+
+LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc, int nthreads)
+{
+    const ROI roi = layer.color.roi();
+    const FloatPixels color(layer.color, roi);
+    const FloatPixels depth(layer.depth, ROI(roi.xbegin, roi.xend, roi.ybegin, roi.yend, 0, 1, 0, 1));
+    std::vector<RowDepth> rows(roi.height());
+    parallel_for(roi.ybegin, roi.yend, [&](int y) {
+        RowDepth& r = rows[y - roi.ybegin];
+        const float* c = color(roi.xbegin, y);
+        const float* zs = depth(roi.xbegin, y);
+        for (int x = 0; x < roi.width(); ++x, c += color.nchannels(), zs += depth.nchannels()) {
+            const float a = c[3];
+            if (a <= 0.0f)
+                continue;
+            const double z = *zs;
+            ++r.pixels;
+            r.zmin = std::min(r.zmin, z);
+            r.zmax = std::max(r.zmax, z);
+            r.weight += a;
+            r.weighted_inverse += a * (std::isinf(z) ? 0.0 : 1.0 / z);
+        }
+    }, by_rows(nthreads));
+    RowDepth total;
+    for (const RowDepth& r : rows) {
+        total.pixels += r.pixels;
+        total.zmin = std::min(total.zmin, r.zmin);
+        total.zmax = std::max(total.zmax, r.zmax);
+        total.weight += r.weight;
+        total.weighted_inverse += r.weighted_inverse;
+    }
+    LayerReport rep;
+    rep.mean_inverse_depth = total.weight > 0 ? total.weighted_inverse / total.weight : 0.0;
+    rep.name = layer.name;
+    rep.pixels = total.pixels;
+    rep.depth_min = total.pixels ? total.zmin : 0.0;
+    rep.depth_max = total.pixels ? total.zmax : 0.0;
+    rep.coc_min = total.pixels ? coc.diameter(rep.depth_min) : 0.0;
+    rep.coc_max = total.pixels ? coc.diameter(rep.depth_max) : 0.0;
+    return rep;
+}
+
+namespace {
+
+/// Composites spread rows over the frame, back to front ("over" on the
+/// spread alpha). Within one layer, pixels of different blur overlap
+/// additively, so where their coverage adds up past 1 the layer is scaled
+/// back to full coverage there (the overlapping parts average instead of
+/// adding), keeping alpha within [0, 1]; rounding residue of the prefix
+/// sums below 0 is cleared.
+class Over final : public RowSink {
+public:
+    explicit Over(ImageBuf& frame) : m_frame(frame) {}
+    void row(int y, int x_begin, int x_end, const double* rgba) override
+    {
+        float* out = static_cast<float*>(m_frame.pixeladdr(x_begin, y));
+        for (int x = x_begin; x < x_end; ++x, rgba += 4, out += 4) {
+            const double a = rgba[3];
+            const double scale = a > 1.0 ? 1.0 / a : 1.0;
+            const double alpha = a > 1.0 ? 1.0 : std::max(0.0, a);
+            for (int c = 0; c < 3; ++c)
+                out[c] = float(rgba[c] * scale + (1.0 - alpha) * out[c]);
+            out[3] = float(alpha + (1.0 - alpha) * out[3]);
+        }
+    }
+
+private:
+    ImageBuf& m_frame;
+};
+
+/// A layer spread on its own, as an image: the hybrid method (highlights
+/// with the PSF image, the rest with the aperture's filter) or the smooth
+/// filters.
+bool spread_apart(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
+                  const RenderSettings& settings, const RowProfile* profile,
+                  int64_t& psf_pixels, int nthreads)
+{
+    auto fast = [&](ImageBuf& out, const ImageBuf& in) {
+        switch (settings.aperture.shape) {
+        case ApertureShape::Box: return spread_box(out, in, radius, {}, nthreads);
+        case ApertureShape::Tent: return spread_smooth(out, in, radius, 2, {}, nthreads);
+        case ApertureShape::Smooth: return spread_smooth(out, in, radius, 3, {}, nthreads);
+        default:
+            return settings.exact_shape
+                       ? spread_scanline(out, in, radius, *profile, {}, nthreads)
+                       : spread_aperture(out, in, radius, *profile, exact_highlight_threshold,
+                                         {}, nthreads);
+        }
+    };
+    if (!settings.psf_image)
+        return fast(dst, color);
+
+    const std::vector<uint8_t> slow = visible_bokeh(color, radius, settings.hybrid_threshold,
+                                                    nthreads);
+    psf_pixels = std::count(slow.begin(), slow.end(), uint8_t(1));
+    // Split the layer: the selected pixels go one way, the rest the other.
+    ImageBuf fast_part(color.spec()), slow_part(color.spec());
+    const ROI roi = color.roi();
+    parallel_for(roi.ybegin, roi.yend, [&](int y) {
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const bool is_slow = slow[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)];
+            const float* c = static_cast<const float*>(color.pixeladdr(x, y));
+            float* f = static_cast<float*>(fast_part.pixeladdr(x, y));
+            float* s = static_cast<float*>(slow_part.pixeladdr(x, y));
+            for (int k = 0; k < 4; ++k) {
+                f[k] = is_slow ? 0.0f : c[k];
+                s[k] = is_slow ? c[k] : 0.0f;
+            }
+        }
+    }, by_rows(nthreads));
+    const std::shared_ptr<const PsfImage> psf = settings.psf_image;
+    ImageBuf fast_spread, slow_spread;
+    if (!fast(fast_spread, fast_part)
+        || !spread_direct(slow_spread, slow_part, radius,
+                          [psf](double r) { return psf->footprint(r); }, {}, nthreads)) {
+        dst.errorfmt("{}{}", fast_spread.geterror(), slow_spread.geterror());
+        return false;
+    }
+    return ImageBufAlgo::add(dst, fast_spread, slow_spread, {}, nthreads);
+}
+
+/// Composites a layer spread apart over the frame, within the frame's window.
+void composite_image(ImageBuf& frame, const ImageBuf& layer, int nthreads)
+{
+    const ROI both = roi_intersection(frame.roi(), layer.roi());
+    Over over(frame);
+    parallel_for(both.ybegin, both.yend, [&](int y) {
+        std::vector<double> row(size_t(std::max(0, both.width())) * 4);
+        for (int x = both.xbegin; x < both.xend; ++x)
+            for (int c = 0; c < 4; ++c)
+                row[size_t(x - both.xbegin) * 4 + c]
+                    = static_cast<const float*>(layer.pixeladdr(x, y))[c];
+        if (both.width() > 0)
+            over.row(y, both.xbegin, both.xend, row.data());
+    }, by_rows(nthreads));
+}
+
+/// Whether a layer goes through the spreading engine, composited as it is
+/// spread, rather than spread apart.
+bool spread_in_engine(const RenderSettings& settings)
+{
+    return !settings.psf_image && settings.aperture.shape != ApertureShape::Tent
+           && settings.aperture.shape != ApertureShape::Smooth;
+}
+
+/// One layer ready for the engine: its radii, float pixels and
+/// highlights, which the engine reads while it lives.
+struct EngineLayer {
+    ImageBuf radius;
+    FloatPixels color_pixels, radius_pixels;
+    std::vector<uint8_t> highlights;
+    std::unique_ptr<SpreadEngine> engine;
+};
+
+bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& settings,
+                   std::vector<LayerReport>* report, RenderTimings& timings, int nthreads)
+{
+    if (!scene.flat.empty() || !scene.deep.empty()) {
+        dst.errorfmt("the scene has flat or deep content: cut it into layers first "
+                     "(decompose_layers)");
+        return false;
+    }
+    Timer spread_timer;
+    const CircleOfConfusion coc(settings.camera, scene.spec.full_width);
+    std::vector<LayerReport> depths;
+    for (const Layer& layer : scene.layers)
+        depths.push_back(describe_layer(layer, coc, nthreads));
+    std::vector<size_t> order(scene.layers.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+        return depths[a].mean_inverse_depth < depths[b].mean_inverse_depth;
+    });
+
+    // Shape apertures share one profile and its footprints, sized to the
+    // largest blur.
+    std::shared_ptr<RowProfile> profile;
+    double max_radius = 0.0;
+    for (const LayerReport& d : depths)
+        max_radius = std::max({ max_radius, 0.5 * std::abs(d.coc_min), 0.5 * std::abs(d.coc_max) });
+    const Aperture& aperture = settings.aperture;
+    if (aperture.shape == ApertureShape::Disc || aperture.shape == ApertureShape::Polygon) {
+        profile = std::make_shared<ApertureProfile>(aperture);
+    } else if (aperture.shape == ApertureShape::Mask) {
+        auto mask = std::make_shared<MaskProfile>();
+        std::string error;
+        if (!mask->load(aperture.mask_file, aperture.aspect, error)) {
+            dst.errorfmt("{}", error);
+            return false;
+        }
+        profile = std::move(mask);
+    }
+    const std::unique_ptr<ShapePrograms> programs =
+        profile ? std::make_unique<ShapePrograms>(profile, max_radius) : nullptr;
+    const SpreadMethod method = aperture.shape == ApertureShape::Box ? SpreadMethod::Box
+                                : settings.exact_shape               ? SpreadMethod::Exact
+                                                                     : SpreadMethod::Bounded;
+
+    // Every layer's radii, and its spread (set up in the engine, or done
+    // apart), so that the frame's window is known before it is made.
+    const ROI display(scene.spec.full_x, scene.spec.full_x + scene.spec.full_width,
+                      scene.spec.full_y, scene.spec.full_y + scene.spec.full_height, 0, 1, 0, 4);
+    ROI grown = display;
+    std::vector<EngineLayer> engines(scene.layers.size());
+    std::vector<ImageBuf> apart(scene.layers.size());
+    for (size_t i : order) {
+        const Layer& layer = scene.layers[i];
+        if (depths[i].pixels == 0)
+            continue;
+        EngineLayer& e = engines[i];
+        if (!coc_radius(e.radius, layer.depth, coc, {}, nthreads)) {
+            dst.errorfmt("layer '{}': {}", layer.name, e.radius.geterror());
+            return false;
+        }
+        if (!spread_in_engine(settings)) {
+            if (!spread_apart(apart[i], layer.color, e.radius, settings, profile.get(),
+                              depths[i].psf_pixels, nthreads)) {
+                dst.errorfmt("layer '{}': {}", layer.name, apart[i].geterror());
+                return false;
+            }
+            e.radius.reset();
+            grown = roi_union(grown, apart[i].roi());
+            continue;
+        }
+        const ROI roi = layer.color.roi();
+        e.color_pixels = FloatPixels(layer.color, roi);
+        e.radius_pixels = FloatPixels(e.radius, roi);
+        SpreadSource source;
+        source.roi = roi;
+        source.color = e.color_pixels(roi.xbegin, roi.ybegin);
+        source.radius = e.radius_pixels(roi.xbegin, roi.ybegin);
+        const double layer_radius
+            = 0.5 * std::max(std::abs(depths[i].coc_min), std::abs(depths[i].coc_max));
+        if (method == SpreadMethod::Bounded && layer_radius >= smallest_merged_radius()) {
+            e.highlights = visible_bokeh(layer.color, e.radius, exact_highlight_threshold,
+                                         nthreads);
+            source.keep_exact = e.highlights.data();
+        }
+        e.engine = std::make_unique<SpreadEngine>(source, method, programs.get(), nthreads);
+        grown = roi_union(grown, e.engine->extent());
+    }
+
+    ROI window = settings.window == OutputWindow::Display ? display
+                 : settings.window == OutputWindow::Grown ? grown
+                                                          : scene.spec.roi();
+    window.chbegin = 0;
+    window.chend = 4;
+    ImageSpec spec(window, TypeFloat);
+    spec.channelnames = { "R", "G", "B", "A" };
+    spec.alpha_channel = 3;
+    spec.full_x = display.xbegin;
+    spec.full_y = display.ybegin;
+    spec.full_width = display.width();
+    spec.full_height = display.height();
+    spec.extra_attribs = scene.spec.extra_attribs;
+    erase_part_attributes(spec);
+    ImageBuf frame;
+    reset_zeroed(frame, spec, nthreads);
+
+    Over over(frame);
+    for (size_t i : order) {
+        if (report)
+            report->push_back(depths[i]);
+        if (engines[i].engine)
+            engines[i].engine->run(window, over, nthreads);
+        else if (apart[i].initialized())
+            composite_image(frame, apart[i], nthreads);
+        engines[i] = EngineLayer();
+    }
+    timings.spread += spread_timer();
+    dst = std::move(frame);
+    return true;
+}
+
+}  // namespace
+
+bool parse_output_window(const std::string& name, OutputWindow& window)
+{
+    for (OutputWindow w : { OutputWindow::Input, OutputWindow::Display, OutputWindow::Grown })
+        if (name == output_window_name(w)) {
+            window = w;
+            return true;
+        }
+    return false;
+}
+
+const char* output_window_name(OutputWindow window)
+{
+    switch (window) {
+    case OutputWindow::Input: return "input";
+    case OutputWindow::Display: return "display";
+    case OutputWindow::Grown: return "grown";
+    }
+    return "?";
+}
+
+bool render_layered_dof(ImageBuf& dst, const Scene& scene,
+                        const RenderSettings& settings,
+                        std::vector<LayerReport>* report, RenderTimings* timings,
+                        int nthreads)
+{
+    RenderTimings unused;
+    // Errors are reported, never thrown through the API; running out of
+    // memory on a huge blur is the one exception the filters can raise.
+    try {
+        return render_layers(dst, scene, settings, report, timings ? *timings : unused,
+                             nthreads);
+    } catch (const std::bad_alloc&) {
+        dst.errorfmt("out of memory (the layers and the blur are too large)");
+        return false;
+    }
+}
+
+}  // namespace defocus

@@ -1,0 +1,283 @@
+#include "io/exr_input.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstring>
+#include <mutex>
+
+#include <OpenEXR/ImfArray.h>
+#include <OpenEXR/ImfDeepFrameBuffer.h>
+#include <OpenEXR/ImfDeepScanLineInputPart.h>
+#include <OpenEXR/ImfDeepTiledInputPart.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfMultiPartInputFile.h>
+#include <OpenEXR/ImfPartType.h>
+#include <OpenEXR/openexr.h>
+#include <OpenImageIO/parallel.h>
+#include <OpenImageIO/strutil.h>
+
+namespace defocus {
+
+using OIIO::Strutil::fmt::format;
+
+namespace {
+
+/// The core library reports errors through a callback: keep the last
+/// message of this thread instead of printing it.
+thread_local std::string core_message;
+
+void keep_message(exr_const_context_t, int code, const char* message)
+{
+    core_message = format("{} ({})", message ? message : "", exr_get_error_code_as_string(code));
+}
+
+/// The address OpenEXR's frame buffers want: that of pixel (0, 0) for an
+/// array holding the data window from `origin` elements on, computed in
+/// integers since it may lie outside the array.
+template<typename T>
+char* frame_base(T* data, size_t origin)
+{
+    return reinterpret_cast<char*>(reinterpret_cast<intptr_t>(data)
+                                   - intptr_t(origin * sizeof(T)));
+}
+
+std::string damaged(const std::string& filename, const std::string& why)
+{
+    return format("{}: corrupt or truncated OpenEXR file: {}", filename,
+                  why.empty() ? "unreadable" : why);
+}
+
+}  // namespace
+
+size_t memory_budget()
+{
+    const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+    return pages > 0 && page > 0 ? size_t(pages) * size_t(page) / 2 : size_t(1) << 32;
+}
+
+struct ExrInput::Context {
+    exr_context_t file = nullptr;
+    std::string filename;
+};
+
+ExrInput::~ExrInput()
+{
+    if (m_context) {
+        exr_finish(&m_context->file);
+        delete m_context;
+    }
+}
+
+bool ExrInput::open(const std::string& filename, std::string& error)
+{
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = keep_message;
+    core_message.clear();
+    exr_context_t file = nullptr;
+    if (exr_start_read(&file, filename.c_str(), &init) != EXR_ERR_SUCCESS) {
+        exr_finish(&file);
+        error = damaged(filename, core_message);
+        return false;
+    }
+    m_context = new Context { file, filename };
+    return true;
+}
+
+bool ExrInput::read(int part, const std::vector<ChannelTarget>& targets, std::string& error,
+                    int nthreads) const
+{
+    exr_const_context_t file = m_context->file;
+    const std::string& filename = m_context->filename;
+    exr_storage_t storage;
+    exr_attr_box2i_t dw;
+    if (exr_get_storage(file, part, &storage) != EXR_ERR_SUCCESS
+        || exr_get_data_window(file, part, &dw) != EXR_ERR_SUCCESS) {
+        error = damaged(filename, core_message);
+        return false;
+    }
+    const int64_t width = int64_t(dw.max.x) - dw.min.x + 1, height = int64_t(dw.max.y) - dw.min.y + 1;
+
+    // The chunks of the part: scanline blocks, or tiles of the top level.
+    int64_t across = 1, chunks = 0;
+    int32_t lines = 1;
+    uint32_t tile_w = 0, tile_h = 0;
+    if (storage == EXR_STORAGE_SCANLINE) {
+        if (exr_get_scanlines_per_chunk(file, part, &lines) != EXR_ERR_SUCCESS || lines < 1) {
+            error = damaged(filename, core_message);
+            return false;
+        }
+        chunks = (height + lines - 1) / lines;
+    } else if (storage == EXR_STORAGE_TILED) {
+        exr_tile_level_mode_t mode;
+        exr_tile_round_mode_t round;
+        if (exr_get_tile_descriptor(file, part, &tile_w, &tile_h, &mode, &round) != EXR_ERR_SUCCESS
+            || tile_w < 1 || tile_h < 1) {
+            error = damaged(filename, core_message);
+            return false;
+        }
+        across = (width + tile_w - 1) / tile_w;
+        chunks = across * ((height + tile_h - 1) / tile_h);
+    } else {
+        error = format("{}: part {} is deep, not flat", filename, part);
+        return false;
+    }
+
+    std::atomic<bool> failed { false };
+    std::mutex first_error;
+    // A few chunks a task: tasks of many chunks leave a thread idle.
+    OIIO::parallel_for_chunked(0, chunks, 4, [&](int64_t c0, int64_t c1) {
+        exr_decode_pipeline_t decoder = EXR_DECODE_PIPELINE_INITIALIZER;
+        auto fail = [&](const std::string& why) {
+            std::lock_guard<std::mutex> lock(first_error);
+            if (!failed.exchange(true))
+                error = why;
+        };
+        core_message.clear();
+        for (int64_t c = c0; c < c1 && !failed; ++c) {
+            exr_chunk_info_t chunk;
+            int64_t x0 = dw.min.x, y0;
+            exr_result_t rv;
+            if (storage == EXR_STORAGE_SCANLINE) {
+                y0 = dw.min.y + c * lines;
+                rv = exr_read_scanline_chunk_info(file, part, int(y0), &chunk);
+            } else {
+                x0 = dw.min.x + (c % across) * tile_w;
+                y0 = dw.min.y + (c / across) * tile_h;
+                rv = exr_read_tile_chunk_info(file, part, int(c % across), int(c / across), 0, 0,
+                                              &chunk);
+            }
+            if (rv == EXR_ERR_SUCCESS)
+                rv = decoder.channels ? exr_decoding_update(file, part, &chunk, &decoder)
+                                      : exr_decoding_initialize(file, part, &chunk, &decoder);
+            if (rv != EXR_ERR_SUCCESS) {
+                fail(damaged(filename, core_message));
+                break;
+            }
+            for (int i = 0; i < decoder.channel_count; ++i) {
+                exr_coding_channel_info_t& ch = decoder.channels[i];
+                ch.decode_to_ptr = nullptr;  // channels that are not asked for are skipped
+                for (const ChannelTarget& t : targets) {
+                    if (t.channel != ch.channel_name)
+                        continue;
+                    if (ch.x_samples != 1 || ch.y_samples != 1) {
+                        fail(format("{}: channel {} is subsampled, which defocus does not read",
+                                    filename, t.channel));
+                        break;
+                    }
+                    ch.user_data_type = EXR_PIXEL_FLOAT;
+                    ch.user_bytes_per_element = sizeof(float);
+                    ch.user_pixel_stride = int32_t(t.pixel_stride * sizeof(float));
+                    ch.user_line_stride = int32_t(t.row_stride * sizeof(float));
+                    ch.decode_to_ptr = reinterpret_cast<uint8_t*>(
+                        t.origin + size_t(y0 - dw.min.y) * t.row_stride
+                        + size_t(x0 - dw.min.x) * t.pixel_stride);
+                }
+            }
+            if (failed)
+                break;
+            if (exr_decoding_choose_default_routines(file, part, &decoder) != EXR_ERR_SUCCESS
+                || exr_decoding_run(file, part, &decoder) != EXR_ERR_SUCCESS) {
+                fail(damaged(filename, core_message));
+                break;
+            }
+        }
+        exr_decoding_destroy(file, &decoder);
+    }, OIIO::paropt(nthreads));
+    return !failed;
+}
+
+bool read_deep_part(const std::string& filename, int part, const DeepChannels& channels,
+                    DeepImage& image, std::string& error)
+{
+    try {
+        Imf::MultiPartInputFile file(filename.c_str());
+        const Imf::Header& header = file.header(part);
+        const Imath::Box2i dw = header.dataWindow();
+        const int64_t width = int64_t(dw.max.x) - dw.min.x + 1;
+        const int64_t height = int64_t(dw.max.y) - dw.min.y + 1;
+        const size_t npixels = size_t(width) * size_t(height);
+        if (width <= 0 || height <= 0
+            || npixels * (sizeof(unsigned) + 6 * sizeof(float*)) > memory_budget()) {
+            error = damaged(filename, format("deep data window of {}x{}", width, height));
+            return false;
+        }
+        const bool tiled = header.type() == Imf::DEEPTILE;
+        std::unique_ptr<Imf::DeepScanLineInputPart> lines;
+        std::unique_ptr<Imf::DeepTiledInputPart> tiles;
+        if (tiled)
+            tiles = std::make_unique<Imf::DeepTiledInputPart>(file, part);
+        else
+            lines = std::make_unique<Imf::DeepScanLineInputPart>(file, part);
+
+        // One frame buffer, set once (setting it again forgets the sample
+        // counts): pixel (x, y) at base + x * xstride + y * ystride. Each
+        // channel's samples go in one array, through a pointer per pixel
+        // to its first sample there, filled in once the counts are known.
+        const int nchannels = channels.depth_back.empty() ? 5 : 6;
+        const std::string* names[6] = { &channels.color[0], &channels.color[1],
+                                        &channels.color[2], &channels.color[3], &channels.depth,
+                                        &channels.depth_back };
+        const size_t origin = size_t(dw.min.y) * size_t(width) + size_t(dw.min.x);
+        std::vector<unsigned> counts(npixels, 0);
+        std::vector<std::vector<float*>> firsts(nchannels, std::vector<float*>(npixels, nullptr));
+        Imf::DeepFrameBuffer frame;
+        frame.insertSampleCountSlice(Imf::Slice(Imf::UINT, frame_base(counts.data(), origin),
+                                                sizeof(unsigned), sizeof(unsigned) * size_t(width)));
+        for (int c = 0; c < nchannels; ++c)
+            frame.insert(*names[c],
+                         Imf::DeepSlice(Imf::FLOAT, frame_base(firsts[c].data(), origin),
+                                        sizeof(float*), sizeof(float*) * size_t(width),
+                                        sizeof(float)));
+        if (tiled) {
+            tiles->setFrameBuffer(frame);
+            tiles->readPixelSampleCounts(0, tiles->numXTiles(0) - 1, 0, tiles->numYTiles(0) - 1);
+        } else {
+            lines->setFrameBuffer(frame);
+            lines->readPixelSampleCounts(dw.min.y, dw.max.y);
+        }
+        size_t total = 0;
+        for (unsigned n : counts)
+            total += n;
+        if (total * nchannels * sizeof(float) > memory_budget()) {
+            error = damaged(filename, format("{} deep samples is more than memory holds", total));
+            return false;
+        }
+        std::vector<std::vector<float>> values(nchannels, std::vector<float>(total));
+        for (int c = 0; c < nchannels; ++c) {
+            size_t at = 0;
+            for (size_t p = 0; p < npixels; ++p) {
+                firsts[c][p] = values[c].data() + at;
+                at += counts[p];
+            }
+        }
+        if (tiled)
+            tiles->readTiles(0, tiles->numXTiles(0) - 1, 0, tiles->numYTiles(0) - 1);
+        else
+            lines->readPixels(dw.min.y, dw.max.y);
+
+        image.roi = OIIO::ROI(dw.min.x, dw.max.x + 1, dw.min.y, dw.max.y + 1);
+        image.offsets.assign(npixels + 1, 0);
+        for (size_t p = 0; p < npixels; ++p)
+            image.offsets[p + 1] = image.offsets[p] + counts[p];
+        image.samples.resize(total);
+        for (size_t s = 0; s < total; ++s) {
+            DeepSample& d = image.samples[s];
+            d.r = values[0][s];
+            d.g = values[1][s];
+            d.b = values[2][s];
+            d.a = values[3][s];
+            d.z = values[4][s];
+            d.zback = nchannels == 6 ? values[5][s] : d.z;
+        }
+        return true;
+    } catch (const std::exception& e) {
+        error = damaged(filename, OIIO::Strutil::replace(e.what(), "\n", " ", true));
+    } catch (...) {
+        error = damaged(filename, "");
+    }
+    return false;
+}
+
+}  // namespace defocus

@@ -1,0 +1,201 @@
+#include <defocus/io/image_output.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <map>
+#include <vector>
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/imageio.h>
+#include <OpenImageIO/strutil.h>
+
+namespace defocus {
+
+using namespace OIIO;
+
+namespace {
+
+std::string temporary_name(const std::string& filename)
+{
+    const std::string dir = Filesystem::parent_path(filename);
+    const std::string name = Strutil::fmt::format(
+        ".{}.{}.tmp{}", Filesystem::filename(filename), getpid(),
+        Filesystem::extension(filename));
+    return dir.empty() ? name : dir + "/" + name;
+}
+
+/// Renames the complete temporary file over `filename`, or removes it.
+bool commit(const std::string& tmp, const std::string& filename, std::string& error)
+{
+    std::string rename_error;
+    if (Filesystem::rename(tmp, filename, rename_error))
+        return true;
+    Filesystem::remove(tmp);
+    error = Strutil::fmt::format("{}: {}", filename, rename_error);
+    return false;
+}
+
+/// The compression names each format that takes one knows (an optional
+/// ":quality" may follow, e.g. dwaa:45).
+const std::map<std::string, std::vector<std::string>>& compressions()
+{
+    static const std::map<std::string, std::vector<std::string>> names = {
+        { "openexr", { "none", "rle", "zips", "zip", "piz", "pxr24", "b44", "b44a", "dwaa",
+                       "dwab" } },
+        { "tiff", { "none", "lzw", "zip", "packbits", "jpeg" } },
+        { "png", { "zip" } },
+        { "jpeg", { "jpeg" } },
+    };
+    return names;
+}
+
+}  // namespace
+
+bool check_output(const std::string& filename, const std::string& compression,
+                  std::string& error)
+{
+    auto fail = [&](const std::string& why) {
+        error = Strutil::fmt::format("{}: {}", filename, why);
+        return false;
+    };
+    const std::string parent = Filesystem::parent_path(filename);
+    const std::string folder = parent.empty() ? "." : parent;
+    if (!Filesystem::is_directory(folder))
+        return fail(Strutil::fmt::format("the folder {} does not exist", folder));
+    if (::access(folder.c_str(), W_OK | X_OK) != 0)
+        return fail(Strutil::fmt::format("the folder {} is not writable", folder));
+    if (Filesystem::is_directory(filename))
+        return fail("is a folder");
+    auto out = ImageOutput::create(filename);
+    if (!out) {
+        OIIO::geterror();  // cleared: our message says it better
+        const std::string ext = Filesystem::extension(filename);
+        return fail(ext.empty() ? "no extension to tell the image format (e.g. .exr)"
+                                : Strutil::fmt::format("no image format writes {} files", ext));
+    }
+    if (compression.empty())
+        return true;
+    const std::string format = out->format_name();
+    const std::string name = Strutil::lower(compression.substr(0, compression.find(':')));
+    const auto known = compressions().find(format);
+    if (known == compressions().end())
+        return fail(Strutil::fmt::format("{} files take no compression ('{}' given)", format,
+                                         compression));
+    if (std::find(known->second.begin(), known->second.end(), name) == known->second.end())
+        return fail(Strutil::fmt::format("unknown {} compression '{}' (known: {})", format,
+                                         compression, Strutil::join(known->second, ", ")));
+    return true;
+}
+
+bool write_atomic(const std::string& filename,
+                  const std::function<bool(ImageOutput&, const std::string&)>& write,
+                  std::string& error)
+{
+    const std::string tmp = temporary_name(filename);
+    // Errors name the user's file, never the temporary one.
+    auto fail = [&](const std::string& why) {
+        error = Strutil::fmt::format(
+            "{}: {}", filename,
+            Strutil::replace(Strutil::replace(why, tmp, filename, true), "\n", " ", true));
+        return false;
+    };
+    auto out = ImageOutput::create(filename);
+    if (!out) {
+        const std::string why = OIIO::geterror();  // geterror() clears it: read once
+        return fail(why.empty() ? "no format writes this file type" : why);
+    }
+    if (!write(*out, tmp) || !out->close()) {
+        const std::string why = out->geterror();
+        out.reset();
+        Filesystem::remove(tmp);
+        return fail(why.empty() ? "cannot write" : why);
+    }
+    out.reset();
+    return commit(tmp, filename, error);
+}
+
+bool write_text_atomic(const std::string& filename, const std::string& text,
+                       std::string& error)
+{
+    const std::string tmp = temporary_name(filename);
+    if (!Filesystem::write_text_file(tmp, text)) {
+        Filesystem::remove(tmp);
+        error = filename + ": cannot write";
+        return false;
+    }
+    return commit(tmp, filename, error);
+}
+
+bool write_image_atomic(const ImageBuf& image, const std::string& filename,
+                        TypeDesc type, const std::string& compression,
+                        std::string& error)
+{
+    ImageSpec spec = image.spec();
+    if (type != TypeUnknown) {
+        spec.set_format(type);
+        spec.channelformats.clear();
+    }
+    if (!compression.empty())
+        spec.attribute("compression", compression);
+    return write_atomic(filename, [&](ImageOutput& out, const std::string& tmp) {
+        if (out.supports("displaywindow"))
+            return out.open(tmp, spec) && image.write(&out);
+        // Formats without a display window (PNG, JPEG, ...) get the picture
+        // a viewer shows: the display window.
+        ImageBuf framed;
+        ImageBufAlgo::crop(framed, image,
+                           ROI(spec.full_x, spec.full_x + spec.full_width, spec.full_y,
+                               spec.full_y + spec.full_height, 0, 1, 0, spec.nchannels));
+        ImageSpec framed_spec = spec;
+        framed_spec.set_roi(ROI(0, spec.full_width, 0, spec.full_height));
+        framed_spec.full_x = framed_spec.full_y = 0;
+        framed.specmod().x = framed.specmod().y = 0;
+        framed.specmod().full_x = framed.specmod().full_y = 0;
+        return out.open(tmp, framed_spec) && framed.write(&out);
+    }, error);
+}
+
+bool write_layers_atomic(const std::vector<Layer>& layers, const ImageSpec& scene_spec,
+                         const std::string& filename, std::string& error)
+{
+    if (layers.empty()) {
+        error = filename + ": the scene has no layers to write";
+        return false;
+    }
+    std::vector<ImageSpec> specs;
+    std::vector<ImageBuf> parts;
+    for (const Layer& layer : layers) {
+        ImageBuf part;
+        ImageBufAlgo::channel_append(part, layer.color, layer.depth);
+        ImageSpec spec = scene_spec;
+        spec.set_roi(part.roi());
+        spec.deep = false;
+        spec.nchannels = 5;
+        spec.set_format(TypeFloat);
+        spec.channelformats.clear();
+        spec.channelnames = { "R", "G", "B", "A", "Z" };
+        spec.alpha_channel = 3;
+        spec.z_channel = 4;
+        erase_part_attributes(spec);
+        spec.attribute("name", layer.name);
+        specs.push_back(spec);
+        parts.push_back(std::move(part));
+    }
+    return write_atomic(filename, [&](ImageOutput& out, const std::string& tmp) {
+        if (!out.supports("multiimage")) {
+            out.errorfmt("cannot hold several layers: write an .exr");
+            return false;
+        }
+        if (!out.open(tmp, int(specs.size()), specs.data()))
+            return false;
+        for (size_t i = 0; i < parts.size(); ++i)
+            if ((i > 0 && !out.open(tmp, specs[i], ImageOutput::AppendSubimage))
+                || !out.write_image(TypeFloat, parts[i].localpixels()))
+                return false;
+        return true;
+    }, error);
+}
+
+}  // namespace defocus

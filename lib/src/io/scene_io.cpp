@@ -1,0 +1,741 @@
+#include <defocus/io/scene_io.h>
+
+#include <cstdio>
+#include <memory>
+#include <set>
+
+#include <OpenImageIO/deepdata.h>
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/imageio.h>
+#include <OpenImageIO/parallel.h>
+#include <OpenImageIO/strutil.h>
+
+#include "io/exr_input.h"
+#include "util/parallel_rows.h"
+
+namespace defocus {
+
+using namespace OIIO;
+using Strutil::fmt::format;
+
+namespace {
+
+bool is_openexr(const std::string& filename)
+{
+    unsigned char magic[4] = { 0, 0, 0, 0 };
+    if (FILE* f = Filesystem::fopen(filename, "rb")) {
+        const size_t n = fread(magic, 1, 4, f);
+        fclose(f);
+        return n == 4 && magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31
+               && magic[3] == 0x01;
+    }
+    return false;
+}
+
+std::string channel_name(const std::string& prefix, const std::string& channel)
+{
+    return prefix.empty() ? channel : prefix + "." + channel;
+}
+
+/// Where one part keeps a layer's colour and depth; -1 where it has none.
+struct Channels {
+    std::string prefix;                 ///< of the colour channels
+    int color[4] = { -1, -1, -1, -1 };  ///< R,G,B,A; A is -1 in colour without alpha
+    int depth    = -1;
+
+    bool has_color() const { return color[0] >= 0; }
+    bool has_alpha() const { return color[3] >= 0; }
+    bool has_depth() const { return depth >= 0; }
+};
+
+/// The first channel of `names` the part has, or -1.
+int first_channel(const ImageSpec& spec, const std::vector<std::string>& names)
+{
+    for (const std::string& n : names) {
+        const int c = spec.channelindex(n);
+        if (c >= 0)
+            return c;
+    }
+    return -1;
+}
+
+/// Resolves the colour and depth channels of one part. Colour is R,G,B,A
+/// (or, when no set has A, R,G,B) under the chosen prefix (--layer, also
+/// with Blender's ".Combined"), or plain, or the part's only prefixed set.
+/// Sets without A are passed over when one has it: they are a render's
+/// colour passes (diffuse, albedo), not its beauty. Depth is Z next to the colour,
+/// Blender's <viewlayer>.Depth.Z, or a depth pass named Z or depth.Z.
+/// `error` is set when the choice is ambiguous.
+Channels find_channels(const ImageSpec& spec, const std::string& layer,
+                       std::string& error)
+{
+    std::vector<std::string> prefixes;
+    if (!layer.empty()) {
+        prefixes = { layer, layer + ".Combined" };
+    } else {
+        prefixes = { "" };
+        std::set<std::string> seen;
+        for (const std::string& n : spec.channelnames)
+            if (Strutil::ends_with(n, ".R") && seen.insert(n).second)
+                prefixes.push_back(n.substr(0, n.size() - 2));
+    }
+    Channels ch;
+    std::vector<std::string> rgba_sets, rgb_sets;
+    for (const std::string& p : prefixes) {
+        const int c[4] = { spec.channelindex(channel_name(p, "R")),
+                           spec.channelindex(channel_name(p, "G")),
+                           spec.channelindex(channel_name(p, "B")),
+                           spec.channelindex(channel_name(p, "A")) };
+        if (c[0] < 0 || c[1] < 0 || c[2] < 0)
+            continue;
+        auto& sets = c[3] >= 0 ? rgba_sets : rgb_sets;
+        sets.push_back(p);
+        if (rgba_sets.size() + rgb_sets.size() == 1 || (c[3] >= 0 && rgba_sets.size() == 1)) {
+            ch.prefix = p;
+            std::copy(c, c + 4, ch.color);
+        }
+    }
+    const auto& complete = rgba_sets.empty() ? rgb_sets : rgba_sets;
+    if (complete.size() > 1 && !complete.front().empty())
+        error = format("it holds several layers ({}): choose one with --layer NAME",
+                       Strutil::join(complete, ", "));
+
+    std::string view_layer = ch.prefix;
+    if (Strutil::ends_with(view_layer, ".Combined"))
+        view_layer.resize(view_layer.size() - 9);
+    std::vector<std::string> depth_names;
+    if (!layer.empty())
+        depth_names = { channel_name(layer, "Z"), channel_name(layer, "Depth.Z") };
+    if (!ch.prefix.empty())
+        depth_names.push_back(channel_name(ch.prefix, "Z"));
+    if (!view_layer.empty())
+        depth_names.push_back(channel_name(view_layer, "Depth.Z"));
+    for (const char* n : { "Z", "depth.Z", "Depth.Z" })
+        depth_names.emplace_back(n);
+    ch.depth = first_channel(spec, depth_names);
+    return ch;
+}
+
+/// The first of R,G,B,Z a part lacks, for messages.
+std::string missing_channel(const ImageSpec& spec, const std::string& layer)
+{
+    for (const char* c : { "R", "G", "B" })
+        if (spec.channelindex(channel_name(layer, c)) < 0
+            && spec.channelindex(channel_name(layer, std::string("Combined.") + c)) < 0)
+            return channel_name(layer, c);
+    return channel_name(layer, "Z");
+}
+
+struct Part {
+    int subimage;
+    ImageSpec spec;
+    std::string label;
+    Channels channels;
+};
+
+/// Reads every channel of a flat part as float.
+bool read_pixels(ImageInput& in, const Part& part, ImageBuf& pixels,
+                 const std::string& filename, std::string& error)
+{
+    ImageSpec all(part.spec.roi(), TypeFloat);
+    all.nchannels    = part.spec.nchannels;
+    all.channelnames = part.spec.channelnames;
+    all.full_x      = part.spec.full_x;
+    all.full_y      = part.spec.full_y;
+    all.full_width  = part.spec.full_width;
+    all.full_height = part.spec.full_height;
+    pixels.reset(all);
+    if (!in.read_image(part.subimage, 0, 0, part.spec.nchannels, TypeFloat,
+                       pixels.localpixels())) {
+        error = format("{}: {}: {}", filename, part.label,
+                       Strutil::replace(in.geterror(), "\n", " ", true));
+        return false;
+    }
+    return true;
+}
+
+/// A layer over `window` of a part whose header is `from` (display
+/// window), its pixels not yet set; false with `error` when it would not
+/// fit in memory.
+bool allocate_layer(const std::string& name, const ROI& window, const ImageSpec& from,
+                    Layer& layer, const std::string& filename, std::string& error)
+{
+    const size_t bytes = size_t(window.npixels()) * 5 * sizeof(float);
+    if (window.npixels() <= 0 || bytes > memory_budget()) {
+        error = format("{}: a data window of {}x{} does not fit in memory", filename,
+                       window.width(), window.height());
+        return false;
+    }
+    auto layer_spec = [&](int nchannels) {
+        ImageSpec spec(window, TypeFloat);
+        spec.nchannels   = nchannels;
+        spec.full_x      = from.full_x;
+        spec.full_y      = from.full_y;
+        spec.full_width  = from.full_width;
+        spec.full_height = from.full_height;
+        return spec;
+    };
+    ImageSpec color_spec = layer_spec(4), depth_spec = layer_spec(1);
+    color_spec.channelnames  = { "R", "G", "B", "A" };
+    color_spec.alpha_channel = 3;
+    depth_spec.channelnames  = { "Z" };
+    depth_spec.z_channel     = 0;
+    // Every pixel is written next: no need to clear them first.
+    layer.name = name;
+    layer.color.reset(color_spec, InitializePixels::No);
+    layer.depth.reset(depth_spec, InitializePixels::No);
+    return true;
+}
+
+/// Sets a layer's colour from channels `color` of `part` and, when
+/// `depth` is not -1, its depth from that channel of the same part. Colour
+/// without alpha (color[3] = -1) is left for set_opaque().
+void copy_layer(Layer& layer, const ImageBuf& part, const int color[4], int depth)
+{
+    const ROI window = part.roi();
+    const int n      = part.nchannels();
+    const int ncolor = color[3] >= 0 ? 4 : 3;
+    parallel_for(window.ybegin, window.yend, [&](int y) {
+        float* rgba = static_cast<float*>(layer.color.pixeladdr(window.xbegin, y));
+        float* z    = static_cast<float*>(layer.depth.pixeladdr(window.xbegin, y));
+        const float* src = static_cast<const float*>(part.pixeladdr(window.xbegin, y));
+        for (int x = window.xbegin; x < window.xend; ++x, rgba += 4, ++z, src += n) {
+            for (int c = 0; c < ncolor; ++c)
+                rgba[c] = src[color[c]];
+            if (depth >= 0)
+                *z = src[depth];
+        }
+    }, by_rows(0));
+}
+
+/// Alpha 1 everywhere: colour read without alpha is opaque.
+void set_opaque(Layer& layer)
+{
+    const ROI window = layer.color.roi();
+    parallel_for(window.ybegin, window.yend, [&](int y) {
+        float* rgba = static_cast<float*>(layer.color.pixeladdr(window.xbegin, y));
+        for (int x = 0; x < window.width(); ++x)
+            rgba[4 * x + 3] = 1.0f;
+    }, by_rows(0));
+}
+
+/// Sets a layer's depth from channel `channel` of `depth`, an image over
+/// another window. Depth it does not cover is 0, which sanitize() treats
+/// as missing.
+void lay_depth(Layer& layer, const ImageBuf& depth, int channel)
+{
+    const ROI window       = layer.depth.roi();
+    const ROI depth_window = depth.roi();
+    parallel_for(window.ybegin, window.yend, [&](int y) {
+        float* z = static_cast<float*>(layer.depth.pixeladdr(window.xbegin, y));
+        for (int x = window.xbegin; x < window.xend; ++x, ++z)
+            *z = depth_window.contains(x, y)
+                     ? static_cast<const float*>(depth.pixeladdr(x, y))[channel]
+                     : 0.0f;
+    }, by_rows(0));
+}
+
+/// A one-channel float image over `window` of a part whose header is
+/// `from` (display window), its pixels not yet set.
+ImageBuf depth_image(const ROI& window, const ImageSpec& from)
+{
+    ImageSpec spec(window, TypeFloat);
+    spec.nchannels    = 1;
+    spec.channelnames = { "Z" };
+    spec.full_x       = from.full_x;
+    spec.full_y       = from.full_y;
+    spec.full_width   = from.full_width;
+    spec.full_height  = from.full_height;
+    return ImageBuf(spec, InitializePixels::No);
+}
+
+/// A layer decoded straight from an EXR: colour from one part and, unless
+/// `depth_part` is null, depth from the same part or another one, over the
+/// colour part's data window.
+bool decode_layer(const ExrInput& exr, const std::string& filename, const std::string& name,
+                  const Part& color_part, const Part* depth_part, Layer& layer,
+                  std::string& error)
+{
+    const ROI window = color_part.spec.roi();
+    if (!allocate_layer(name, window, color_part.spec, layer, filename, error))
+        return false;
+    const ImageSpec& cs = color_part.spec;
+    const size_t width = size_t(window.width());
+    float* rgba = static_cast<float*>(layer.color.localpixels());
+    float* z = static_cast<float*>(layer.depth.localpixels());
+    std::vector<ChannelTarget> targets;
+    for (int c = 0; c < 4; ++c)
+        if (color_part.channels.color[c] >= 0)
+            targets.push_back({ cs.channelnames[color_part.channels.color[c]], rgba + c, 4, 4 * width });
+    if (depth_part) {
+        const std::string depth_name = depth_part->spec.channelnames[depth_part->channels.depth];
+        const ROI depth_window = depth_part->spec.roi();
+        if (depth_part->subimage == color_part.subimage) {
+            targets.push_back({ depth_name, z, 1, width });
+        } else if (depth_window == window) {
+            if (!exr.read(depth_part->subimage, { { depth_name, z, 1, width } }, error, 0))
+                return false;
+        } else {
+            ImageBuf depth = depth_image(depth_window, depth_part->spec);
+            if (!exr.read(depth_part->subimage,
+                          { { depth_name, static_cast<float*>(depth.localpixels()), 1,
+                              size_t(depth_window.width()) } },
+                          error, 0))
+                return false;
+            lay_depth(layer, depth, 0);
+        }
+    }
+    return exr.read(color_part.subimage, targets, error, 0);
+}
+
+/// A flat layer: colour from `color_part` (opaque without alpha) and, unless
+/// `depth_part` is null, depth from the same part or another one.
+bool read_layer(const ExrInput& exr, ImageInput& in, const std::string& filename,
+                const std::string& name, const Part& color_part, const Part* depth_part,
+                Layer& layer, std::string& error)
+{
+    if (is_openexr(filename)) {
+        if (!decode_layer(exr, filename, name, color_part, depth_part, layer, error))
+            return false;
+    } else {
+        ImageBuf color, depth;
+        const bool same_part = depth_part && depth_part->subimage == color_part.subimage;
+        if (!read_pixels(in, color_part, color, filename, error)
+            || !allocate_layer(name, color.roi(), color_part.spec, layer, filename, error))
+            return false;
+        copy_layer(layer, color, color_part.channels.color,
+                   same_part ? color_part.channels.depth : -1);
+        if (depth_part && !same_part) {
+            if (!read_pixels(in, *depth_part, depth, filename, error))
+                return false;
+            lay_depth(layer, depth, depth_part->channels.depth);
+        }
+    }
+    if (!color_part.channels.has_alpha())
+        set_opaque(layer);
+    return true;
+}
+
+/// What one file holds for the scene, chosen from its headers alone.
+struct FileLayout {
+    std::vector<Part> parts;      ///< of the chosen view, and of no view
+    std::vector<size_t> complete; ///< parts with colour and depth: layers or one flat render
+    int joined_color = -1;        ///< else a beauty part ...
+    int joined_depth = -1;        ///< ... and a depth part: one flat render
+    std::string depth_file;       ///< or the beauty part's depth in another file
+    ROI data_window;              ///< the union of what is read
+
+    /// The first part's header: display window, metadata.
+    const ImageSpec& first() const { return parts.front().spec; }
+};
+
+/// Opens a file as OIIO reads it. An EXR's headers are first checked by
+/// OpenEXR's core library, kept in `exr` (when given) to decode its pixels:
+/// OpenImageIO 2.4 crashes or hangs on some corrupt EXRs that it rejects.
+std::unique_ptr<ImageInput> open_file(const std::string& filename, ExrInput* exr,
+                                      std::string& error)
+{
+    if (!Filesystem::exists(filename)) {
+        error = filename + ": no such file";
+        return nullptr;
+    }
+    if (Filesystem::is_directory(filename)) {
+        error = filename + ": is a directory, not an image";
+        return nullptr;
+    }
+    ExrInput headers_only;
+    if (is_openexr(filename) && !(exr ? exr : &headers_only)->open(filename, error))
+        return nullptr;
+    auto in = ImageInput::open(filename);
+    if (!in) {
+        std::string why = OIIO::geterror();
+        if (why.empty())
+            why = "not an image file OpenImageIO can read";
+        error = format("{}: {}", filename, Strutil::replace(why, "\n", " ", true));
+    }
+    return in;
+}
+
+/// Chooses the parts of one file that make the scene, from their headers.
+bool choose_parts(ImageInput& in, const std::string& filename, const ReadOptions& options,
+                  FileLayout& layout, std::string& error)
+{
+    // The parts of the chosen view, and those that belong to no view.
+    std::vector<Part>& parts = layout.parts;
+    std::vector<std::string> views;
+    std::string view = options.view;
+    for (int s = 0; in.seek_subimage(s, 0); ++s) {
+        ImageSpec spec = in.spec(s, 0);
+        const std::string part_view = spec.get_string_attribute("view");
+        if (!part_view.empty() && std::find(views.begin(), views.end(), part_view) == views.end())
+            views.push_back(part_view);
+        if (view.empty() && s == 0)
+            view = part_view;
+        if (!part_view.empty() && part_view != view)
+            continue;
+        const std::string name = spec.get_string_attribute("name");
+        parts.push_back({ s, spec,
+                          name.empty() ? format("part {}", s) : format("part {} '{}'", s, name),
+                          {} });
+    }
+    if (!options.view.empty() && std::find(views.begin(), views.end(), options.view) == views.end()) {
+        error = views.empty()
+                    ? format("{}: has no views, so --view {} does not apply", filename, options.view)
+                    : format("{}: no view '{}' (views: {})", filename, options.view,
+                             Strutil::join(views, ", "));
+        return false;
+    }
+    if (parts.empty()) {
+        error = filename + ": has no image parts";
+        return false;
+    }
+
+    // --depth names a channel of the file's parts, or else a file.
+    bool depth_is_channel = false;
+    for (const Part& part : parts)
+        depth_is_channel |= !options.depth.empty() && part.spec.channelindex(options.depth) >= 0;
+    if (!options.depth.empty() && !depth_is_channel) {
+        if (!Filesystem::is_regular(options.depth)) {
+            error = format("{}: --depth {}: no such channel (channels: {}) and no such file",
+                           filename, options.depth,
+                           Strutil::join(parts.front().spec.channelnames, ","));
+            return false;
+        }
+        layout.depth_file = options.depth;
+    }
+
+    std::vector<size_t> color_only, depth_only;
+    for (size_t i = 0; i < parts.size(); ++i) {
+        Part& part = parts[i];
+        std::string ambiguity;
+        part.channels = find_channels(part.spec, options.layer, ambiguity);
+        if (!ambiguity.empty()) {
+            error = format("{}: {}: {}", filename, part.label, ambiguity);
+            return false;
+        }
+        if (part.spec.depth > 1) {
+            error = format("{}: {} is a volume image", filename, part.label);
+            return false;
+        }
+        Channels& c = part.channels;
+        if (!options.depth.empty())
+            c.depth = depth_is_channel ? part.spec.channelindex(options.depth) : -1;
+        if (part.spec.deep && c.has_color() && !c.has_alpha()) {
+            error = format("{}: {} is deep and has no A channel: deep samples need their "
+                           "coverage", filename, part.label);
+            return false;
+        }
+        if (c.has_color() && c.has_depth())
+            layout.complete.push_back(i);
+        else if (c.has_color())
+            color_only.push_back(i);
+        else if (c.has_depth() && !part.spec.deep)
+            depth_only.push_back(i);
+    }
+    for (size_t i : layout.complete)
+        layout.data_window = roi_union(layout.data_window, parts[i].spec.roi());
+
+    if (!layout.depth_file.empty()) {
+        // A beauty part, its depth in another file.
+        if (color_only.size() != 1 || parts[color_only[0]].spec.deep) {
+            error = format("{}: --depth FILE gives one flat render its depth, and this file "
+                           "{}", filename,
+                           color_only.empty()                ? "has no R,G,B channels"
+                           : parts[color_only[0]].spec.deep ? "is deep"
+                                                             : "has several colour parts");
+            return false;
+        }
+        layout.joined_color = int(color_only[0]);
+        layout.data_window  = parts[color_only[0]].spec.roi();
+    } else if (layout.complete.empty()) {
+        // A beauty part and a depth part of the same view: one flat render.
+        if (color_only.size() == 1 && depth_only.size() == 1 && !parts[color_only[0]].spec.deep) {
+            layout.joined_color = int(color_only[0]);
+            layout.joined_depth = int(depth_only[0]);
+            layout.data_window  = parts[color_only[0]].spec.roi();
+        } else if (color_only.size() > 1 && depth_only.size() == 1) {
+            error = format("{}: several colour parts share one depth part: choose a view "
+                           "with --view", filename);
+            return false;
+        } else {
+            const Part& first = color_only.empty() ? parts.front() : parts[color_only.front()];
+            const std::string missing =
+                options.depth.empty() ? missing_channel(first.spec, options.layer) : options.depth;
+            const bool no_depth = first.channels.has_color();
+            error = format("{}: {} has no {} channel (channels: {}){}", filename, first.label,
+                           missing, Strutil::join(first.spec.channelnames, ","),
+                           no_depth ? ": give its depth with --depth FILE or --depth CHANNEL"
+                                    : "");
+            return false;
+        }
+    }
+    return true;
+}
+
+/// Checks that a file shares the display window of the scene's first.
+bool same_display_window(const ImageSpec& first, const ImageSpec& scene,
+                         const std::string& filename, std::string& error)
+{
+    if (first.full_x == scene.full_x && first.full_y == scene.full_y
+        && first.full_width == scene.full_width && first.full_height == scene.full_height)
+        return true;
+    error = format("{}: display window {}x{}{:+d}{:+d} differs from the first input's {}x{}{:+d}{:+d}",
+                   filename, first.full_width, first.full_height, first.full_x, first.full_y,
+                   scene.full_width, scene.full_height, scene.full_x, scene.full_y);
+    return false;
+}
+
+/// Lays a flat render's depth from its own file (--depth FILE) into `layer`:
+/// the Z channel of the file's first part, or its only channel. The file
+/// must share the render's display window (`render`).
+bool read_depth_file(const std::string& filename, const ImageSpec& render, Layer& layer,
+                     std::string& error)
+{
+    ExrInput exr;
+    auto in = open_file(filename, &exr, error);
+    if (!in)
+        return false;
+    const Part part { 0, in->spec(), "part 0", {} };
+    const ImageSpec& spec = part.spec;
+    int channel = first_channel(spec, { "Z", "depth.Z", "Depth.Z" });
+    if (channel < 0 && spec.nchannels == 1)
+        channel = 0;
+    if (spec.deep || channel < 0) {
+        error = format("{}: {}: --depth takes a flat image with a Z channel or one channel",
+                       filename,
+                       spec.deep ? "is a deep image"
+                                 : format("has no Z channel (channels: {})",
+                                          Strutil::join(spec.channelnames, ",")));
+        return false;
+    }
+    if (!same_display_window(spec, render, filename, error))
+        return false;
+    ImageBuf depth;
+    if (is_openexr(filename)) {
+        depth = depth_image(spec.roi(), spec);
+        if (!exr.read(0, { { spec.channelnames[channel], static_cast<float*>(depth.localpixels()),
+                             1, size_t(spec.width) } },
+                      error, 0))
+            return false;
+        channel = 0;
+    } else if (!read_pixels(*in, part, depth, filename, error)) {
+        return false;
+    }
+    lay_depth(layer, depth, channel);
+    return true;
+}
+
+/// Reads one file into `scene`: its layers, flat renders and deep images.
+bool read_file(const std::string& filename, const ReadOptions& options,
+               Scene& scene, std::string& error)
+{
+    ExrInput exr;
+    auto in = open_file(filename, &exr, error);
+    FileLayout layout;
+    if (!in || !choose_parts(*in, filename, options, layout, error))
+        return false;
+    auto layer_name = [](const Part& part, const char* fallback) -> std::string {
+        return part.spec.get_string_attribute("name", format("{}{}", fallback, part.subimage));
+    };
+    // ImageBuf's move may throw, so a vector that grows copies its layers.
+    (layout.complete.size() > 1 ? scene.layers : scene.flat).reserve(layout.complete.size() + 1);
+    for (size_t i : layout.complete) {
+        const Part& part = layout.parts[i];
+        const Channels& c = part.channels;
+        if (part.spec.deep) {
+            DeepChannels names;
+            for (int k = 0; k < 4; ++k)
+                names.color[k] = part.spec.channelnames[c.color[k]];
+            names.depth = part.spec.channelnames[c.depth];
+            const int zback = first_channel(part.spec, { channel_name(c.prefix, "ZBack"), "ZBack" });
+            if (zback >= 0)
+                names.depth_back = part.spec.channelnames[zback];
+            DeepImage image;
+            image.name = layer_name(part, "deep");
+            if (!read_deep_part(filename, part.subimage, names, image, error))
+                return false;
+            scene.deep.push_back(std::move(image));
+            continue;
+        }
+        Layer layer;
+        if (!read_layer(exr, *in, filename, layer_name(part, "layer"), part, &part, layer, error))
+            return false;
+        (layout.complete.size() > 1 ? scene.layers : scene.flat).push_back(std::move(layer));
+    }
+    if (layout.joined_color >= 0) {
+        const Part& color_part = layout.parts[layout.joined_color];
+        const Part* depth_part =
+            layout.joined_depth >= 0 ? &layout.parts[layout.joined_depth] : nullptr;
+        const std::string name = color_part.spec.get_string_attribute("name", "beauty");
+        Layer layer;
+        if (!read_layer(exr, *in, filename, name, color_part, depth_part, layer, error))
+            return false;
+        if (!layout.depth_file.empty()) {
+            if (!read_depth_file(layout.depth_file, color_part.spec, layer, error))
+                return false;
+            scene.notes.push_back("depth from " + layout.depth_file);
+        }
+        scene.flat.push_back(std::move(layer));
+    }
+    for (const Part& part : layout.parts)
+        if (part.channels.has_color() && !part.channels.has_alpha()) {
+            scene.notes.push_back(filename + ": no alpha channel, taken as opaque");
+            break;
+        }
+    if (scene.spec.nchannels == 0 || scene.spec.full_width == 0) {
+        scene.spec = layout.first();
+        return true;
+    }
+    return same_display_window(layout.first(), scene.spec, filename, error);
+}
+
+/// Deep images of one scene merged into one: every pixel's samples from all
+/// of them, over the union of their data windows. Slicing then sorts each
+/// pixel's samples by depth, so objects from different files interleave
+/// correctly pixel by pixel.
+DeepImage merge_deep(std::vector<DeepImage>& images)
+{
+    DeepImage merged;
+    merged.name = images.front().name;
+    for (const DeepImage& image : images)
+        merged.roi = roi_union(merged.roi, image.roi);
+    const int64_t n = merged.roi.npixels();
+    merged.offsets.assign(n + 1, 0);
+    auto for_each_source_pixel = [&](auto&& fn) {
+        for (const DeepImage& image : images)
+            for (int y = image.roi.ybegin; y < image.roi.yend; ++y)
+                for (int x = image.roi.xbegin; x < image.roi.xend; ++x)
+                    fn(image, image.pixel_index(x, y), merged.pixel_index(x, y));
+    };
+    for_each_source_pixel([&](const DeepImage& image, int64_t p, int64_t q) {
+        merged.offsets[q + 1] += image.offsets[p + 1] - image.offsets[p];
+    });
+    for (int64_t q = 0; q < n; ++q)
+        merged.offsets[q + 1] += merged.offsets[q];
+    merged.samples.resize(merged.offsets.back());
+    std::vector<uint64_t> fill(merged.offsets.begin(), merged.offsets.end() - 1);
+    for_each_source_pixel([&](const DeepImage& image, int64_t p, int64_t q) {
+        for (uint64_t i = image.offsets[p]; i < image.offsets[p + 1]; ++i)
+            merged.samples[fill[q]++] = image.samples[i];
+    });
+    return merged;
+}
+
+}  // namespace
+
+void erase_part_attributes(ImageSpec& spec)
+{
+    for (const char* part_only : { "name", "view", "oiio:subimages", "oiio:subimagename",
+                                   "openexr:chunkCount" })
+        spec.erase_attribute(part_only);
+}
+
+namespace {
+
+/// Depth in metres: every Z, and a deep sample's Z back, times `scale`.
+void scale_depth(Scene& scene, float scale)
+{
+    for (auto* list : { &scene.layers, &scene.flat })
+        for (Layer& layer : *list) {
+            const ROI roi = layer.depth.roi();
+            parallel_for(roi.ybegin, roi.yend, [&](int y) {
+                float* z = static_cast<float*>(layer.depth.pixeladdr(roi.xbegin, y));
+                for (int x = 0; x < roi.width(); ++x)
+                    z[x] *= scale;
+            }, by_rows(0));
+        }
+    for (DeepImage& image : scene.deep)
+        for (DeepSample& s : image.samples) {
+            s.z *= scale;
+            s.zback *= scale;
+        }
+}
+
+/// Checks that there are inputs, and that a depth file is given to one.
+bool check_inputs(const std::vector<std::string>& filenames, const ReadOptions& options,
+                  std::string& error)
+{
+    if (filenames.empty()) {
+        error = "no input file";
+        return false;
+    }
+    if (filenames.size() > 1 && Filesystem::is_regular(options.depth)) {
+        error = format("--depth {}: a depth file gives one flat render its depth, not {} "
+                       "inputs",
+                       options.depth, filenames.size());
+        return false;
+    }
+    return true;
+}
+
+}  // namespace
+
+bool read_scene_spec(const std::vector<std::string>& filenames, const ReadOptions& options,
+                     ImageSpec& spec, std::string& error)
+{
+    if (!check_inputs(filenames, options, error))
+        return false;
+    ROI data_window;
+    for (size_t f = 0; f < filenames.size(); ++f) {
+        auto in = open_file(filenames[f], nullptr, error);
+        FileLayout layout;
+        if (!in || !choose_parts(*in, filenames[f], options, layout, error))
+            return false;
+        if (f == 0)
+            spec = layout.first();
+        else if (!same_display_window(layout.first(), spec, filenames[f], error))
+            return false;
+        data_window = roi_union(data_window, layout.data_window);
+    }
+    spec.set_roi(data_window);
+    return true;
+}
+
+bool read_scene(const std::vector<std::string>& filenames, const ReadOptions& options,
+                Scene& scene, std::string& error)
+{
+    scene = Scene();
+    if (!check_inputs(filenames, options, error))
+        return false;
+    for (const std::string& filename : filenames) {
+        Scene part;
+        part.spec = scene.spec;
+        if (!read_file(filename, options, part, error))
+            return false;
+        if (scene.source.empty())
+            scene.spec = part.spec;
+        // Several files are the layers of one scene: a flat file is a layer.
+        // (Reserved: ImageBuf's move may throw, so a growing vector copies.)
+        auto& as_layers = filenames.size() > 1 ? scene.layers : scene.flat;
+        as_layers.reserve(as_layers.size() + part.flat.size() + part.layers.size());
+        scene.layers.reserve(scene.layers.size() + part.flat.size() + part.layers.size());
+        for (Layer& layer : part.flat)
+            as_layers.push_back(std::move(layer));
+        for (Layer& layer : part.layers)
+            scene.layers.push_back(std::move(layer));
+        for (DeepImage& image : part.deep)
+            scene.deep.push_back(std::move(image));
+        for (std::string& note : part.notes)
+            if (std::find(scene.notes.begin(), scene.notes.end(), note) == scene.notes.end())
+                scene.notes.push_back(std::move(note));
+        scene.source += (scene.source.empty() ? "" : " ") + filename;
+    }
+    if (scene.deep.size() > 1) {
+        DeepImage merged = merge_deep(scene.deep);
+        scene.deep.clear();
+        scene.deep.push_back(std::move(merged));
+    }
+    ROI data_window;
+    for (const auto* list : { &scene.layers, &scene.flat })
+        for (const Layer& layer : *list)
+            data_window = roi_union(data_window, layer.color.roi());
+    for (const DeepImage& image : scene.deep)
+        data_window = roi_union(data_window, image.roi);
+    scene.spec.set_roi(data_window);
+    if (options.depth_scale != 1.0)
+        scale_depth(scene, float(options.depth_scale));
+    return true;
+}
+
+}  // namespace defocus

@@ -1,0 +1,124 @@
+// Filling the background a flat render cannot see (push-pull: Gortler,
+// Grzeszczuk, Szeliski & Cohen, "The Lumigraph", SIGGRAPH 1996).
+#include <defocus/layers/layering.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include <OpenImageIO/parallel.h>
+
+#include "util/parallel_rows.h"
+
+namespace defocus {
+
+using namespace OIIO;
+
+namespace {
+
+/// One pyramid cell: sums over the observed pixels of premultiplied
+/// R, G, B, A and of A·Z, and their count.
+struct Cell {
+    float v[5] = { 0, 0, 0, 0, 0 };
+    float w = 0;
+};
+
+struct Level {
+    int width, height;
+    std::vector<Cell> cells;
+    Cell& at(int x, int y) { return cells[size_t(y) * width + x]; }
+};
+
+}  // namespace
+
+void fill_hidden_background(Layer& layer, const std::vector<bool>& holes,
+                            double max_distance, int nthreads)
+{
+    const ROI roi = layer.color.roi();
+    std::vector<Level> pyramid;
+    pyramid.push_back({ roi.width(), roi.height(), {} });
+    pyramid[0].cells.resize(roi.npixels());
+    parallel_for(roi.ybegin, roi.yend, [&](int y) {
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            // Every pixel not hidden is an observation of the layer, empty
+            // ones too: the fill estimates coverage as well as colour.
+            const size_t p = size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin);
+            if (holes[p])
+                continue;
+            const float* c = static_cast<const float*>(layer.color.pixeladdr(x, y));
+            Cell& cell = pyramid[0].cells[p];
+            std::copy(c, c + 4, cell.v);
+            const float z = *static_cast<const float*>(layer.depth.pixeladdr(x, y));
+            cell.v[4] = c[3] > 0.0f ? c[3] * std::min(z, 1e30f) : 0.0f;
+            cell.w = 1.0f;
+        }
+    }, by_rows(nthreads));
+
+    // Push: each level sums 2x2 cells of the finer one, as far as a cell
+    // spans the distance to fill.
+    const int levels = 1 + int(std::ceil(std::log2(std::max(2.0, max_distance))));
+    for (int l = 1; l <= levels && (pyramid.back().width > 1 || pyramid.back().height > 1); ++l) {
+        Level& fine = pyramid.back();
+        Level coarse { (fine.width + 1) / 2, (fine.height + 1) / 2, {} };
+        coarse.cells.resize(size_t(coarse.width) * coarse.height);
+        for (int y = 0; y < fine.height; ++y)
+            for (int x = 0; x < fine.width; ++x) {
+                const Cell& f = fine.at(x, y);
+                Cell& c = coarse.at(x / 2, y / 2);
+                for (int i = 0; i < 5; ++i)
+                    c.v[i] += f.v[i];
+                c.w += f.w;
+            }
+        pyramid.push_back(std::move(coarse));
+    }
+    // Pull: an empty cell takes the coarser level's averages, interpolated
+    // bilinearly between the four nearest coarse cells that have any.
+    for (int l = int(pyramid.size()) - 2; l >= 0; --l) {
+        Level& fine = pyramid[l];
+        Level& coarse = pyramid[l + 1];
+        for (int y = 0; y < fine.height; ++y)
+            for (int x = 0; x < fine.width; ++x) {
+                Cell& f = fine.at(x, y);
+                if (f.w > 0.0f)
+                    continue;
+                // Fine cell centre in coarse cell units.
+                const float cx = 0.5f * (x + 0.5f) - 0.5f, cy = 0.5f * (y + 0.5f) - 0.5f;
+                const int x0 = int(std::floor(cx)), y0 = int(std::floor(cy));
+                const float fx = cx - x0, fy = cy - y0;
+                float sum[5] = { 0, 0, 0, 0, 0 }, weight = 0.0f;
+                for (int j = 0; j < 2; ++j)
+                    for (int i = 0; i < 2; ++i) {
+                        const int u = std::clamp(x0 + i, 0, coarse.width - 1);
+                        const int v = std::clamp(y0 + j, 0, coarse.height - 1);
+                        const Cell& c = coarse.at(u, v);
+                        if (c.w <= 0.0f)
+                            continue;
+                        const float b = (i ? fx : 1 - fx) * (j ? fy : 1 - fy);
+                        for (int k = 0; k < 5; ++k)
+                            sum[k] += b * c.v[k] / c.w;
+                        weight += b;
+                    }
+                if (weight <= 0.0f)
+                    continue;
+                for (int k = 0; k < 5; ++k)
+                    f.v[k] = sum[k] / weight;
+                f.w = 1.0f;
+            }
+    }
+
+    parallel_for(roi.ybegin, roi.yend, [&](int y) {
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const size_t p = size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin);
+            const Cell& cell = pyramid[0].cells[p];
+            if (!holes[p] || cell.w <= 0.0f)
+                continue;
+            if (cell.v[3] <= 0.0f)
+                continue;
+            float* c = static_cast<float*>(layer.color.pixeladdr(x, y));
+            for (int i = 0; i < 4; ++i)
+                c[i] = cell.v[i] / cell.w;
+            *static_cast<float*>(layer.depth.pixeladdr(x, y)) = cell.v[4] / cell.v[3];
+        }
+    }, by_rows(nthreads));
+}
+
+}  // namespace defocus

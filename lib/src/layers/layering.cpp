@@ -1,0 +1,398 @@
+#include <defocus/layers/layering.h>
+
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/parallel.h>
+#include <OpenImageIO/strutil.h>
+
+#include <defocus/spread/footprint.h>
+
+#include "util/parallel_rows.h"
+
+namespace defocus {
+
+using namespace OIIO;
+
+LayerBounds::LayerBounds(double coc_near, double coc_far)
+    : m_bounds { coc_near, std::max(coc_near, coc_far) }
+{
+}
+
+LayerBounds::LayerBounds(std::vector<double> boundaries, double soft_band)
+    : m_bounds(std::move(boundaries))
+    , m_band(std::max(0.0, soft_band))
+{
+    if (m_bounds.size() < 2)
+        m_bounds = { 0.0, 0.0 };
+}
+
+LayerBounds::Share LayerBounds::share(double c) const
+{
+    const int n = count();
+    // Layer k holds [boundary(k), boundary(k + 1)).
+    const int k = int(std::upper_bound(m_bounds.begin() + 1, m_bounds.end() - 1, c)
+                      - (m_bounds.begin() + 1));
+    const double half = 0.5 * m_band;
+    if (k > 0 && c - m_bounds[k] < half)
+        return { k - 1, float((m_bounds[k] + half - c) / m_band) };
+    if (k + 1 < n && m_bounds[k + 1] - c < half)
+        return { k, float((m_bounds[k + 1] + half - c) / m_band) };
+    return { k, 1.0f };
+}
+
+SplitWeights split_weights(float front_weight, float a)
+{
+    if (front_weight >= 1.0f)
+        return { 1.0f, 0.0f };
+    // Front part over back part: w·a + (1 - w·a)·s·a = a needs
+    // s = (1 - w) / (1 - w·a); the same factor makes the colours add up.
+    a = std::clamp(a, 0.0f, 1.0f);
+    return { front_weight, (1.0f - front_weight) / (1.0f - front_weight * a) };
+}
+
+namespace {
+
+/// A piece of a pixel's content at one depth: premultiplied colour and
+/// alpha, the layers it belongs to and its share of each.
+struct Fragment {
+    float r, g, b, a, z;
+    int front;  ///< layer index; the back share goes to front + 1
+    float front_weight, back_weight;
+};
+
+/// Every pixel's fragments, sorted front to back.
+struct Fragments {
+    ROI roi;
+    std::vector<uint64_t> offsets;  ///< per pixel, npixels + 1
+    std::vector<Fragment> items;
+};
+
+void assign_layers(Fragment& f, const CircleOfConfusion& coc, const LayerBounds& bounds)
+{
+    const LayerBounds::Share s = bounds.share(coc.diameter(f.z));
+    const SplitWeights w = split_weights(s.front_weight, f.a);
+    f.front = s.front;
+    f.front_weight = w.front;
+    f.back_weight = w.back;
+}
+
+Fragments flat_fragments(const Layer& flat, const CircleOfConfusion& coc,
+                         const LayerBounds& bounds, int nthreads)
+{
+    Fragments out;
+    out.roi = flat.color.roi();
+    const int64_t n = out.roi.npixels();
+    out.offsets.resize(n + 1);
+    out.items.resize(n);
+    for (int64_t i = 0; i <= n; ++i)
+        out.offsets[i] = i;
+    parallel_for(out.roi.ybegin, out.roi.yend, [&](int y) {
+        for (int x = out.roi.xbegin; x < out.roi.xend; ++x) {
+            const float* c = static_cast<const float*>(flat.color.pixeladdr(x, y));
+            Fragment& f = out.items[int64_t(y - out.roi.ybegin) * out.roi.width()
+                                    + (x - out.roi.xbegin)];
+            f = { c[0], c[1], c[2], c[3],
+                  *static_cast<const float*>(flat.depth.pixeladdr(x, y)), 0, 1, 0 };
+            if (f.a > 0.0f)
+                assign_layers(f, coc, bounds);
+        }
+    }, by_rows(nthreads));
+    return out;
+}
+
+/// Cuts a volume sample [z, zback] at the layer boundaries inside it. Each
+/// piece keeps the alpha-split of OpenEXR's deep-pixel rules: a piece
+/// covering fraction x of the sample has alpha 1 - (1 - a)^x and colour
+/// C·alpha_piece/a, so the pieces composited front to back give back the
+/// sample. A piece sits at its middle depth.
+void split_volume(const DeepSample& s, const std::vector<double>& planes,
+                  std::vector<Fragment>& out)
+{
+    std::vector<double> cuts { s.z };
+    for (double p : planes)
+        if (p > s.z && p < s.zback)
+            cuts.push_back(p);
+    cuts.push_back(s.zback);
+    const double length = double(s.zback) - s.z;
+    const double log_transmit = std::log1p(-std::min(double(s.a), 1.0 - 1e-7));
+    for (size_t i = 0; i + 1 < cuts.size(); ++i) {
+        const double x = (cuts[i + 1] - cuts[i]) / length;
+        const double a = -std::expm1(x * log_transmit);
+        const double scale = s.a > 0.0f ? a / s.a : x;
+        out.push_back({ float(s.r * scale), float(s.g * scale), float(s.b * scale),
+                        float(a), float(0.5 * (cuts[i] + cuts[i + 1])), 0, 1, 0 });
+    }
+}
+
+Fragments deep_fragments(const DeepImage& deep, const CircleOfConfusion& coc,
+                         const LayerBounds& bounds, int nthreads)
+{
+    std::vector<double> planes;
+    for (int k = 1; k < bounds.count(); ++k)
+        planes.push_back(coc.depth_at(bounds.boundary(k)));
+
+    const int64_t n = deep.roi.npixels();
+    std::vector<std::vector<Fragment>> rows(deep.roi.height());
+    parallel_for(deep.roi.ybegin, deep.roi.yend, [&](int y) {
+        std::vector<Fragment>& row = rows[y - deep.roi.ybegin];
+        std::vector<DeepSample> samples;
+        for (int x = deep.roi.xbegin; x < deep.roi.xend; ++x) {
+            const int64_t p = deep.pixel_index(x, y);
+            samples.assign(deep.samples.begin() + deep.offsets[p],
+                           deep.samples.begin() + deep.offsets[p + 1]);
+            // By Z, then ZBack. (OIIO 2.4's DeepData::sort breaks ties on Z
+            // again instead of ZBack.)
+            std::stable_sort(samples.begin(), samples.end(),
+                             [](const DeepSample& a, const DeepSample& b) {
+                                 return a.z < b.z || (a.z == b.z && a.zback < b.zback);
+                             });
+            const size_t first = row.size();
+            for (const DeepSample& s : samples) {
+                if (s.a <= 0.0f)
+                    continue;
+                if (s.zback > s.z && std::isfinite(s.zback))
+                    split_volume(s, planes, row);
+                else
+                    row.push_back({ s.r, s.g, s.b, s.a, s.z, 0, 1, 0 });
+            }
+            std::stable_sort(row.begin() + first, row.end(),
+                             [](const Fragment& a, const Fragment& b) { return a.z < b.z; });
+            for (size_t i = first; i < row.size(); ++i)
+                assign_layers(row[i], coc, bounds);
+            row.push_back({ 0, 0, 0, 0, -1, -1, 0, 0 });  // end of pixel
+        }
+    }, by_rows(nthreads));
+
+    Fragments out;
+    out.roi = deep.roi;
+    out.offsets.reserve(n + 1);
+    out.offsets.push_back(0);
+    for (const std::vector<Fragment>& row : rows)
+        for (const Fragment& f : row) {
+            if (f.front < 0)
+                out.offsets.push_back(out.items.size());
+            else
+                out.items.push_back(f);
+        }
+    return out;
+}
+
+/// Layer k of the fragments: each pixel's share of it composited front to
+/// back, with the alpha-weighted depth. Returns false when it is empty.
+bool extract_layer(const Fragments& frags, int k, Layer& layer, int nthreads)
+{
+    const ROI& roi = frags.roi;
+    ImageSpec color_spec(roi, TypeFloat);
+    color_spec.nchannels = 4;
+    color_spec.channelnames = { "R", "G", "B", "A" };
+    color_spec.alpha_channel = 3;
+    ImageSpec depth_spec(roi, TypeFloat);
+    depth_spec.nchannels = 1;
+    depth_spec.channelnames = { "Z" };
+    // Every pixel is written below.
+    layer.color.reset(color_spec, InitializePixels::No);
+    layer.depth.reset(depth_spec, InitializePixels::No);
+    std::atomic<bool> any { false };
+    parallel_for(roi.ybegin, roi.yend, [&](int y) {
+        bool row_any = false;
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const int64_t p = int64_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin);
+            double rgba[4] = { 0, 0, 0, 0 }, zsum = 0, wsum = 0;
+            for (uint64_t i = frags.offsets[p]; i < frags.offsets[p + 1]; ++i) {
+                const Fragment& f = frags.items[i];
+                const float w = f.front == k ? f.front_weight
+                                : f.front + 1 == k ? f.back_weight : 0.0f;
+                if (w <= 0.0f || f.a <= 0.0f)
+                    continue;
+                const double t = 1.0 - rgba[3];
+                rgba[0] += t * w * f.r;
+                rgba[1] += t * w * f.g;
+                rgba[2] += t * w * f.b;
+                const double covered = t * w * f.a;
+                rgba[3] += covered;
+                zsum += covered * f.z;
+                wsum += covered;
+            }
+            float* c = static_cast<float*>(layer.color.pixeladdr(x, y));
+            for (int i = 0; i < 4; ++i)
+                c[i] = float(rgba[i]);
+            // Infinite depths (the sky) stay infinite.
+            *static_cast<float*>(layer.depth.pixeladdr(x, y))
+                = wsum > 0 ? float(std::isinf(zsum) ? INFINITY : zsum / wsum) : 0.0f;
+            row_any |= wsum > 0;
+        }
+        if (row_any)
+            any = true;
+    }, by_rows(nthreads));
+    return any;
+}
+
+/// Crops a layer to the pixels that carry light.
+void crop_to_content(Layer& layer, int nthreads)
+{
+    ROI content = ImageBufAlgo::nonzero_region(layer.color, {}, nthreads);
+    content.chbegin = 0;
+    content.chend = 4;
+    if (content == layer.color.roi())
+        return;
+    ImageBuf color, depth;
+    ImageBufAlgo::crop(color, layer.color, content, nthreads);
+    ROI zroi = content;
+    zroi.chend = 1;
+    ImageBufAlgo::crop(depth, layer.depth, zroi, nthreads);
+    layer.color = std::move(color);
+    layer.depth = std::move(depth);
+}
+
+/// The pixels that a layer nearer than k covers and layer k does not:
+/// where layer k's hidden background lies.
+std::vector<bool> hidden_under_nearer(const Fragments& frags, const Layer& layer, int k)
+{
+    const ROI& roi = frags.roi;
+    std::vector<bool> holes(roi.npixels(), false);
+    for (int y = roi.ybegin; y < roi.yend; ++y)
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const int64_t p = int64_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin);
+            if (frags.offsets[p] == frags.offsets[p + 1])
+                continue;
+            const Fragment& front = frags.items[frags.offsets[p]];
+            const float a = static_cast<const float*>(layer.color.pixeladdr(x, y))[3];
+            holes[p] = front.a > 0.0f && front.front < k && a <= 0.0f;
+        }
+    return holes;
+}
+
+void slice(const Fragments& frags, const std::string& base, const LayerBounds& bounds,
+           std::vector<Layer>& layers, int nthreads)
+{
+    // ImageBuf's move may throw, so a vector that grows copies its layers.
+    layers.reserve(layers.size() + bounds.count());
+    for (int k = 0; k < bounds.count(); ++k) {
+        Layer layer;
+        layer.name = Strutil::fmt::format("{}.{:02d}", base, k);
+        if (!extract_layer(frags, k, layer, nthreads))
+            continue;
+        if (k > 0) {
+            // The hidden background matters as far as it shows through the
+            // blurred edges of nearer layers, or spreads its own light out
+            // from under them: up to the largest blur of layers 0..k.
+            const double c = std::max(std::abs(bounds.boundary(0)),
+                                      std::abs(bounds.boundary(k + 1)));
+            fill_hidden_background(layer, hidden_under_nearer(frags, layer, k),
+                                   box_half_width(0.5 * c) + 1.0, nthreads);
+        }
+        crop_to_content(layer, nthreads);
+        layers.push_back(std::move(layer));
+    }
+}
+
+}  // namespace
+
+namespace {
+
+/// Alpha-weighted content of a scene's flat and deep parts per bin of CoC.
+struct CocHistogram {
+    double lo = INFINITY, hi = -INFINITY;
+    static constexpr double bin = 0.25;  // pixels of CoC
+    std::vector<double> weight;
+
+    int index(double c) const { return std::clamp(int((c - lo) / bin), 0, int(weight.size()) - 1); }
+};
+
+/// Calls fn(c, alpha) for every covered flat pixel and deep sample (both
+/// ends of a volume sample), rows in parallel; fn must be thread-safe.
+template<typename Fn>
+void for_each_coc(const Scene& scene, const CircleOfConfusion& coc, Fn&& fn)
+{
+    for (const Layer& flat : scene.flat) {
+        const ROI roi = flat.color.roi();
+        parallel_for(roi.ybegin, roi.yend, [&](int y) {
+            for (int x = roi.xbegin; x < roi.xend; ++x) {
+                const float a = static_cast<const float*>(flat.color.pixeladdr(x, y))[3];
+                if (a > 0.0f)
+                    fn(y, coc.diameter(*static_cast<const float*>(flat.depth.pixeladdr(x, y))), a);
+            }
+        }, by_rows(0));
+    }
+    for (const DeepImage& deep : scene.deep)
+        parallel_for(deep.roi.ybegin, deep.roi.yend, [&](int y) {
+            const int64_t begin = deep.pixel_index(deep.roi.xbegin, y);
+            for (uint64_t i = deep.offsets[begin]; i < deep.offsets[begin + deep.roi.width()]; ++i) {
+                const DeepSample& s = deep.samples[i];
+                if (s.a > 0.0f) {
+                    fn(y, coc.diameter(s.z), s.a);
+                    if (s.zback != s.z)
+                        fn(y, coc.diameter(s.zback), 0.0f);
+                }
+            }
+        }, by_rows(0));
+}
+
+CocHistogram coc_histogram(const Scene& scene, const CircleOfConfusion& coc)
+{
+    CocHistogram h;
+    std::mutex mutex;
+    for_each_coc(scene, coc, [&](int, double c, float) {
+        std::lock_guard<std::mutex> lock(mutex);
+        h.lo = std::min(h.lo, c);
+        h.hi = std::max(h.hi, c);
+    });
+    if (!(h.hi > h.lo))
+        return h;
+    h.weight.assign(size_t((h.hi - h.lo) / CocHistogram::bin) + 1, 0.0);
+    for_each_coc(scene, coc, [&](int, double c, float a) {
+        std::lock_guard<std::mutex> lock(mutex);
+        h.weight[h.index(c)] += a;
+    });
+    return h;
+}
+
+}  // namespace
+
+LayerBounds choose_layer_bounds(const Scene& scene, const CircleOfConfusion& coc,
+                                const LayeringOptions& options)
+{
+    const CocHistogram h = coc_histogram(scene, coc);
+    if (h.weight.empty())
+        return std::isfinite(h.lo) ? LayerBounds(h.lo, h.lo) : LayerBounds();
+    std::vector<double> bounds { h.lo };
+    if (options.layers > 0) {
+        for (int k = 1; k < options.layers; ++k)
+            bounds.push_back(h.lo + (h.hi - h.lo) * k / options.layers);
+    } else {
+        const int span = std::max(1, int(options.max_coc_span / CocHistogram::bin));
+        int from = 0;
+        while (int(h.weight.size()) - from > span) {
+            // The emptiest bin within reach; among equals the farthest, so
+            // that a gap between objects is crossed in one layer.
+            int best = from + 1;
+            for (int i = from + 1; i <= from + span; ++i)
+                if (h.weight[i] <= h.weight[best])
+                    best = i;
+            bounds.push_back(h.lo + (best + 0.5) * CocHistogram::bin);
+            from = best;
+        }
+    }
+    bounds.push_back(h.hi);
+    return LayerBounds(std::move(bounds), options.soft_band);
+}
+
+LayerBounds decompose_layers(Scene& scene, const CircleOfConfusion& coc,
+                             const LayeringOptions& options, int nthreads)
+{
+    const LayerBounds bounds = choose_layer_bounds(scene, coc, options);
+    for (const Layer& flat : scene.flat)
+        slice(flat_fragments(flat, coc, bounds, nthreads), flat.name, bounds,
+              scene.layers, nthreads);
+    for (const DeepImage& deep : scene.deep)
+        slice(deep_fragments(deep, coc, bounds, nthreads), deep.name, bounds,
+              scene.layers, nthreads);
+    scene.flat.clear();
+    scene.deep.clear();
+    return bounds;
+}
+
+}  // namespace defocus

@@ -1,0 +1,283 @@
+#include <defocus/shot/shot.h>
+
+#include <functional>
+#include <type_traits>
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/strutil.h>
+
+#include <defocus/shot/option_value.h>
+#include <defocus/spread/aperture_profile.h>
+#include <defocus/spread/hybrid.h>
+
+namespace defocus {
+
+using OIIO::Strutil::fmt::format;
+
+namespace {
+
+using Setter = std::function<bool(Shot&, const std::string& label,
+                                  const std::string& value, std::string& error)>;
+using Getter = std::function<std::string(const Shot&)>;
+
+struct SettingRule {
+    ShotSetting setting;
+    Setter set;
+    Getter get;
+};
+
+/// A number setting; whole numbers for an int member.
+template<typename Member>
+SettingRule number(ShotSetting s, Member member, double lo, double hi)
+{
+    return { s,
+             [=](Shot& shot, const std::string& label, const std::string& value,
+                 std::string& error) {
+                 auto& target = member(shot);
+                 if constexpr (std::is_same_v<decltype(target), int&>)
+                     return parse_whole_number(label, value, lo, hi, target, error);
+                 else
+                     return parse_number(label, value, lo, hi, target, error);
+             },
+             [=](const Shot& shot) { return format("{}", member(shot)); } };
+}
+
+template<typename Member>
+SettingRule text(ShotSetting s, Member member)
+{
+    return { s,
+             [=](Shot& shot, const std::string&, const std::string& value, std::string&) {
+                 member(shot) = value;
+                 return true;
+             },
+             [=](const Shot& shot) { return member(shot); } };
+}
+
+/// One of an enum's names, read and written by its own functions; `what`
+/// and `choices` word the error.
+template<typename Member, typename Enum>
+SettingRule choice(ShotSetting s, Member member, bool (*parse)(const std::string&, Enum&),
+                   const char* (*name)(Enum), const char* what, const char* choices)
+{
+    return { s,
+             [=](Shot& shot, const std::string& label, const std::string& value,
+                 std::string& error) {
+                 if (parse(value, member(shot)))
+                     return true;
+                 error = format("{}: unknown {} '{}' (choose {})", label, what, value, choices);
+                 return false;
+             },
+             [=](const Shot& shot) { return std::string(name(member(shot))); } };
+}
+
+/// Keyframes of `arity` numbers; setting them clears `other` (focus and
+/// focus-at exclude each other).
+SettingRule keyframes(ShotSetting s, Keyframes Shot::*member, int arity, double lo,
+                      double hi, Keyframes Shot::*other = nullptr)
+{
+    return { s,
+             [=](Shot& shot, const std::string& label, const std::string& value,
+                 std::string& error) {
+                 if (!Keyframes::parse(label, value, arity, lo, hi, shot.*member,
+                                       error))
+                     return false;
+                 if (other)
+                     shot.*other = Keyframes();
+                 return true;
+             },
+             [=](const Shot& shot) { return (shot.*member).to_string(); } };
+}
+
+const std::vector<SettingRule>& rules()
+{
+    using K = ShotValueKind;
+    static const std::vector<SettingRule> table = {
+        text({ "frames", "scene", "frames", K::Text }, [](auto& s) -> auto& { return s.frames; }),
+        text({ "view", "scene", "view", K::Text }, [](auto& s) -> auto& { return s.read.view; }),
+        text({ "layer", "scene", "layer", K::Text }, [](auto& s) -> auto& { return s.read.layer; }),
+        number({ "layers", "scene", "layers", K::Number },
+                     [](auto& s) -> auto& { return s.layering.layers; }, 0, 256),
+        text({ "depth", "scene", "depth", K::FileOrName },
+             [](auto& s) -> auto& { return s.read.depth; }),
+        number({ "depth-scale", "scene", "depth_scale", K::Number },
+               [](auto& s) -> auto& { return s.read.depth_scale; }, 1e-9, 1e9),
+
+        keyframes({ "focus", "camera", "focus", K::Keyframes }, &Shot::focus, 1, 1e-6,
+                  1e30, &Shot::focus_at),
+        keyframes({ "focus-at", "camera", "focus_at", K::Point }, &Shot::focus_at, 2,
+                  -1e7, 1e7, &Shot::focus),
+        keyframes({ "focal", "camera", "focal", K::Keyframes }, &Shot::focal_length_mm, 1,
+                  1e-3, 1e5),
+        keyframes({ "fstop", "camera", "fstop", K::Keyframes }, &Shot::fstop, 1, 0.1, 1e4),
+        number({ "sensor", "camera", "sensor", K::Number },
+               [](auto& s) -> auto& { return s.sensor_width_mm; }, 1e-3, 1e4),
+        choice({ "lens", "camera", "lens", K::Text }, [](auto& s) -> auto& { return s.lens; },
+               parse_lens_model, lens_model_name, "model", "thin or optical"),
+        number({ "max-blur", "camera", "max_blur", K::Number },
+               [](auto& s) -> auto& { return s.max_blur_px; }, 0.0, 1e5),
+
+        { { "aperture", "aperture", "shape", K::Text },
+          [](Shot& shot, const std::string& label, const std::string& value, std::string& error) {
+              Aperture& a = shot.aperture;
+              if (OIIO::Strutil::starts_with(value, "mask:")) {
+                  a.shape     = ApertureShape::Mask;
+                  a.mask_file = value.substr(5);
+                  return true;
+              }
+              if (parse_aperture_shape(value, a.shape))
+                  return true;
+              error = label + ": unknown shape '" + value
+                      + "' (choose disc, polygon, mask:FILE, box, tent or smooth)";
+              return false;
+          },
+          [](const Shot& shot) {
+              return std::string(aperture_shape_name(shot.aperture.shape));
+          } },
+        text({ "aperture-mask", "aperture", "mask", K::Path },
+             [](auto& s) -> auto& { return s.aperture.mask_file; }),
+        number({ "blades", "aperture", "blades", K::Number },
+                     [](auto& s) -> auto& { return s.aperture.blades; }, 3, 16),
+        number({ "rotation", "aperture", "rotation", K::Number },
+               [](auto& s) -> auto& { return s.aperture.rotation_deg; }, -3600, 3600),
+        number({ "roundness", "aperture", "roundness", K::Number },
+               [](auto& s) -> auto& { return s.aperture.roundness; }, 0, 1),
+        number({ "aspect", "aperture", "aspect", K::Number },
+               [](auto& s) -> auto& { return s.aperture.aspect; }, 0.05, 20),
+        { { "spread", "aperture", "spread", K::Text },
+          [](Shot& shot, const std::string& label, const std::string& value, std::string& error) {
+              if (value == "bounded" || value == "exact") {
+                  shot.exact_shape = value == "exact";
+                  return true;
+              }
+              error = label + ": unknown method '" + value + "' (choose bounded or exact)";
+              return false;
+          },
+          [](const Shot& shot) { return std::string(shot.exact_shape ? "exact" : "bounded"); } },
+        text({ "psf-image", "aperture", "psf_image", K::Path },
+             [](auto& s) -> auto& { return s.psf_image; }),
+        number({ "hybrid-threshold", "aperture", "hybrid_threshold", K::Number },
+               [](auto& s) -> auto& { return s.hybrid_threshold; }, 1.0, 1e6),
+
+        text({ "colorconfig", "color", "config", K::Path },
+             [](auto& s) -> auto& { return s.color_config; }),
+        text({ "iscolorspace", "color", "input", K::Text },
+             [](auto& s) -> auto& { return s.input_space; }),
+        text({ "tocolorspace", "color", "output", K::Text },
+             [](auto& s) -> auto& { return s.output_space; }),
+
+        { { "output", "output", "kind", K::Text },
+          [](Shot& shot, const std::string& label, const std::string& value, std::string& error) {
+              if (value == "image" || value == "focusmap") {
+                  shot.output = value == "image" ? OutputKind::Image : OutputKind::FocusMap;
+                  return true;
+              }
+              error = label + ": unknown kind '" + value + "' (choose image or focusmap)";
+              return false;
+          },
+          [](const Shot& shot) {
+              return std::string(shot.output == OutputKind::Image ? "image" : "focusmap");
+          } },
+        { { "pixel-type", "output", "type", K::Text },
+          [](Shot& shot, const std::string& label, const std::string& value, std::string& error) {
+              if (value == "half" || value == "float" || value.empty()) {
+                  shot.pixel_type = OIIO::TypeDesc(value);
+                  return true;
+              }
+              error = label + ": unknown type '" + value + "' (choose half or float)";
+              return false;
+          },
+          [](const Shot& shot) {
+              return shot.pixel_type == OIIO::TypeUnknown ? std::string()
+                                                          : std::string(shot.pixel_type.c_str());
+          } },
+        text({ "compression", "output", "compression", K::Text },
+             [](auto& s) -> auto& { return s.compression; }),
+        choice({ "window", "output", "window", K::Text },
+               [](auto& s) -> auto& { return s.window; }, parse_output_window,
+               output_window_name, "window", "input, display or grown"),
+        choice({ "edge", "scene", "edge", K::Text }, [](auto& s) -> auto& { return s.edge; },
+               parse_edge_mode, edge_mode_name, "edge", "auto, extend or black"),
+    };
+    return table;
+}
+
+const SettingRule* find_rule(const std::string& name)
+{
+    for (const SettingRule& rule : rules())
+        if (name == rule.setting.name)
+            return &rule;
+    return nullptr;
+}
+
+}  // namespace
+
+const std::vector<ShotSetting>& shot_settings()
+{
+    static const std::vector<ShotSetting> settings = [] {
+        std::vector<ShotSetting> list;
+        for (const SettingRule& rule : rules())
+            list.push_back(rule.setting);
+        return list;
+    }();
+    return settings;
+}
+
+bool set_shot_setting(Shot& shot, const std::string& name, const std::string& value,
+                      std::string& error, const std::string& label)
+{
+    const SettingRule* rule = find_rule(name);
+    if (!rule) {
+        error = format("unknown setting '{}'", name);
+        return false;
+    }
+    return rule->set(shot, label.empty() ? "--" + name : label, value, error);
+}
+
+std::string shot_setting(const Shot& shot, const std::string& name)
+{
+    const SettingRule* rule = find_rule(name);
+    return rule ? rule->get(shot) : std::string();
+}
+
+std::string validate(const Shot& shot)
+{
+    if (shot.inputs.empty())
+        return "no input file";
+    if (shot.focus.empty() && shot.focus_at.empty())
+        return "--focus DIST or --focus-at X,Y is required: where the focus is";
+    if (shot.aperture.shape == ApertureShape::Mask && shot.aperture.mask_file.empty())
+        return "--aperture mask:FILE needs the image of the shape";
+    std::string error;
+    if (shot.aperture.shape == ApertureShape::Mask) {
+        MaskProfile probe;
+        if (!probe.load(shot.aperture.mask_file, 1.0, error))
+            return "--aperture: " + error;
+    }
+    PsfImage psf;
+    if (!shot.psf_image.empty() && !psf.load(shot.psf_image, error))
+        return "--psf-image: " + error;
+    if (!shot.color_config.empty() && !OIIO::Filesystem::is_regular(shot.color_config))
+        return "--colorconfig: " + shot.color_config + ": no such file";
+    return "";
+}
+
+bool is_animated(const Shot& shot)
+{
+    return shot.focus.animated() || shot.focus_at.animated()
+           || shot.focal_length_mm.animated() || shot.fstop.animated();
+}
+
+Camera camera_at(const Shot& shot, int frame)
+{
+    Camera camera;
+    camera.focal_length_mm = shot.focal_length_mm.at(frame, Interpolation::Linear)[0];
+    camera.fstop           = shot.fstop.at(frame, Interpolation::Reciprocal)[0];
+    if (!shot.focus.empty())
+        camera.focus_distance = shot.focus.at(frame, Interpolation::Reciprocal)[0];
+    camera.sensor_width_mm = shot.sensor_width_mm;
+    camera.lens            = shot.lens;
+    camera.max_blur_px     = shot.max_blur_px;
+    return camera;
+}
+
+}  // namespace defocus

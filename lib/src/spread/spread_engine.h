@@ -1,0 +1,117 @@
+// Internal: the one driver of the scattering filters (box, exact and
+// bounded-time shapes).
+//
+// Output rows are made top to bottom in bands, one band per task, and each
+// band in column tiles, left to right. A row is a sum of deltas that one
+// prefix sum along x integrates (Kosloff, Tao & Barsky 2009); the box's
+// corner deltas are first integrated down the columns (Heckbert 1986).
+//
+// Two paths feed a row's deltas:
+//  - dense: single pixels of small footprint are scattered, source row by
+//    source row, into a short ring of rows that the tile's width keeps in
+//    cache;
+//  - sparse: pixels of large footprint are summed in blocks of s x s
+//    pixels (s = 2, 4, ... 32), each block spread once, and gathered into
+//    a row just before it is integrated. Blocks of up to 4 (from r = 4 s)
+//    spread the footprint of a uniform block (every pixel's shape on its
+//    own centre, summed), so a uniform area comes out as exact spreading
+//    makes it; larger ones (from r = 8 s) a slightly softened shape from
+//    their centre (see level_start). Light varying within a block is
+//    spread as if even over it, which under such blurs is invisible
+//    except on highlights, whose bokeh shows its outline, so those are
+//    spread exactly, on their own (the paper's hybrid idea: the exact
+//    shape only where it shows).
+//    Radii near a change of block size are spread both ways, blended, so
+//    footprints change continuously.
+// The work per pixel is bounded whatever the blur. Rows are handed to a
+// sink as they are made, so that compositing needs no layer-sized buffer.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include <OpenImageIO/imagebuf.h>
+
+#include "spread/footprint_program.h"
+
+namespace defocus {
+
+/// Receives spread rows. Called once for every row of the window that the
+/// spread reaches, in column pieces; concurrently, but never twice for one
+/// pixel.
+class RowSink {
+public:
+    virtual ~RowSink() = default;
+    /// Row y over columns [x_begin, x_end): premultiplied RGBA, 4 doubles
+    /// per pixel.
+    virtual void row(int y, int x_begin, int x_end, const double* rgba) = 0;
+};
+
+/// The footprints of one aperture shape, for single pixels and for merged
+/// blocks of every size, built as spreading needs them and shared by all
+/// layers of a frame.
+class ShapePrograms {
+public:
+    ShapePrograms(std::shared_ptr<const RowProfile> profile, double max_radius);
+
+    /// Single pixels.
+    const ProgramFamily& pixels() const { return *m_families.front(); }
+    /// Uniform blocks of 2^level x 2^level pixels (see ProgramFamily).
+    const ProgramFamily& blocks(int level) const { return *m_families[level]; }
+
+private:
+    std::vector<std::unique_ptr<ProgramFamily>> m_families;
+};
+
+/// A layer to spread: premultiplied RGBA and CoC radius over `roi`.
+struct SpreadSource {
+    OIIO::ROI roi;
+    const float* color = nullptr;   ///< 4 floats per pixel, rows of roi.width()
+    const float* radius = nullptr;  ///< 1 float per pixel
+    /// Optional, 1 byte per pixel: pixels never merged into blocks
+    /// (highlights whose bokeh is visible, see visible_bokeh).
+    const uint8_t* keep_exact = nullptr;
+};
+
+/// The smallest CoC radius the Bounded method merges into blocks: below
+/// it every pixel is spread exactly, so no highlight needs marking.
+double smallest_merged_radius();
+
+enum class SpreadMethod {
+    Box,      ///< squares of the CoC disc's area, constant time (16 deltas)
+    Exact,    ///< the shape, every pixel on its own: time grows with the radius
+    Bounded,  ///< the shape, large footprints merged in blocks: bounded time
+};
+
+class SpreadEngine {
+public:
+    /// `shape` is needed (and must outlive the engine) unless the method is
+    /// Box.
+    SpreadEngine(const SpreadSource& source, SpreadMethod method, const ShapePrograms* shape,
+                 int nthreads);
+    ~SpreadEngine();
+
+    /// Every pixel the spread can light.
+    const OIIO::ROI& extent() const { return m_extent; }
+
+    /// Spreads the pixels of `window` into the sink. Light from pixels
+    /// outside it still counts where it falls inside.
+    void run(const OIIO::ROI& window, RowSink& sink, int nthreads) const;
+
+    struct Sparse;
+
+private:
+    struct Dense {
+        float max_radius = -1.0f;  ///< of the pixels on this path; < 0: none
+        int first_row = 0, last_row = 0, first_column = 0, last_column = 0;
+    };
+
+    SpreadSource m_source;
+    SpreadMethod m_method;
+    const ShapePrograms* m_shape;
+    Dense m_dense;
+    std::vector<std::unique_ptr<Sparse>> m_sparse;  ///< per level: highlights, then blocks
+    OIIO::ROI m_extent;
+};
+
+}  // namespace defocus

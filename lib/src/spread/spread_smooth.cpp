@@ -1,0 +1,191 @@
+// Smooth PSFs in constant time by repeated integration (Heckbert 1986,
+// "Filtering by repeated integration"; Kosloff, Hensley & Barsky 2009,
+// "Fast filter spreading"). The order-n PSF is n boxes convolved: per axis
+// its n-th difference is the binomial delta set (δ0 - δw)^n, so each pixel
+// writes (n+1)² deltas (per blended width) and the buffer is integrated n
+// times along x and n times along y.
+//
+// The integration is exact: deltas are fixed-point integers in 128 bits
+// and the sums wrap around, which is exact modulo 2^128, so the rounding
+// residue that floating point would leave after one integration, and the
+// next integrations would amplify into a ramp, never appears.
+#include <defocus/spread/spread.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include <OpenImageIO/parallel.h>
+
+#include "spread/row_bands.h"
+#include "spread/spread_common.h"
+#include "util/parallel_rows.h"
+
+namespace defocus {
+
+namespace {
+
+using Fixed = unsigned __int128;
+constexpr double fixed_scale = 79228162514264337593543950336.0;  // 2^96
+
+/// The two integer box widths whose blend gives the PSF of CoC radius r,
+/// and the blend. The order-n box of width w has variance n(w² - 1)/12;
+/// matching the CoC disc's r²/4 gives w² = 1 + 3r²/n. Odd orders need odd
+/// widths to stay centred.
+struct Widths {
+    int w[2];
+    double weight[2];
+};
+
+Widths smooth_widths(int order, double r)
+{
+    const double w = std::sqrt(1.0 + 3.0 * r * r / order);
+    const int step = order % 2 ? 2 : 1;
+    int w0 = std::max(1, int(std::floor(w)));
+    if (step == 2 && w0 % 2 == 0)
+        --w0;
+    const double t = std::clamp((w - w0) / step, 0.0, 1.0);
+    return { { w0, w0 + step }, { 1.0 - t, t } };
+}
+
+int binomial(int n, int k)
+{
+    int c = 1;
+    for (int i = 0; i < k; ++i)
+        c = c * (n - i) / (i + 1);
+    return c;
+}
+
+/// The half-width of the order-n box of width w: n(w - 1)/2.
+int half_support(int order, int w) { return order * (w - 1) / 2; }
+
+/// One axis of the order-n box of width w, normalised: the taps from
+/// -half_support to +half_support.
+std::vector<double> box_power(int order, int w)
+{
+    std::vector<double> taps { 1.0 };
+    for (int k = 0; k < order; ++k) {
+        std::vector<double> next(taps.size() + w - 1, 0.0);
+        for (size_t i = 0; i < taps.size(); ++i)
+            for (int j = 0; j < w; ++j)
+                next[i + j] += taps[i] / w;
+        taps = std::move(next);
+    }
+    return taps;
+}
+
+}  // namespace
+
+Footprint smooth_footprint(int order, double coc_radius)
+{
+    const Widths ws = smooth_widths(order, coc_radius);
+    const int reach = half_support(order, ws.w[1]);
+    std::vector<double> axis(2 * reach + 1, 0.0);
+    for (int b = 0; b < 2; ++b) {
+        const std::vector<double> taps = box_power(order, ws.w[b]);
+        const int h = half_support(order, ws.w[b]);
+        for (int i = -h; i <= h; ++i)
+            axis[i + reach] += ws.weight[b] * taps[i + h];
+    }
+    Footprint fp;
+    fp.x0 = fp.y0 = -reach;
+    fp.width = fp.height = 2 * reach + 1;
+    fp.weights.resize(size_t(fp.width) * fp.height);
+    for (int j = 0; j < fp.height; ++j)
+        for (int i = 0; i < fp.width; ++i)
+            fp.weights[size_t(j) * fp.width + i] = axis[i] * axis[j];
+    return fp;
+}
+
+bool spread_smooth(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, int order,
+                   ROI roi, int nthreads)
+{
+    if (order < 2 || order > 3) {
+        dst.errorfmt("spread_smooth: order {} (2: tent, 3: smooth)", order);
+        return false;
+    }
+    const SpreadInputs in = prepare_spread(dst, src, radius, roi, nthreads);
+    if (!in.valid)
+        return false;
+    const int nc = in.nchannels;
+    if (nc > 8) {
+        dst.errorfmt("spread_smooth: {} channels (at most 8)", nc);
+        return false;
+    }
+    roi = in.roi;
+    const int reach = half_support(order, smooth_widths(order, in.max_radius).w[1]);
+    const ROI ext(roi.xbegin - reach, roi.xend + reach, roi.ybegin - reach,
+                  roi.yend + reach, 0, 1, 0, nc);
+    const size_t row_len = size_t(ext.width()) * nc;
+    std::unique_ptr<Fixed[]> acc(new Fixed[row_len * ext.height()]);
+
+    // Scatter, then integrate each row `order` times, band by band. Deltas
+    // beyond the right or bottom edge only reach further out: dropped.
+    for_each_row_band(0, ext.height(), nthreads, [&](int r0, int r1) {
+        std::fill(&acc[r0 * row_len], &acc[r1 * row_len], Fixed(0));
+        // A source row writes rows from y - half to y + half + order.
+        const int ylo = std::max(roi.ybegin, ext.ybegin + r0 - reach - order);
+        const int yhi = std::min(roi.yend, ext.ybegin + r1 + reach);
+        for (int y = ylo; y < yhi; ++y)
+            for (int x = roi.xbegin; x < roi.xend; ++x) {
+                const float* v = in.pixels(x, y);
+                if (is_zero(v, nc))
+                    continue;
+                const Widths ws = smooth_widths(order, *in.radii(x, y));
+                for (int a = 0; a < 2; ++a)
+                    for (int b = 0; b < 2; ++b) {
+                        const double scale = ws.weight[a] * ws.weight[b]
+                                             / std::pow(double(ws.w[a]), order)
+                                             / std::pow(double(ws.w[b]), order);
+                        if (scale == 0.0)
+                            continue;
+                        Fixed amplitude[8];
+                        for (int c = 0; c < nc; ++c)
+                            amplitude[c] = Fixed(__int128(
+                                std::nearbyint(double(v[c]) * scale * fixed_scale)));
+                        for (int k = 0; k <= order; ++k) {
+                            const int row = y - ext.ybegin - half_support(order, ws.w[b]) + k * ws.w[b];
+                            if (row < r0 || row >= r1)
+                                continue;
+                            const int ck = (k % 2 ? -1 : 1) * binomial(order, k);
+                            for (int l = 0; l <= order; ++l) {
+                                const int col = x - ext.xbegin - half_support(order, ws.w[a]) + l * ws.w[a];
+                                if (col >= ext.width())
+                                    continue;
+                                const __int128 coef = __int128(ck) * ((l % 2 ? -1 : 1) * binomial(order, l));
+                                Fixed* p = &acc[row * row_len + size_t(col) * nc];
+                                for (int c = 0; c < nc; ++c)
+                                    p[c] += amplitude[c] * Fixed(coef);
+                            }
+                        }
+                    }
+            }
+        for (int row = r0; row < r1; ++row) {
+            Fixed* p = &acc[row * row_len];
+            for (int pass = 0; pass < order; ++pass)
+                for (size_t k = nc; k < row_len; ++k)
+                    p[k] += p[k - nc];
+        }
+    });
+
+    // Integrate each column `order` times, in column chunks, into float.
+    dst.reset(output_spec(src, ext), OIIO::InitializePixels::No);  // every pixel is written below
+    float* out = static_cast<float*>(dst.localpixels());
+    OIIO::parallel_for_chunked(0, int64_t(row_len), 0, [&](int64_t k0, int64_t k1) {
+        std::vector<Fixed> sums(size_t(k1 - k0) * order, Fixed(0));
+        for (int64_t y = 0; y < ext.height(); ++y) {
+            const Fixed* a = &acc[y * row_len];
+            float* o = out + y * row_len;
+            for (int64_t k = k0; k < k1; ++k) {
+                Fixed* s = &sums[size_t(k - k0) * order];
+                s[0] += a[k];
+                for (int pass = 1; pass < order; ++pass)
+                    s[pass] += s[pass - 1];
+                o[k] = float(double(__int128(s[order - 1])) / fixed_scale);
+            }
+        }
+    }, by_rows(nthreads));
+    return true;
+}
+
+}  // namespace defocus
