@@ -36,6 +36,7 @@
 #include <OpenImageIO/timer.h>
 
 #include <defocus/composite/layered_dof.h>
+#include <defocus/io/aperture_images.h>
 #include <defocus/io/scene_io.h>
 #include <defocus/spread/spread.h>
 
@@ -299,7 +300,8 @@ int main(int argc, const char* argv[])
     auto hexagon = std::make_shared<defocus::ApertureProfile>(hexagon_aperture);
     auto mask = std::make_shared<defocus::MaskProfile>();
     std::string error;
-    if (!mask->load(std::string(EXAMPLES_DIR) + "/psf/blades7.exr", 1.0, error)) {
+    if (!defocus::read_aperture_mask(std::string(EXAMPLES_DIR) + "/psf/blades7.exr", 1.0, *mask,
+                                     error)) {
         std::fprintf(stderr, "bench_speed: %s\n", error.c_str());
         return 1;
     }

@@ -8,6 +8,7 @@
 #include <OpenImageIO/imagebufalgo.h>
 
 #include <defocus/composite/layered_dof.h>
+#include <defocus/io/aperture_images.h>
 #include <defocus/spread/hybrid.h>
 
 #include "test_support.h"
@@ -61,7 +62,7 @@ TEST_CASE("a PSF image is scaled to the CoC and normalised")
 {
     PsfImage psf;
     std::string error;
-    REQUIRE(psf.load(shipped_psf + "disc_rim.exr", error));
+    REQUIRE(read_psf_image(shipped_psf + "disc_rim.exr", psf, error));
     for (double r : { 0.5, 3.0, 7.5, 20.0 }) {
         const Footprint fp = psf.footprint(r);
         double sum = 0.0;
@@ -76,7 +77,7 @@ TEST_CASE("a PSF image is scaled to the CoC and normalised")
     CHECK(fp.at(c + 19, c) > 1.5 * fp.at(c, c));
     CHECK(fp.at(c + 15, c + 15) == 0.0);
     PsfImage missing;
-    CHECK_FALSE(missing.load(shipped_psf + "nope.exr", error));
+    CHECK_FALSE(read_psf_image(shipped_psf + "nope.exr", missing, error));
     CHECK_THAT(error, Catch::Contains("nope.exr"));
 }
 
@@ -87,7 +88,7 @@ TEST_CASE("the hybrid method spreads highlights with the PSF image and keeps ene
     settings.aperture.shape = ApertureShape::Box;
     auto psf = std::make_shared<PsfImage>();
     std::string error;
-    REQUIRE(psf->load(shipped_psf + "disc_rim.exr", error));
+    REQUIRE(read_psf_image(shipped_psf + "disc_rim.exr", *psf, error));
     settings.psf_image = psf;
     // A lone highlight (on a transparent wall, so no coverage overlaps).
     ImageBuf out;

@@ -6,6 +6,7 @@
 
 #include <OpenImageIO/imagebufalgo.h>
 
+#include <defocus/io/aperture_images.h>
 #include <defocus/spread/spread.h>
 
 #include "test_support.h"
@@ -155,7 +156,7 @@ std::shared_ptr<MaskProfile> load_mask(const std::string& path, double max_radiu
     auto mask = std::make_shared<MaskProfile>();
     std::string error;
     INFO(error);
-    REQUIRE(mask->load(path, 1.0, error));
+    REQUIRE(read_aperture_mask(path, 1.0, *mask, error));
     return mask;
 }
 

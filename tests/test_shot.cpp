@@ -7,6 +7,7 @@
 #include <OpenImageIO/strutil.h>
 
 #include <defocus/focus/focus_at.h>
+#include <defocus/io/aperture_images.h>
 #include <defocus/io/frames.h>
 #include <defocus/shot/keyframes.h>
 #include <defocus/shot/shot.h>
@@ -174,6 +175,38 @@ TEST_CASE("shot settings: command-line text, errors, focus and focus-at exclude 
     CHECK(camera.focus_distance == 2.0);
     CHECK(camera.fstop == 2.8);  // the defaults
     CHECK(camera.focal_length_mm == 50.0);
+}
+
+TEST_CASE("checking a shot reads no file; the images its aperture names are read apart")
+{
+    Shot shot;
+    shot.inputs = { "scene.exr" };
+    std::string error;
+    REQUIRE(set_shot_setting(shot, "focus", "3", error));
+    const std::string dir = scratch_dir("aperture_images");
+    REQUIRE(set_shot_setting(shot, "aperture", "mask:" + dir + "/no_mask.png", error));
+    REQUIRE(set_shot_setting(shot, "psf-image", dir + "/no_psf.exr", error));
+    CHECK(validate(shot).empty());
+
+    ApertureImages images;
+    CHECK_FALSE(read_aperture_images(shot, images, error));
+    CHECK(contains(error, "--aperture: "));
+    CHECK(contains(error, "no_mask.png: cannot read the aperture mask"));
+
+    ImageBuf mask = zero_image(ROI(0, 8, 0, 8), 1);
+    const float one = 1.0f;
+    mask.setpixel(4, 4, &one);
+    REQUIRE(mask.write(dir + "/mask.exr"));
+    REQUIRE(set_shot_setting(shot, "aperture", "mask:" + dir + "/mask.exr", error));
+    CHECK_FALSE(read_aperture_images(shot, images, error));
+    CHECK(contains(error, "--psf-image: "));
+    CHECK(contains(error, "no_psf.exr: cannot read the PSF image"));
+
+    REQUIRE(set_shot_setting(shot, "psf-image", "", error));
+    INFO(error);
+    REQUIRE(read_aperture_images(shot, images, error));
+    CHECK(images.mask);
+    CHECK_FALSE(images.psf);
 }
 
 TEST_CASE(".dof files: every setting round-trips, paths relative to the file")

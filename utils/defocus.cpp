@@ -313,6 +313,10 @@ int main(int argc, const char* argv[])
     if (!error.empty())
         return fail(error);
     const Shot& shot = cl.shot;
+    // Read once, for every frame.
+    ApertureImages images;
+    if (!read_aperture_images(shot, images, error))
+        return fail(error);
 
     std::vector<int> frames;
     std::vector<std::string> outputs, previews;
@@ -367,7 +371,7 @@ int main(int argc, const char* argv[])
         FrameResult frame;
         std::string error;
         const bool ok = [&] {
-            if (!render_frame(shot, frames[i], frame, error,
+            if (!render_frame(shot, frames[i], images, frame, error,
                               [&](const char* stage) { progress.stage(label, stage); },
                               cl.threads))
                 return false;

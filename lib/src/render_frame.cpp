@@ -9,6 +9,7 @@
 #include <defocus/focus/focus_map.h>
 #include <defocus/io/frames.h>
 #include <defocus/io/scene_io.h>
+#include <defocus/layers/edges.h>
 #include <defocus/layers/layering.h>
 
 namespace defocus {
@@ -55,8 +56,8 @@ void describe_output(ImageSpec& spec, const ImageSpec& input, const Shot& shot,
     spec.attribute("Software", "defocus " DEFOCUS_VERSION);
 }
 
-bool render(const Shot& shot, int frame, FrameResult& out, std::string& error,
-            const StageCallback& on_stage, int nthreads)
+bool render(const Shot& shot, int frame, const ApertureImages& images, FrameResult& out,
+            std::string& error, const StageCallback& on_stage, int nthreads)
 {
     Timer timer;
     auto stage = [&](const char* name) {
@@ -121,12 +122,8 @@ bool render(const Shot& shot, int frame, FrameResult& out, std::string& error,
         settings.window   = shot.window;
         settings.hybrid_threshold = shot.hybrid_threshold;
         settings.exact_shape = shot.exact_shape;
-        if (!shot.psf_image.empty()) {
-            auto psf = std::make_shared<PsfImage>();
-            if (!psf->load(shot.psf_image, error))
-                return false;
-            settings.psf_image = psf;
-        }
+        settings.mask = images.mask;
+        settings.psf_image = images.psf;
         const int extended = extend_edges(scene, coc, shot.edge, nthreads);
         if (extended > 0)
             out.edges = format("edges: layers extended up to {} px past the data window ({}; "
@@ -191,12 +188,13 @@ bool frame_spec(const Shot& shot, int frame, ImageSpec& spec, std::string& error
     return true;
 }
 
-bool render_frame(const Shot& shot, int frame, FrameResult& result, std::string& error,
-                  const StageCallback& on_stage, int nthreads)
+bool render_frame(const Shot& shot, int frame, const ApertureImages& images,
+                  FrameResult& result, std::string& error, const StageCallback& on_stage,
+                  int nthreads)
 {
     result = FrameResult();
     try {
-        return render(shot, frame, result, error, on_stage, nthreads);
+        return render(shot, frame, images, result, error, on_stage, nthreads);
     } catch (const std::bad_alloc&) {
         error = result.source + ": out of memory";
         return false;

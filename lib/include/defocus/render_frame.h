@@ -15,6 +15,7 @@
 
 #include <defocus/color/color_plan.h>
 #include <defocus/composite/layered_dof.h>
+#include <defocus/io/aperture_images.h>
 #include <defocus/scene.h>
 #include <defocus/shot/shot.h>
 
@@ -51,9 +52,11 @@ using StageCallback = std::function<void(const char* stage)>;
 bool frame_spec(const Shot& shot, int frame, OIIO::ImageSpec& spec, std::string& error);
 
 /// Renders `frame` of a shot (the inputs' frame patterns and the keyframes
-/// are taken at it). False with `error` a one-line message naming the file
-/// and the problem.
-bool render_frame(const Shot& shot, int frame, FrameResult& result, std::string& error,
-                  const StageCallback& on_stage = {}, int nthreads = 0);
+/// are taken at it) with the images its aperture names, read once for all
+/// frames (read_aperture_images). False with `error` a one-line message
+/// naming the file and the problem.
+bool render_frame(const Shot& shot, int frame, const ApertureImages& images,
+                  FrameResult& result, std::string& error, const StageCallback& on_stage = {},
+                  int nthreads = 0);
 
 }  // namespace defocus

@@ -226,7 +226,7 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
 
     // Shape apertures share one profile and its footprints, sized to the
     // largest blur.
-    std::shared_ptr<RowProfile> profile;
+    std::shared_ptr<const RowProfile> profile;
     double max_radius = 0.0;
     for (const LayerReport& d : depths)
         max_radius = std::max({ max_radius, 0.5 * std::abs(d.coc_min), 0.5 * std::abs(d.coc_max) });
@@ -234,13 +234,11 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
     if (aperture.shape == ApertureShape::Disc || aperture.shape == ApertureShape::Polygon) {
         profile = std::make_shared<ApertureProfile>(aperture);
     } else if (aperture.shape == ApertureShape::Mask) {
-        auto mask = std::make_shared<MaskProfile>();
-        std::string error;
-        if (!mask->load(aperture.mask_file, aperture.aspect, error)) {
-            dst.errorfmt("{}", error);
+        if (!settings.mask) {
+            dst.errorfmt("a mask aperture needs its shape (read_aperture_mask)");
             return false;
         }
-        profile = std::move(mask);
+        profile = settings.mask;
     }
     const std::unique_ptr<ShapePrograms> programs =
         profile ? std::make_unique<ShapePrograms>(profile, max_radius) : nullptr;
@@ -325,26 +323,6 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
 }
 
 }  // namespace
-
-bool parse_output_window(const std::string& name, OutputWindow& window)
-{
-    for (OutputWindow w : { OutputWindow::Input, OutputWindow::Display, OutputWindow::Grown })
-        if (name == output_window_name(w)) {
-            window = w;
-            return true;
-        }
-    return false;
-}
-
-const char* output_window_name(OutputWindow window)
-{
-    switch (window) {
-    case OutputWindow::Input: return "input";
-    case OutputWindow::Display: return "display";
-    case OutputWindow::Grown: return "grown";
-    }
-    return "?";
-}
 
 bool render_layered_dof(ImageBuf& dst, const Scene& scene,
                         const RenderSettings& settings,

@@ -13,26 +13,6 @@ namespace defocus {
 
 using namespace OIIO;
 
-bool parse_edge_mode(const std::string& name, EdgeMode& mode)
-{
-    for (EdgeMode m : { EdgeMode::Auto, EdgeMode::Extend, EdgeMode::Black })
-        if (name == edge_mode_name(m)) {
-            mode = m;
-            return true;
-        }
-    return false;
-}
-
-const char* edge_mode_name(EdgeMode mode)
-{
-    switch (mode) {
-    case EdgeMode::Auto: return "auto";
-    case EdgeMode::Extend: return "extend";
-    case EdgeMode::Black: return "black";
-    }
-    return "?";
-}
-
 namespace {
 
 /// `image` over `grown` (which contains its window), each pixel outside

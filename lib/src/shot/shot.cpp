@@ -7,8 +7,6 @@
 #include <OpenImageIO/strutil.h>
 
 #include <defocus/shot/option_value.h>
-#include <defocus/spread/aperture_profile.h>
-#include <defocus/spread/hybrid.h>
 
 namespace defocus {
 
@@ -247,15 +245,6 @@ std::string validate(const Shot& shot)
         return "--focus DIST or --focus-at X,Y is required: where the focus is";
     if (shot.aperture.shape == ApertureShape::Mask && shot.aperture.mask_file.empty())
         return "--aperture mask:FILE needs the image of the shape";
-    std::string error;
-    if (shot.aperture.shape == ApertureShape::Mask) {
-        MaskProfile probe;
-        if (!probe.load(shot.aperture.mask_file, 1.0, error))
-            return "--aperture: " + error;
-    }
-    PsfImage psf;
-    if (!shot.psf_image.empty() && !psf.load(shot.psf_image, error))
-        return "--psf-image: " + error;
     if (!shot.color_config.empty() && !OIIO::Filesystem::is_regular(shot.color_config))
         return "--colorconfig: " + shot.color_config + ": no such file";
     return "";

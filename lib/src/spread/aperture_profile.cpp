@@ -4,9 +4,6 @@
 #include <cmath>
 
 #include <OpenImageIO/imagebuf.h>
-#include <OpenImageIO/strutil.h>
-
-#include <defocus/io/image_input.h>
 
 #include "spread/footprint_program.h"
 
@@ -165,11 +162,8 @@ double ApertureProfile::rows(double r, std::vector<RowSpan>& spans) const
     return area;
 }
 
-bool MaskProfile::load(const std::string& filename, double aspect, std::string& error)
+bool MaskProfile::set_shape(const OIIO::ImageBuf& image, double aspect, std::string& error)
 {
-    OIIO::ImageBuf image;
-    if (!read_image_file(filename, "the aperture mask", image, error))
-        return false;
     const OIIO::ROI roi = image.roi();
     const int nc = image.nchannels();
     std::vector<float> luma(roi.npixels());
@@ -184,7 +178,7 @@ bool MaskProfile::load(const std::string& filename, double aspect, std::string& 
                 peak = std::max(peak, l);
         }
     if (!(peak > 0.0f)) {
-        error = filename + ": the aperture mask is empty (all black)";
+        error = "the aperture mask is empty (all black)";
         return false;
     }
     double count = 0.0, sx = 0.0, sy = 0.0;

@@ -6,9 +6,6 @@
 
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/parallel.h>
-#include <OpenImageIO/strutil.h>
-
-#include <defocus/io/image_input.h>
 
 #include "util/float_pixels.h"
 #include "util/parallel_rows.h"
@@ -26,11 +23,8 @@ double luminance(const float* c)
 
 }  // namespace
 
-bool PsfImage::load(const std::string& filename, std::string& error)
+bool PsfImage::set_image(const ImageBuf& image, std::string& error)
 {
-    ImageBuf image;
-    if (!read_image_file(filename, "the PSF image", image, error))
-        return false;
     const ROI roi = image.roi();
     const int nc = image.nchannels();
     m_width = roi.width();
@@ -43,14 +37,14 @@ bool PsfImage::load(const std::string& filename, std::string& error)
             image.getpixel(roi.xbegin + x, roi.ybegin + y, c, std::min(nc, 4));
             const double l = nc >= 3 ? luminance(c) : c[0];
             if (!(l >= 0.0) || !std::isfinite(l)) {
-                error = filename + ": the PSF image has negative or non-finite values";
+                error = "the PSF image has negative or non-finite values";
                 return false;
             }
             m_luma[size_t(y) * m_width + x] = float(l);
             total += l;
         }
     if (!(total > 0.0)) {
-        error = filename + ": the PSF image is black";
+        error = "the PSF image is black";
         return false;
     }
     return true;

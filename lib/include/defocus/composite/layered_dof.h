@@ -12,6 +12,8 @@
 #include <defocus/scene.h>
 #include <defocus/shot/aperture.h>
 #include <defocus/shot/camera.h>
+#include <defocus/shot/options.h>
+#include <defocus/spread/aperture_profile.h>
 #include <defocus/spread/hybrid.h>
 
 namespace defocus {
@@ -22,20 +24,11 @@ bool coc_radius(OIIO::ImageBuf& dst, const OIIO::ImageBuf& depth,
                 const CircleOfConfusion& coc, OIIO::ROI roi = {},
                 int nthreads = 0);
 
-/// The data window of a result.
-enum class OutputWindow {
-    Input,    ///< the input's data window, as oiiotool's filters keep it
-    Display,  ///< the display window
-    Grown,    ///< the input's data window grown by the blur: all of the light
-};
-
-/// "input", "display" or "grown"; false for any other name.
-bool parse_output_window(const std::string& name, OutputWindow& window);
-const char* output_window_name(OutputWindow window);
-
 struct RenderSettings {
     Camera camera;
     Aperture aperture;
+    /// The shape of a mask aperture (see read_aperture_mask).
+    std::shared_ptr<const MaskProfile> mask;
     /// The hybrid method: when set, the pixels whose bokeh is visible (see
     /// visible_bokeh, with hybrid_threshold) are spread directly with this
     /// PSF image, the others with the aperture's fast filter.

@@ -7,26 +7,9 @@
 #include <vector>
 
 #include <defocus/scene.h>
+#include <defocus/shot/options.h>
 
 namespace defocus {
-
-struct ReadOptions {
-    /// The view of a multi-view file ("" = the first part's view).
-    std::string view;
-    /// The channel prefix to read colour and depth from, e.g. "beauty" for
-    /// beauty.R..beauty.Z or Blender's "ViewLayer" for
-    /// ViewLayer.Combined.R..ViewLayer.Depth.Z ("" = plain R,G,B,A,Z, or
-    /// the one prefixed set the file has).
-    std::string layer;
-    /// Metres per depth unit: Z (and a deep sample's Z back) is multiplied
-    /// by it as it is read, e.g. 0.01 for renders with Z in centimetres.
-    double depth_scale = 1.0;
-    /// Where the depth is when the input has no Z (or another one is
-    /// wanted): a channel of the input by name, or else a depth image file
-    /// (its Z channel, or its only channel) over the same display window
-    /// ("" = the input's Z).
-    std::string depth;
-};
 
 /// Reads a scene from one or several files.
 ///

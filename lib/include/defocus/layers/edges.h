@@ -5,18 +5,9 @@
 
 #include <defocus/scene.h>
 #include <defocus/shot/camera.h>
+#include <defocus/shot/options.h>
 
 namespace defocus {
-
-enum class EdgeMode {
-    Auto,    ///< extend where the data window does not cover the blur's reach
-    Extend,  ///< the edge pixels continue outwards
-    Black,   ///< nothing: light fades towards the edges of the data window
-};
-
-/// "auto", "extend" or "black"; false for any other name.
-bool parse_edge_mode(const std::string& name, EdgeMode& mode);
-const char* edge_mode_name(EdgeMode mode);
 
 /// Extends the layers beyond the frame's data window (scene.spec's) by
 /// repeating their outermost pixels, colour and depth, so that a blurred

@@ -7,18 +7,9 @@
 
 #include <defocus/scene.h>
 #include <defocus/shot/camera.h>
+#include <defocus/shot/options.h>
 
 namespace defocus {
-
-struct LayeringOptions {
-    /// Number of depth layers; 0 chooses boundaries automatically so that
-    /// no layer spans more than `max_coc_span` pixels of CoC.
-    int layers = 0;
-    double max_coc_span = 24.0;
-    /// Width in pixels of CoC of the band around each boundary in which
-    /// content belongs to both neighbouring layers (0: hard slicing).
-    double soft_band = 1.5;
-};
 
 /// Layer boundaries in signed CoC, that is in 1/z: layer k holds the
 /// content between boundary(k) and boundary(k + 1), nearest first.

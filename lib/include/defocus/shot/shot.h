@@ -7,13 +7,10 @@
 
 #include <OpenImageIO/typedesc.h>
 
-#include <defocus/composite/layered_dof.h>
-#include <defocus/io/scene_io.h>
-#include <defocus/layers/edges.h>
-#include <defocus/layers/layering.h>
 #include <defocus/shot/aperture.h>
 #include <defocus/shot/camera.h>
 #include <defocus/shot/keyframes.h>
+#include <defocus/shot/options.h>
 
 namespace defocus {
 

@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include <OpenImageIO/imagebuf.h>
+
 #include <defocus/shot/aperture.h>
 #include <defocus/spread/footprint.h>
 
@@ -65,8 +67,10 @@ private:
 /// each an eighth of the row.
 class MaskProfile final : public RowProfile {
 public:
-    /// False with `error` naming the file and the problem.
-    bool load(const std::string& filename, double aspect, std::string& error);
+    /// The shape drawn in `mask` (its luminance, thresholded at half its
+    /// peak), squeezed horizontally by `aspect`. False with `error` saying
+    /// why (read the file with read_aperture_mask).
+    bool set_shape(const OIIO::ImageBuf& mask, double aspect, std::string& error);
 
     double rows(double r, std::vector<RowSpan>& spans) const override;
     double extent() const override { return m_extent; }

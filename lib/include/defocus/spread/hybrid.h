@@ -19,8 +19,9 @@ namespace defocus {
 /// CoC's diameter, scaled to each pixel's CoC radius.
 class PsfImage {
 public:
-    /// False with `error` naming the file and the problem.
-    bool load(const std::string& filename, std::string& error);
+    /// The PSF drawn in `image` (its luminance). False with `error` saying
+    /// why (read the file with read_psf_image).
+    bool set_image(const OIIO::ImageBuf& image, std::string& error);
 
     /// The footprint for CoC radius r: the image resampled (bilinearly)
     /// over [-r, r]², normalised to sum to 1. Below a pixel, the pixel.

@@ -1,0 +1,61 @@
+// A shot's option types, each read by one stage: values only, so that the
+// settings need none of the stages that use them.
+#pragma once
+
+#include <string>
+
+namespace defocus {
+
+/// How the readers take the input files.
+struct ReadOptions {
+    /// The view of a multi-view file ("" = the first part's view).
+    std::string view;
+    /// The channel prefix to read colour and depth from, e.g. "beauty" for
+    /// beauty.R..beauty.Z or Blender's "ViewLayer" for
+    /// ViewLayer.Combined.R..ViewLayer.Depth.Z ("" = plain R,G,B,A,Z, or
+    /// the one prefixed set the file has).
+    std::string layer;
+    /// Metres per depth unit: Z (and a deep sample's Z back) is multiplied
+    /// by it as it is read, e.g. 0.01 for renders with Z in centimetres.
+    double depth_scale = 1.0;
+    /// Where the depth is when the input has no Z (or another one is
+    /// wanted): a channel of the input by name, or else a depth image file
+    /// (its Z channel, or its only channel) over the same display window
+    /// ("" = the input's Z).
+    std::string depth;
+};
+
+/// How flat renders and deep images are cut into depth layers.
+struct LayeringOptions {
+    /// Number of depth layers; 0 chooses boundaries automatically so that
+    /// no layer spans more than `max_coc_span` pixels of CoC.
+    int layers = 0;
+    double max_coc_span = 24.0;
+    /// Width in pixels of CoC of the band around each boundary in which
+    /// content belongs to both neighbouring layers (0: hard slicing).
+    double soft_band = 1.5;
+};
+
+/// What lies beyond the frame's data window when a blur reaches past it.
+enum class EdgeMode {
+    Auto,    ///< extend where the data window does not cover the blur's reach
+    Extend,  ///< the edge pixels continue outwards
+    Black,   ///< nothing: light fades towards the edges of the data window
+};
+
+/// "auto", "extend" or "black"; false for any other name.
+bool parse_edge_mode(const std::string& name, EdgeMode& mode);
+const char* edge_mode_name(EdgeMode mode);
+
+/// The data window of a result.
+enum class OutputWindow {
+    Input,    ///< the input's data window, as oiiotool's filters keep it
+    Display,  ///< the display window
+    Grown,    ///< the input's data window grown by the blur: all of the light
+};
+
+/// "input", "display" or "grown"; false for any other name.
+bool parse_output_window(const std::string& name, OutputWindow& window);
+const char* output_window_name(OutputWindow window);
+
+}  // namespace defocus

@@ -1,0 +1,56 @@
+#include <defocus/io/aperture_images.h>
+
+#include <defocus/io/image_input.h>
+
+namespace defocus {
+
+using OIIO::ImageBuf;
+
+bool read_aperture_mask(const std::string& filename, double aspect, MaskProfile& mask,
+                        std::string& error)
+{
+    ImageBuf image;
+    if (!read_image_file(filename, "the aperture mask", image, error))
+        return false;
+    if (!mask.set_shape(image, aspect, error)) {
+        error = filename + ": " + error;
+        return false;
+    }
+    return true;
+}
+
+bool read_psf_image(const std::string& filename, PsfImage& psf, std::string& error)
+{
+    ImageBuf image;
+    if (!read_image_file(filename, "the PSF image", image, error))
+        return false;
+    if (!psf.set_image(image, error)) {
+        error = filename + ": " + error;
+        return false;
+    }
+    return true;
+}
+
+bool read_aperture_images(const Shot& shot, ApertureImages& images, std::string& error)
+{
+    images = ApertureImages();
+    if (shot.aperture.shape == ApertureShape::Mask) {
+        auto mask = std::make_shared<MaskProfile>();
+        if (!read_aperture_mask(shot.aperture.mask_file, shot.aperture.aspect, *mask, error)) {
+            error = "--aperture: " + error;
+            return false;
+        }
+        images.mask = std::move(mask);
+    }
+    if (!shot.psf_image.empty()) {
+        auto psf = std::make_shared<PsfImage>();
+        if (!read_psf_image(shot.psf_image, *psf, error)) {
+            error = "--psf-image: " + error;
+            return false;
+        }
+        images.psf = std::move(psf);
+    }
+    return true;
+}
+
+}  // namespace defocus
