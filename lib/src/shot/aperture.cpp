@@ -1,24 +1,15 @@
 #include <defocus/shot/aperture.h>
 
+#include <defocus/shot/option_value.h>
+
 namespace defocus {
 
 bool parse_aperture_shape(const std::string& name, ApertureShape& shape)
 {
-    if (name == "box")
-        shape = ApertureShape::Box;
-    else if (name == "disc")
-        shape = ApertureShape::Disc;
-    else if (name == "polygon")
-        shape = ApertureShape::Polygon;
-    else if (name == "tent")
-        shape = ApertureShape::Tent;
-    else if (name == "smooth")
-        shape = ApertureShape::Smooth;
-    else if (name == "mask")
-        shape = ApertureShape::Mask;
-    else
-        return false;
-    return true;
+    return parse_name(name,
+                      { ApertureShape::Box, ApertureShape::Disc, ApertureShape::Polygon,
+                        ApertureShape::Tent, ApertureShape::Smooth, ApertureShape::Mask },
+                      aperture_shape_name, shape);
 }
 
 const char* aperture_shape_name(ApertureShape shape)

@@ -5,6 +5,8 @@
 
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/shot/option_value.h>
+
 namespace defocus {
 
 CircleOfConfusion::CircleOfConfusion(const Camera& camera, int display_width)
@@ -41,13 +43,7 @@ double CircleOfConfusion::depth_at(double c) const
 
 bool parse_lens_model(const std::string& name, LensModel& lens)
 {
-    if (name == "thin")
-        lens = LensModel::ThinLens;
-    else if (name == "optical")
-        lens = LensModel::Optical;
-    else
-        return false;
-    return true;
+    return parse_name(name, { LensModel::ThinLens, LensModel::Optical }, lens_model_name, lens);
 }
 
 const char* lens_model_name(LensModel lens)

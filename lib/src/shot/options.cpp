@@ -1,15 +1,13 @@
 #include <defocus/shot/options.h>
 
+#include <defocus/shot/option_value.h>
+
 namespace defocus {
 
 bool parse_edge_mode(const std::string& name, EdgeMode& mode)
 {
-    for (EdgeMode m : { EdgeMode::Auto, EdgeMode::Extend, EdgeMode::Black })
-        if (name == edge_mode_name(m)) {
-            mode = m;
-            return true;
-        }
-    return false;
+    return parse_name(name, { EdgeMode::Auto, EdgeMode::Extend, EdgeMode::Black },
+                      edge_mode_name, mode);
 }
 
 const char* edge_mode_name(EdgeMode mode)
@@ -24,12 +22,8 @@ const char* edge_mode_name(EdgeMode mode)
 
 bool parse_output_window(const std::string& name, OutputWindow& window)
 {
-    for (OutputWindow w : { OutputWindow::Input, OutputWindow::Display, OutputWindow::Grown })
-        if (name == output_window_name(w)) {
-            window = w;
-            return true;
-        }
-    return false;
+    return parse_name(name, { OutputWindow::Input, OutputWindow::Display, OutputWindow::Grown },
+                      output_window_name, window);
 }
 
 const char* output_window_name(OutputWindow window)
