@@ -173,14 +173,7 @@ bool frame_spec(const Shot& shot, int frame, ImageSpec& spec, std::string& error
                          window.yend + reach);
         }
     }
-    spec = ImageSpec(window, output_pixel_type(shot, input));
-    spec.nchannels     = 4;
-    spec.channelnames  = { "R", "G", "B", "A" };
-    spec.alpha_channel = 3;
-    spec.full_x        = display.xbegin;
-    spec.full_y        = display.ybegin;
-    spec.full_width    = display.width();
-    spec.full_height   = display.height();
+    spec = result_spec(input, window, output_pixel_type(shot, input));
     describe_output(spec, input, shot, camera_at(shot, frame), color, frame);
     // Focusing at a pixel measures the focus from the pixels.
     if (!shot.focus_at.empty())

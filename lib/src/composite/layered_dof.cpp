@@ -295,17 +295,8 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
                                                           : scene.spec.roi();
     window.chbegin = 0;
     window.chend = 4;
-    ImageSpec spec(window, TypeFloat);
-    spec.channelnames = { "R", "G", "B", "A" };
-    spec.alpha_channel = 3;
-    spec.full_x = display.xbegin;
-    spec.full_y = display.ybegin;
-    spec.full_width = display.width();
-    spec.full_height = display.height();
-    spec.extra_attribs = scene.spec.extra_attribs;
-    erase_part_attributes(spec);
     ImageBuf frame;
-    reset_zeroed(frame, spec, nthreads);
+    reset_zeroed(frame, result_spec(scene.spec, window, TypeFloat), nthreads);
 
     Over over(frame);
     for (size_t i : order) {
@@ -323,6 +314,19 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
 }
 
 }  // namespace
+
+ImageSpec result_spec(const ImageSpec& scene, const ROI& window, TypeDesc format)
+{
+    ImageSpec spec(window, format);
+    spec.nchannels = 4;
+    spec.channelnames = { "R", "G", "B", "A" };
+    spec.alpha_channel = 3;
+    spec.full_x = scene.full_x;
+    spec.full_y = scene.full_y;
+    spec.full_width = scene.full_width;
+    spec.full_height = scene.full_height;
+    return spec;
+}
 
 bool render_layered_dof(ImageBuf& dst, const Scene& scene,
                         const RenderSettings& settings,

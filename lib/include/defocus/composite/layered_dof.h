@@ -40,6 +40,12 @@ struct RenderSettings {
     OutputWindow window = OutputWindow::Input;
 };
 
+/// The spec of a defocused result over `window`: R, G, B, A of type
+/// `format`, in the display window of `scene` (a scene's spec). Its
+/// metadata is left to the caller.
+OIIO::ImageSpec result_spec(const OIIO::ImageSpec& scene, const OIIO::ROI& window,
+                            OIIO::TypeDesc format);
+
 /// What one layer holds, for -v and layerize --info.
 struct LayerReport {
     std::string name;
@@ -63,7 +69,8 @@ struct RenderTimings {
 /// scene (see sanitize()) whose content is all in layers (see
 /// decompose_layers()). Layers are taken back to front by their
 /// alpha-weighted mean inverse depth; `report`, when given, lists them in
-/// that order. The result keeps the scene's display window.
+/// that order. The result keeps the scene's display window; it has no
+/// metadata.
 bool render_layered_dof(OIIO::ImageBuf& dst, const Scene& scene,
                         const RenderSettings& settings,
                         std::vector<LayerReport>* report = nullptr,
