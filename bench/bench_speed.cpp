@@ -207,9 +207,10 @@ bool read_stage(const std::string& filename)
 /// The four 4096x2160 layers of the floor, as a scene with a camera that
 /// gives blur up to 100 px: far field (CoC 60 px), hills in the lower half
 /// (10 to 40 px), an in-focus post (10% of the width) and near leaves
-/// (100 px, a quarter of the frame).
+/// (100 px, a quarter of the frame), layered: described and ordered back to
+/// front, as the layering stage hands them on.
 struct FloorScene {
-    defocus::Scene scene;
+    defocus::LayeredScene scene;
     defocus::RenderSettings settings;
 };
 
@@ -238,6 +239,7 @@ FloorScene make_floor_scene(const std::vector<bench::FloorLayer>& layers)
         s.scene.layers.push_back(std::move(layer));
     }
     s.scene.spec = ImageSpec(width, 2160, 4, TypeFloat);
+    defocus::order_layers(s.scene, coc);
     return s;
 }
 

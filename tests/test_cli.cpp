@@ -367,7 +367,8 @@ TEST_CASE("layerize writes the layers defocus uses, and defocus reads them back"
     REQUIRE(run(layerize + " " + flat + camera + " -o " + layers, log) == 0);
     REQUIRE(run_defocus(flat + " -o " + dir + "/direct.exr -d float" + camera, log) == 0);
     REQUIRE(run_defocus(layers + " -o " + dir + "/via_layers.exr -d float" + camera, log) == 0);
-    const ImageBuf direct = read_image(dir + "/direct.exr"), via = read_image(dir + "/via_layers.exr");
+    const ImageBuf direct = read_image(dir + "/direct.exr");
+    const ImageBuf via = read_image(dir + "/via_layers.exr");
     REQUIRE(direct.initialized());
     REQUIRE(via.initialized());
     CHECK(direct.roi() == via.roi());

@@ -93,7 +93,8 @@ TEST_CASE("the hybrid method spreads highlights with the PSF image and keeps ene
     // A lone highlight (on a transparent wall, so no coverage overlaps).
     ImageBuf out;
     std::vector<LayerReport> report;
-    REQUIRE(render_layered_dof(out, highlight_scene(0.0f), settings, &report));
+    REQUIRE(render_layered_dof(out, layered_scene(highlight_scene(0.0f), settings.camera),
+                               settings, &report));
     CHECK(report[0].psf_pixels == 1);
     CHECK(channel_sum(out, 0) == Approx(50.0).epsilon(1e-5));
     CHECK(channel_sum(out, 3) == Approx(1.0).epsilon(1e-5));
@@ -108,7 +109,8 @@ TEST_CASE("the hybrid method spreads highlights with the PSF image and keeps ene
     CHECK(corner[0] == 0.0f);
     // On the grey wall, the wall is spread the fast way around it (less
     // the highlight pixel's own 1/730 share of grey).
-    REQUIRE(render_layered_dof(out, highlight_scene(), settings, &report));
+    REQUIRE(render_layered_dof(out, layered_scene(highlight_scene(), settings.camera), settings,
+                               &report));
     out.getpixel(60 + 12, 40 + 12, corner);
     CHECK(corner[0] == Approx(0.1f).margin(2e-4));
 }

@@ -41,9 +41,10 @@ ImageBuf render(Scene scene, double focus, const LayeringOptions& options = {})
 {
     RenderSettings settings;
     settings.camera = synthetic_camera(focus);
-    decompose_layers(scene, CircleOfConfusion(settings.camera, 120), options);
+    LayeredScene layers;
+    decompose_layers(std::move(scene), CircleOfConfusion(settings.camera, 120), options, layers);
     ImageBuf out;
-    REQUIRE(render_layered_dof(out, scene, settings));
+    REQUIRE(render_layered_dof(out, layers, settings));
     return out;
 }
 
@@ -51,9 +52,10 @@ ImageBuf render(Scene scene, double focus, const LayeringOptions& options = {})
 void composite_pixel(const std::vector<Layer>& layers, int x, int y, float out[4])
 {
     std::fill(out, out + 4, 0.0f);
-    for (const Layer& layer : layers) {  // nearest first, as sliced
+    // Nearest first: layering orders them back to front.
+    for (auto layer = layers.rbegin(); layer != layers.rend(); ++layer) {
         float p[4];
-        layer.color.getpixel(x, y, p);
+        layer->color.getpixel(x, y, p);
         const float t = 1.0f - out[3];
         for (int c = 0; c < 4; ++c)
             out[c] += t * p[c];
@@ -135,10 +137,18 @@ TEST_CASE("a deep volume sample split across layers composites back to itself")
     LayeringOptions options;
     options.layers = 6;
     const CircleOfConfusion coc(synthetic_camera(1.0), 120);
-    decompose_layers(scene, coc, options);
-    REQUIRE(scene.layers.size() >= 3);
+    LayeredScene layers;
+    decompose_layers(std::move(scene), coc, options, layers);
+    REQUIRE(layers.layers.size() >= 3);
+    // Back to front, each layer with its own report.
+    REQUIRE(layers.reports.size() == layers.layers.size());
+    for (size_t i = 0; i < layers.layers.size(); ++i) {
+        CHECK(layers.reports[i].name == layers.layers[i].name);
+        if (i > 0)
+            CHECK(layers.reports[i - 1].mean_inverse_depth < layers.reports[i].mean_inverse_depth);
+    }
     float out[4];
-    composite_pixel(scene.layers, 10, 10, out);
+    composite_pixel(layers.layers, 10, 10, out);
     // Point sample (a = 0.2) over the volume (a = 0.8), in that order.
     const float expected[4] = { 0.1f + 0.8f * 0.4f, 0.1f + 0.8f * 0.2f,
                                 0.1f + 0.8f * 0.1f, 0.2f + 0.8f * 0.8f };
@@ -159,9 +169,10 @@ TEST_CASE("deep samples are ordered by Z, then ZBack")
     deep.samples = { { 0.0f, 0.5f, 0.0f, 0.5f, 2.0f, 4.0f },    // green, long
                      { 0.5f, 0.0f, 0.0f, 0.5f, 2.0f, 2.0f } };  // red, point
     scene.deep.push_back(deep);
-    decompose_layers(scene, CircleOfConfusion(synthetic_camera(1.0), 120), {});
+    LayeredScene layers;
+    decompose_layers(std::move(scene), CircleOfConfusion(synthetic_camera(1.0), 120), {}, layers);
     float out[4];
-    composite_pixel(scene.layers, 0, 0, out);
+    composite_pixel(layers.layers, 0, 0, out);
     CHECK(out[0] == Approx(0.5f));   // red in front
     CHECK(out[1] == Approx(0.25f));  // green behind it
 }

@@ -52,7 +52,7 @@ ImageBuf layered(double focus)
     RenderSettings settings;
     settings.camera = synthetic_camera(focus);
     ImageBuf out;
-    REQUIRE(render_layered_dof(out, two_layer_scene(), settings));
+    REQUIRE(render_layered_dof(out, layered_scene(two_layer_scene(), settings.camera), settings));
     return out;
 }
 
@@ -137,7 +137,8 @@ TEST_CASE("layers are composited back to front whatever their file order")
     settings.camera = synthetic_camera(near_z);
     std::vector<LayerReport> report;
     ImageBuf out;
-    REQUIRE(render_layered_dof(out, two_layer_scene(), settings, &report));
+    REQUIRE(render_layered_dof(out, layered_scene(two_layer_scene(), settings.camera), settings,
+                               &report));
     REQUIRE(report.size() == 2);
     CHECK(report[0].name == "wall");
     CHECK(report[1].name == "card");
@@ -153,7 +154,8 @@ TEST_CASE("the focus map shows in-focus green, in front red, behind blue")
     float p[4];
     // Focus on the card: the card is green, the wall behind it blue.
     ImageBuf map;
-    REQUIRE(focus_map(map, two_layer_scene(), synthetic_camera(near_z)));
+    const Camera camera_near_z = synthetic_camera(near_z);
+    REQUIRE(focus_map(map, layered_scene(two_layer_scene(), camera_near_z), camera_near_z));
     colour_at(map, 60, 40, p);
     CHECK(p[1] == 1.0f);
     CHECK(p[0] == 0.0f);
@@ -162,7 +164,8 @@ TEST_CASE("the focus map shows in-focus green, in front red, behind blue")
     CHECK(p[0] == 0.0f);
     CHECK(p[1] == 0.0f);
     // Focus on the wall: the card is red, the wall green.
-    REQUIRE(focus_map(map, two_layer_scene(), synthetic_camera(far_z)));
+    const Camera camera_far_z = synthetic_camera(far_z);
+    REQUIRE(focus_map(map, layered_scene(two_layer_scene(), camera_far_z), camera_far_z));
     colour_at(map, 60, 40, p);
     CHECK(p[0] > 0.5f);
     CHECK(p[1] == 0.0f);
@@ -171,7 +174,7 @@ TEST_CASE("the focus map shows in-focus green, in front red, behind blue")
     // Where the blur reaches the max, the colour is whitened.
     Camera clamped = synthetic_camera(far_z);
     clamped.max_blur_px = 10;
-    REQUIRE(focus_map(map, two_layer_scene(), clamped));
+    REQUIRE(focus_map(map, layered_scene(two_layer_scene(), clamped), clamped));
     colour_at(map, 60, 40, p);
     CHECK(p[0] > 0.9f);
     CHECK(p[1] >= 0.5f);

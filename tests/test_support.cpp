@@ -16,6 +16,16 @@ namespace defocus_test {
 
 using namespace OIIO;
 
+defocus::LayeredScene layered_scene(defocus::Scene scene, const defocus::Camera& camera)
+{
+    defocus::LayeredScene out;
+    out.source = scene.source;
+    out.spec = scene.spec;
+    out.layers = std::move(scene.layers);
+    defocus::order_layers(out, defocus::CircleOfConfusion(camera, out.spec.full_width));
+    return out;
+}
+
 ImageBuf read_image(const std::string& file)
 {
     ImageBuf image;

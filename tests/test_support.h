@@ -7,6 +7,8 @@
 
 #include <OpenImageIO/imagebuf.h>
 
+#include <defocus/layers/layered_scene.h>
+#include <defocus/scene.h>
 #include <defocus/shot/camera.h>
 
 namespace defocus_test {
@@ -18,6 +20,10 @@ using OIIO::ROI;
 /// rewrite files under one name, which OpenImageIO's shared cache would
 /// not see; see defocus::read_image_file). Empty when unreadable.
 ImageBuf read_image(const std::string& file);
+
+/// The layers of `scene` (no flat or deep content), described with
+/// `camera` and ordered back to front, as layering gives them.
+defocus::LayeredScene layered_scene(defocus::Scene scene, const defocus::Camera& camera);
 
 /// A float image of `nchannels` over `roi`, all zero.
 ImageBuf zero_image(const ROI& roi, int nchannels);

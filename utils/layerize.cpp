@@ -2,7 +2,6 @@
 // (one part per layer, with Z), for inspection and as input again.
 //
 //   read -> sanitize -> layers -> write
-#include <algorithm>
 #include <cstdlib>
 #include <string>
 #include <vector>
@@ -11,7 +10,6 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/strutil.h>
 
-#include <defocus/composite/layered_dof.h>
 #include <defocus/focus/focus_at.h>
 #include <defocus/io/image_output.h>
 #include <defocus/io/scene_io.h>
@@ -102,24 +100,19 @@ int main(int argc, const char* argv[])
     if (!shot_camera(shot, scene, 0, camera, error))
         return fail("{}", error);
     const CircleOfConfusion coc(camera, scene.spec.full_width);
-    decompose_layers(scene, coc, shot.layering, threads);
+    LayeredScene layered;
+    decompose_layers(std::move(scene), coc, shot.layering, layered, threads);
 
     if (info) {
-        std::vector<LayerReport> reports;
-        for (const Layer& layer : scene.layers)
-            reports.push_back(describe_layer(layer, coc, threads));
-        std::stable_sort(reports.begin(), reports.end(), [](const auto& a, const auto& b) {
-            return a.mean_inverse_depth < b.mean_inverse_depth;
-        });
-        for (const LayerReport& l : reports)
+        for (const LayerReport& l : layered.reports)
             Strutil::print("{:<16} {:>9} px  depth {:.4g}..{:.4g}  CoC {:.3g}..{:.3g} px\n",
                            l.name, l.pixels, l.depth_min, l.depth_max, l.coc_min,
                            l.coc_max);
         return EXIT_SUCCESS;
     }
-    ImageSpec spec = scene.spec;
+    ImageSpec spec = layered.spec;
     record_camera(spec, camera);
-    if (!write_layers_atomic(scene.layers, spec, output, error))
+    if (!write_layers_atomic(layered.layers, spec, output, error))
         return fail("{}", error);
     return EXIT_SUCCESS;
 }

@@ -93,13 +93,15 @@ bool render(const Shot& shot, int frame, const ApertureImages& images, FrameResu
     const CircleOfConfusion coc(out.camera, scene.spec.full_width);
     const bool to_slice = !scene.flat.empty() || !scene.deep.empty();
     const size_t layers_given = scene.layers.size();
-    const LayerBounds bounds = decompose_layers(scene, coc, shot.layering, nthreads);
+    LayeredScene layered;
+    const LayerBounds bounds =
+        decompose_layers(std::move(scene), coc, shot.layering, layered, nthreads);
     if (to_slice) {
         std::vector<std::string> edges;
         for (int k = 0; k <= bounds.count(); ++k)
             edges.push_back(format("{:.3g}", bounds.boundary(k)));
         // Slices nothing falls into make no layer.
-        const int made = int(scene.layers.size() - layers_given);
+        const int made = int(layered.layers.size() - layers_given);
         const int empty = bounds.count() - made;
         out.slicing = format("sliced into {} depth layer(s){}, bounds in px of CoC: {}", made,
                              empty > 0 ? format(" ({} empty slice(s) dropped)", empty) : "",
@@ -110,8 +112,8 @@ bool render(const Shot& shot, int frame, const ApertureImages& images, FrameResu
     stage("render");
     ImageBuf& image = out.image;
     if (shot.output == OutputKind::FocusMap) {
-        if (!focus_map(image, scene, out.camera, 8.0, nthreads)) {
-            error = scene.source + ": " + image.geterror();
+        if (!focus_map(image, layered, out.camera, 8.0, nthreads)) {
+            error = layered.source + ": " + image.geterror();
             return false;
         }
         lap("focus map");
@@ -124,7 +126,7 @@ bool render(const Shot& shot, int frame, const ApertureImages& images, FrameResu
         settings.exact_shape = shot.exact_shape;
         settings.mask = images.mask;
         settings.psf_image = images.psf;
-        const int extended = extend_edges(scene, coc, shot.edge, nthreads);
+        const int extended = extend_edges(layered, coc, shot.edge, nthreads);
         if (extended > 0)
             out.edges = format("edges: layers extended up to {} px past the data window ({}; "
                                "--edge black keeps them dark)",
@@ -133,8 +135,8 @@ bool render(const Shot& shot, int frame, const ApertureImages& images, FrameResu
                                    ? "--edge extend"
                                    : "the data window does not cover the blur's reach");
         RenderTimings timings;
-        if (!render_layered_dof(image, scene, settings, &out.layers, &timings, nthreads)) {
-            error = scene.source + ": " + image.geterror();
+        if (!render_layered_dof(image, layered, settings, &out.layers, &timings, nthreads)) {
+            error = layered.source + ": " + image.geterror();
             return false;
         }
         out.timings.emplace_back("spread and composite", timings.spread);
@@ -144,8 +146,8 @@ bool render(const Shot& shot, int frame, const ApertureImages& images, FrameResu
             return false;
         lap("colour out");
     }
-    describe_output(image.specmod(), scene.spec, shot, out.camera, color, frame);
-    out.pixel_type = output_pixel_type(shot, scene.spec);
+    describe_output(image.specmod(), layered.spec, shot, out.camera, color, frame);
+    out.pixel_type = output_pixel_type(shot, layered.spec);
     return true;
 }
 

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <memory>
 #include <new>
-#include <numeric>
 
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/parallel.h>
@@ -39,58 +38,6 @@ bool coc_radius(ImageBuf& dst, const ImageBuf& depth,
             out[x] = float(coc.radius(*in));
     }, by_rows(nthreads));
     return true;
-}
-
-namespace {
-
-/// Per-row partial sums of describe_layer(), reduced after the parallel pass.
-struct RowDepth {
-    int64_t pixels = 0;
-    double zmin = INFINITY, zmax = -INFINITY;
-    double weight = 0, weighted_inverse = 0;
-};
-
-}  // namespace
-
-LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc, int nthreads)
-{
-    const ROI roi = layer.color.roi();
-    const FloatPixels color(layer.color, roi);
-    const FloatPixels depth(layer.depth, ROI(roi.xbegin, roi.xend, roi.ybegin, roi.yend, 0, 1, 0, 1));
-    std::vector<RowDepth> rows(roi.height());
-    parallel_for(roi.ybegin, roi.yend, [&](int y) {
-        RowDepth& r = rows[y - roi.ybegin];
-        const float* c = color(roi.xbegin, y);
-        const float* zs = depth(roi.xbegin, y);
-        for (int x = 0; x < roi.width(); ++x, c += color.nchannels(), zs += depth.nchannels()) {
-            const float a = c[3];
-            if (a <= 0.0f)
-                continue;
-            const double z = *zs;
-            ++r.pixels;
-            r.zmin = std::min(r.zmin, z);
-            r.zmax = std::max(r.zmax, z);
-            r.weight += a;
-            r.weighted_inverse += a * (std::isinf(z) ? 0.0 : 1.0 / z);
-        }
-    }, by_rows(nthreads));
-    RowDepth total;
-    for (const RowDepth& r : rows) {
-        total.pixels += r.pixels;
-        total.zmin = std::min(total.zmin, r.zmin);
-        total.zmax = std::max(total.zmax, r.zmax);
-        total.weight += r.weight;
-        total.weighted_inverse += r.weighted_inverse;
-    }
-    LayerReport rep;
-    rep.mean_inverse_depth = total.weight > 0 ? total.weighted_inverse / total.weight : 0.0;
-    rep.name = layer.name;
-    rep.pixels = total.pixels;
-    rep.depth_min = total.pixels ? total.zmin : 0.0;
-    rep.depth_max = total.pixels ? total.zmax : 0.0;
-    rep.coc_min = total.pixels ? coc.diameter(rep.depth_min) : 0.0;
-    rep.coc_max = total.pixels ? coc.diameter(rep.depth_max) : 0.0;
-    return rep;
 }
 
 namespace {
@@ -205,24 +152,12 @@ struct EngineLayer {
     std::unique_ptr<SpreadEngine> engine;
 };
 
-bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& settings,
+bool render_layers(ImageBuf& dst, const LayeredScene& scene, const RenderSettings& settings,
                    std::vector<LayerReport>* report, RenderTimings& timings, int nthreads)
 {
-    if (!scene.flat.empty() || !scene.deep.empty()) {
-        dst.errorfmt("the scene has flat or deep content: cut it into layers first "
-                     "(decompose_layers)");
-        return false;
-    }
     Timer spread_timer;
     const CircleOfConfusion coc(settings.camera, scene.spec.full_width);
-    std::vector<LayerReport> depths;
-    for (const Layer& layer : scene.layers)
-        depths.push_back(describe_layer(layer, coc, nthreads));
-    std::vector<size_t> order(scene.layers.size());
-    std::iota(order.begin(), order.end(), 0);
-    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-        return depths[a].mean_inverse_depth < depths[b].mean_inverse_depth;
-    });
+    std::vector<LayerReport> depths = scene.reports;
 
     // Shape apertures share one profile and its footprints, sized to the
     // largest blur.
@@ -253,7 +188,7 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
     ROI grown = display;
     std::vector<EngineLayer> engines(scene.layers.size());
     std::vector<ImageBuf> apart(scene.layers.size());
-    for (size_t i : order) {
+    for (size_t i = 0; i < scene.layers.size(); ++i) {
         const Layer& layer = scene.layers[i];
         if (depths[i].pixels == 0)
             continue;
@@ -299,7 +234,7 @@ bool render_layers(ImageBuf& dst, const Scene& scene, const RenderSettings& sett
     reset_zeroed(frame, result_spec(scene.spec, window, TypeFloat), nthreads);
 
     Over over(frame);
-    for (size_t i : order) {
+    for (size_t i = 0; i < scene.layers.size(); ++i) {
         if (report)
             report->push_back(depths[i]);
         if (engines[i].engine)
@@ -328,7 +263,7 @@ ImageSpec result_spec(const ImageSpec& scene, const ROI& window, TypeDesc format
     return spec;
 }
 
-bool render_layered_dof(ImageBuf& dst, const Scene& scene,
+bool render_layered_dof(ImageBuf& dst, const LayeredScene& scene,
                         const RenderSettings& settings,
                         std::vector<LayerReport>* report, RenderTimings* timings,
                         int nthreads)

@@ -13,13 +13,9 @@ namespace defocus {
 
 using namespace OIIO;
 
-bool focus_map(ImageBuf& dst, const Scene& scene, const Camera& camera, double in_focus_px,
-               int nthreads)
+bool focus_map(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
+               double in_focus_px, int nthreads)
 {
-    if (!scene.flat.empty() || !scene.deep.empty()) {
-        dst.errorfmt("focus_map: cut the scene into layers first (decompose_layers)");
-        return false;
-    }
     const ImageSpec& s = scene.spec;
     const ROI display(s.full_x, s.full_x + s.full_width, s.full_y, s.full_y + s.full_height,
                       0, 1, 0, 4);

@@ -5,7 +5,7 @@
 
 #include <OpenImageIO/parallel.h>
 
-#include <defocus/composite/layered_dof.h>
+#include <defocus/layers/layered_scene.h>
 
 #include "util/parallel_rows.h"
 
@@ -37,7 +37,7 @@ ImageBuf clamped_copy(const ImageBuf& image, const ROI& grown, int nthreads)
 
 }  // namespace
 
-int extend_edges(Scene& scene, const CircleOfConfusion& coc, EdgeMode mode, int nthreads)
+int extend_edges(LayeredScene& scene, const CircleOfConfusion& coc, EdgeMode mode, int nthreads)
 {
     if (mode == EdgeMode::Black)
         return 0;
@@ -47,8 +47,9 @@ int extend_edges(Scene& scene, const CircleOfConfusion& coc, EdgeMode mode, int 
     const int overscan[4] = { s.full_x - data.xbegin, data.xend - (s.full_x + s.full_width),
                               s.full_y - data.ybegin, data.yend - (s.full_y + s.full_height) };
     int most = 0;
-    for (Layer& layer : scene.layers) {
-        const LayerReport r = describe_layer(layer, coc, nthreads);
+    for (size_t i = 0; i < scene.layers.size(); ++i) {
+        Layer& layer = scene.layers[i];
+        const LayerReport& r = scene.reports[i];
         if (r.pixels == 0)
             continue;
         // The last pixel a footprint reaches, and one more for antialiasing.
@@ -74,7 +75,10 @@ int extend_edges(Scene& scene, const CircleOfConfusion& coc, EdgeMode mode, int 
                         own.yend + add[3]);
         layer.color = clamped_copy(layer.color, grown, nthreads);
         layer.depth = clamped_copy(layer.depth, grown, nthreads);
+        scene.reports[i] = describe_layer(layer, coc, nthreads);
     }
+    if (most > 0)
+        sort_back_to_front(scene);
     return most;
 }
 

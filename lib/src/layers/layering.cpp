@@ -380,8 +380,9 @@ LayerBounds choose_layer_bounds(const Scene& scene, const CircleOfConfusion& coc
     return LayerBounds(std::move(bounds), options.soft_band);
 }
 
-LayerBounds decompose_layers(Scene& scene, const CircleOfConfusion& coc,
-                             const LayeringOptions& options, int nthreads)
+LayerBounds decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
+                             const LayeringOptions& options, LayeredScene& layered,
+                             int nthreads)
 {
     const LayerBounds bounds = choose_layer_bounds(scene, coc, options);
     for (const Layer& flat : scene.flat)
@@ -390,8 +391,11 @@ LayerBounds decompose_layers(Scene& scene, const CircleOfConfusion& coc,
     for (const DeepImage& deep : scene.deep)
         slice(deep_fragments(deep, coc, bounds, nthreads), deep.name, bounds,
               scene.layers, nthreads);
-    scene.flat.clear();
-    scene.deep.clear();
+    layered.source = std::move(scene.source);
+    layered.spec = std::move(scene.spec);
+    layered.layers = std::move(scene.layers);
+    order_layers(layered, coc, nthreads);
+    scene = Scene();
     return bounds;
 }
 

@@ -9,6 +9,7 @@
 
 #include <OpenImageIO/imagebuf.h>
 
+#include <defocus/layers/layered_scene.h>
 #include <defocus/scene.h>
 #include <defocus/shot/aperture.h>
 #include <defocus/shot/camera.h>
@@ -46,32 +47,17 @@ struct RenderSettings {
 OIIO::ImageSpec result_spec(const OIIO::ImageSpec& scene, const OIIO::ROI& window,
                             OIIO::TypeDesc format);
 
-/// What one layer holds, for -v and layerize --info.
-struct LayerReport {
-    std::string name;
-    int64_t pixels = 0;  ///< pixels with alpha > 0
-    double depth_min = 0, depth_max = 0;
-    double coc_min = 0, coc_max = 0;  ///< signed CoC diameters, pixels
-    double mean_inverse_depth = 0;    ///< alpha-weighted; orders the layers
-    int64_t psf_pixels = 0;           ///< spread with the PSF image (hybrid)
-};
-
-/// Pixel count and depth and CoC ranges of a layer's covered pixels.
-LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc,
-                           int nthreads = 0);
-
 /// Where render_layered_dof() spends its time, in seconds.
 struct RenderTimings {
     double spread = 0.0;  ///< CoC radii, spreading and compositing, all layers
 };
 
 /// Renders the defocused, flattened premultiplied RGBA of a sanitized
-/// scene (see sanitize()) whose content is all in layers (see
-/// decompose_layers()). Layers are taken back to front by their
-/// alpha-weighted mean inverse depth; `report`, when given, lists them in
-/// that order. The result keeps the scene's display window; it has no
-/// metadata.
-bool render_layered_dof(OIIO::ImageBuf& dst, const Scene& scene,
+/// (see sanitize()), layered scene, back to front; `report`, when given,
+/// lists its layers' reports in that order, with the pixels the hybrid
+/// method spread with its PSF image. The result keeps the scene's display
+/// window; it has no metadata.
+bool render_layered_dof(OIIO::ImageBuf& dst, const LayeredScene& scene,
                         const RenderSettings& settings,
                         std::vector<LayerReport>* report = nullptr,
                         RenderTimings* timings = nullptr, int nthreads = 0);

@@ -3,7 +3,7 @@
 
 #include <string>
 
-#include <defocus/scene.h>
+#include <defocus/layers/layered_scene.h>
 #include <defocus/shot/camera.h>
 #include <defocus/shot/options.h>
 
@@ -17,7 +17,9 @@ namespace defocus {
 /// render was cut off by the frame: on the sides where the data window
 /// reaches the display window but not that far past it (overscan); a data
 /// window inside the display window bounds the content, with nothing
-/// beyond. Returns the most pixels added on any side (0: none).
-int extend_edges(Scene& scene, const CircleOfConfusion& coc, EdgeMode mode, int nthreads = 0);
+/// beyond. The extended layers are described again and the layers
+/// reordered. Returns the most pixels added on any side (0: none).
+int extend_edges(LayeredScene& scene, const CircleOfConfusion& coc, EdgeMode mode,
+                 int nthreads = 0);
 
 }  // namespace defocus

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include <defocus/layers/layered_scene.h>
 #include <defocus/scene.h>
 #include <defocus/shot/camera.h>
 #include <defocus/shot/options.h>
@@ -55,17 +56,19 @@ struct SplitWeights {
 };
 SplitWeights split_weights(float front_weight, float a);
 
-/// Cuts scene.flat and scene.deep into depth layers and appends them to
-/// scene.layers, cropped to their content; afterwards scene.flat and
-/// scene.deep are empty. Deep pixels follow OpenEXR's "Interpreting
-/// OpenEXR Deep Pixels": samples sorted by Z then ZBack, volume samples
-/// split at layer planes with the alpha-split formula, and each layer's
-/// share of a pixel composited front to back with an alpha-weighted Z.
-/// A flat render's hidden background, the part of a layer behind nearer
-/// layers that one render cannot see, is filled from the layer's visible
-/// surroundings (see fill_hidden_background). Returns the bounds used.
-LayerBounds decompose_layers(Scene& scene, const CircleOfConfusion& coc,
-                              const LayeringOptions& options, int nthreads = 0);
+/// Cuts `scene` into depth layers: its layers as they are, and its flat
+/// renders and deep images cut at the bounds, cropped to their content,
+/// all described and ordered back to front (order_layers) into `layered`.
+/// Deep pixels follow OpenEXR's "Interpreting OpenEXR Deep Pixels":
+/// samples sorted by Z then ZBack, volume samples split at layer planes
+/// with the alpha-split formula, and each layer's share of a pixel
+/// composited front to back with an alpha-weighted Z. A flat render's
+/// hidden background, the part of a layer behind nearer layers that one
+/// render cannot see, is filled from the layer's visible surroundings (see
+/// fill_hidden_background). Returns the bounds used.
+LayerBounds decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
+                             const LayeringOptions& options, LayeredScene& layered,
+                             int nthreads = 0);
 
 /// Push-pull hole filling (Gortler et al. 1996): the pixels of `layer`
 /// flagged in `holes` (hidden behind nearer layers) take the average of

@@ -1,0 +1,93 @@
+#include <defocus/layers/layered_scene.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include <OpenImageIO/parallel.h>
+
+#include "util/float_pixels.h"
+#include "util/parallel_rows.h"
+
+namespace defocus {
+
+using namespace OIIO;
+
+namespace {
+
+/// Per-row partial sums of describe_layer(), reduced after the parallel pass.
+struct RowDepth {
+    int64_t pixels = 0;
+    double zmin = INFINITY, zmax = -INFINITY;
+    double weight = 0, weighted_inverse = 0;
+};
+
+}  // namespace
+
+LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc, int nthreads)
+{
+    const ROI roi = layer.color.roi();
+    const FloatPixels color(layer.color, roi);
+    const FloatPixels depth(layer.depth, ROI(roi.xbegin, roi.xend, roi.ybegin, roi.yend, 0, 1, 0, 1));
+    std::vector<RowDepth> rows(roi.height());
+    parallel_for(roi.ybegin, roi.yend, [&](int y) {
+        RowDepth& r = rows[y - roi.ybegin];
+        const float* c = color(roi.xbegin, y);
+        const float* zs = depth(roi.xbegin, y);
+        for (int x = 0; x < roi.width(); ++x, c += color.nchannels(), zs += depth.nchannels()) {
+            const float a = c[3];
+            if (a <= 0.0f)
+                continue;
+            const double z = *zs;
+            ++r.pixels;
+            r.zmin = std::min(r.zmin, z);
+            r.zmax = std::max(r.zmax, z);
+            r.weight += a;
+            r.weighted_inverse += a * (std::isinf(z) ? 0.0 : 1.0 / z);
+        }
+    }, by_rows(nthreads));
+    RowDepth total;
+    for (const RowDepth& r : rows) {
+        total.pixels += r.pixels;
+        total.zmin = std::min(total.zmin, r.zmin);
+        total.zmax = std::max(total.zmax, r.zmax);
+        total.weight += r.weight;
+        total.weighted_inverse += r.weighted_inverse;
+    }
+    LayerReport rep;
+    rep.mean_inverse_depth = total.weight > 0 ? total.weighted_inverse / total.weight : 0.0;
+    rep.name = layer.name;
+    rep.pixels = total.pixels;
+    rep.depth_min = total.pixels ? total.zmin : 0.0;
+    rep.depth_max = total.pixels ? total.zmax : 0.0;
+    rep.coc_min = total.pixels ? coc.diameter(rep.depth_min) : 0.0;
+    rep.coc_max = total.pixels ? coc.diameter(rep.depth_max) : 0.0;
+    return rep;
+}
+
+void order_layers(LayeredScene& scene, const CircleOfConfusion& coc, int nthreads)
+{
+    scene.reports.clear();
+    for (const Layer& layer : scene.layers)
+        scene.reports.push_back(describe_layer(layer, coc, nthreads));
+    sort_back_to_front(scene);
+}
+
+void sort_back_to_front(LayeredScene& scene)
+{
+    std::vector<size_t> order(scene.layers.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+        return scene.reports[a].mean_inverse_depth < scene.reports[b].mean_inverse_depth;
+    });
+    std::vector<Layer> layers;
+    std::vector<LayerReport> reports;
+    for (size_t i : order) {
+        layers.push_back(std::move(scene.layers[i]));
+        reports.push_back(scene.reports[i]);
+    }
+    scene.layers = std::move(layers);
+    scene.reports = std::move(reports);
+}
+
+}  // namespace defocus
