@@ -80,8 +80,11 @@ void sort_back_to_front(LayeredScene& scene)
     std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
         return scene.reports[a].mean_inverse_depth < scene.reports[b].mean_inverse_depth;
     });
+    // Reserved: ImageBuf's move may throw, so a vector that grows copies.
     std::vector<Layer> layers;
     std::vector<LayerReport> reports;
+    layers.reserve(order.size());
+    reports.reserve(order.size());
     for (size_t i : order) {
         layers.push_back(std::move(scene.layers[i]));
         reports.push_back(scene.reports[i]);
