@@ -384,6 +384,29 @@ TEST_CASE("layerize writes the layers defocus uses, and defocus reads them back"
     CHECK(Strutil::contains(log, "CoC"));
 }
 
+TEST_CASE("layerize cuts in scene-linear light, as defocus spreads")
+{
+    // A flat sRGB-encoded grey card at 3 m: the layers hold its linear light.
+    const std::string dir = scratch_dir("cli_layerize_colour");
+    ImageBuf card = zero_image(ROI(0, 16, 0, 8), 5);
+    ImageBufAlgo::fill(card, { 0.5f, 0.5f, 0.5f, 1.0f, 3.0f });
+    card.specmod().channelnames = { "R", "G", "B", "A", "Z" };
+    card.specmod().alpha_channel = 3;
+    card.specmod().z_channel = 4;
+    REQUIRE(card.write(dir + "/card.exr"));
+    std::string log;
+    INFO(log);
+    REQUIRE(run(std::string(LAYERIZE_BIN) + " " + dir + "/card.exr --iscolorspace srgb_tx"
+                    + " --focus 3 -o " + dir + "/layers.exr",
+                log) == 0);
+    const ImageBuf layers = read_image(dir + "/layers.exr");
+    REQUIRE(layers.initialized());
+    float p[5];
+    layers.getpixel(8, 4, p);
+    CHECK(p[0] == Approx(0.2140).epsilon(1e-3));  // sRGB 0.5 decoded
+    CHECK(p[3] == Approx(1.0f));
+}
+
 TEST_CASE("layerize reports bad input like defocus")
 {
     const std::string dir = scratch_dir("cli_layerize_errors");

@@ -110,6 +110,15 @@ void ShotArguments::add_scene(ArgParse& ap)
         "per layer)");
 }
 
+void ShotArguments::add_input_color(ArgParse& ap)
+{
+    add(ap, "--colorconfig FILE", "colorconfig",
+        "OCIO config (default: $OCIO, else the config shipped with defocus)");
+    add(ap, "--iscolorspace NAME", "iscolorspace",
+        "Colour space of the input (default: the file's oiio:ColorSpace if the config has "
+        "it, else linear)");
+}
+
 void ShotArguments::add_threads(ArgParse& ap)
 {
     ap.arg("--threads N").help("Worker threads (default: 0 = all cores)")

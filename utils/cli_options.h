@@ -43,6 +43,8 @@ public:
     void add_camera(OIIO::ArgParse& ap);
     /// The "Scene:" options (--view, --layer, --layers).
     void add_scene(OIIO::ArgParse& ap);
+    /// --colorconfig and --iscolorspace, the input's colour.
+    void add_input_color(OIIO::ArgParse& ap);
     /// --threads.
     void add_threads(OIIO::ArgParse& ap);
 

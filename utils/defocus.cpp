@@ -119,11 +119,7 @@ std::string parse_command_line(int argc, const char* argv[], CommandLine& cl,
                   "mean over its CoC (default: 4)");
     shot_args.add_scene(ap);
     ap.separator("Colour (OpenColorIO; spreading happens in scene-linear light):");
-    shot_args.add(ap, "--colorconfig FILE", "colorconfig",
-                  "OCIO config (default: $OCIO, else the config shipped with defocus)");
-    shot_args.add(ap, "--iscolorspace NAME", "iscolorspace",
-                  "Colour space of the input (default: the file's oiio:ColorSpace if the "
-                  "config has it, else linear)");
+    shot_args.add_input_color(ap);
     shot_args.add(ap, "--tocolorspace NAME", "tocolorspace",
                   "Colour space of the output (default: the input's)");
     ap.arg("--preview FILE")

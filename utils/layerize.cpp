@@ -1,7 +1,9 @@
 // layerize: writes the depth layers defocus would use, as a multi-part EXR
 // (one part per layer, with Z), for inspection and as input again.
 //
-//   read -> sanitize -> layers -> write
+//   read -> sanitize -> to scene-linear -> focus -> layers -> write
+//
+// The first four stages are render_frame's own (prepare_layers).
 #include <cstdlib>
 #include <string>
 #include <vector>
@@ -10,10 +12,9 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/strutil.h>
 
-#include <defocus/focus/focus_at.h>
 #include <defocus/io/image_output.h>
 #include <defocus/io/scene_io.h>
-#include <defocus/layers/layering.h>
+#include <defocus/render_frame.h>
 
 #include "cli_options.h"
 
@@ -59,6 +60,8 @@ int main(int argc, const char* argv[])
     ap.arg("filename").hidden().action([&](cspan<const char*> a) { inputs.emplace_back(a[0]); });
     shot_args.add_camera(ap);
     shot_args.add_scene(ap);
+    ap.separator("Colour (OpenColorIO; the layers are cut and written in scene-linear light):");
+    shot_args.add_input_color(ap);
     ap.separator("Output:");
     ap.arg("-o FILE").help("Multi-part EXR to write the layers to")
         .action(shot_args.store_into(output));
@@ -92,16 +95,10 @@ int main(int argc, const char* argv[])
         return fail("{}", error);
     OIIO::attribute("threads", threads);
 
-    Scene scene;
-    if (!read_scene(inputs, shot.read, scene, error))
-        return fail("{}", error);
-    sanitize(scene, threads);
-    Camera camera;
-    if (!shot_camera(shot, scene, 0, camera, error))
-        return fail("{}", error);
-    const CircleOfConfusion coc(camera, scene.spec.full_width);
     LayeredScene layered;
-    decompose_layers(std::move(scene), coc, shot.layering, layered, threads);
+    FrameResult prepared;
+    if (!prepare_layers(shot, 0, layered, prepared, error, {}, threads))
+        return fail("{}", error);
 
     if (info) {
         for (const LayerReport& l : layered.reports)
@@ -111,7 +108,9 @@ int main(int argc, const char* argv[])
         return EXIT_SUCCESS;
     }
     ImageSpec spec = layered.spec;
-    record_camera(spec, camera);
+    record_camera(spec, prepared.camera);
+    if (prepared.color.loaded)  // the layers are in the working space now
+        spec.attribute("oiio:ColorSpace", prepared.color.working);
     if (!write_layers_atomic(layered.layers, spec, output, error))
         return fail("{}", error);
     return EXIT_SUCCESS;

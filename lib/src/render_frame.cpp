@@ -56,8 +56,10 @@ void describe_output(ImageSpec& spec, const ImageSpec& input, const Shot& shot,
     spec.attribute("Software", "defocus " DEFOCUS_VERSION);
 }
 
-bool render(const Shot& shot, int frame, const ApertureImages& images, FrameResult& out,
-            std::string& error, const StageCallback& on_stage, int nthreads)
+}  // namespace
+
+bool prepare_layers(const Shot& shot, int frame, LayeredScene& layered, FrameResult& out,
+                    std::string& error, const StageCallback& on_stage, int nthreads)
 {
     Timer timer;
     auto stage = [&](const char* name) {
@@ -93,7 +95,6 @@ bool render(const Shot& shot, int frame, const ApertureImages& images, FrameResu
     const CircleOfConfusion coc(out.camera, scene.spec.full_width);
     const bool to_slice = !scene.flat.empty() || !scene.deep.empty();
     const size_t layers_given = scene.layers.size();
-    LayeredScene layered;
     const LayerBounds bounds =
         decompose_layers(std::move(scene), coc, shot.layering, layered, nthreads);
     if (to_slice) {
@@ -108,8 +109,23 @@ bool render(const Shot& shot, int frame, const ApertureImages& images, FrameResu
                              Strutil::join(edges, " "));
     }
     lap("slice");
+    return true;
+}
 
-    stage("render");
+namespace {
+
+bool render(const Shot& shot, int frame, const ApertureImages& images, FrameResult& out,
+            std::string& error, const StageCallback& on_stage, int nthreads)
+{
+    LayeredScene layered;
+    if (!prepare_layers(shot, frame, layered, out, error, on_stage, nthreads))
+        return false;
+    const ColorPlan& color = out.color;
+    const CircleOfConfusion coc(out.camera, layered.spec.full_width);
+    Timer timer;
+    auto lap = [&](const char* name) { out.timings.emplace_back(name, timer.lap()); };
+    if (on_stage)
+        on_stage("render");
     ImageBuf& image = out.image;
     if (shot.output == OutputKind::FocusMap) {
         if (!focus_map(image, layered, out.camera, 8.0, nthreads)) {

@@ -16,6 +16,7 @@
 #include <defocus/color/color_plan.h>
 #include <defocus/composite/layered_dof.h>
 #include <defocus/io/aperture_images.h>
+#include <defocus/layers/layered_scene.h>
 #include <defocus/scene.h>
 #include <defocus/shot/shot.h>
 
@@ -42,6 +43,14 @@ struct FrameResult {
 /// Called as each stage of a frame starts ("read", "colour", "slice",
 /// "render"), for progress display.
 using StageCallback = std::function<void(const char* stage)>;
+
+/// The first half of a frame, shared by render_frame() and layerize: read
+/// -> sanitize -> to scene-linear -> focus -> layers. Fills `layers` and,
+/// of `result`, the source, camera, colour plan, pixel fixes, notes,
+/// slicing and those stages' timings. False with `error` a one-line
+/// message naming the file and the problem.
+bool prepare_layers(const Shot& shot, int frame, LayeredScene& layers, FrameResult& result,
+                    std::string& error, const StageCallback& on_stage = {}, int nthreads = 0);
 
 /// The spec of `frame` of a shot as render_frame() gives it, from the
 /// inputs' headers alone, without reading pixels or rendering: display and
