@@ -36,7 +36,7 @@
 #include <OpenImageIO/timer.h>
 
 #include <defocus/composite/layered_dof.h>
-#include <defocus/io/aperture_images.h>
+#include <defocus/io/aperture_files.h>
 #include <defocus/io/scene_io.h>
 #include <defocus/spread/spread.h>
 
@@ -211,19 +211,19 @@ bool read_stage(const std::string& filename)
 /// front, as the layering stage hands them on.
 struct FloorScene {
     defocus::LayeredScene scene;
-    defocus::RenderSettings settings;
+    defocus::Camera camera;
 };
 
 FloorScene make_floor_scene(const std::vector<bench::FloorLayer>& layers)
 {
     FloorScene s;
     // A 50 mm lens at f/1 on a 36 mm sensor: infinity blurs to 72 px.
-    s.settings.camera.focal_length_mm = 50.0;
-    s.settings.camera.fstop = 1.0;
-    s.settings.camera.sensor_width_mm = 36.0;
-    s.settings.camera.focus_distance = 4.0;
+    s.camera.focal_length_mm = 50.0;
+    s.camera.fstop = 1.0;
+    s.camera.sensor_width_mm = 36.0;
+    s.camera.focus_distance = 4.0;
     const int width = 4096;
-    const defocus::CircleOfConfusion coc(s.settings.camera, width);
+    const defocus::CircleOfConfusion coc(s.camera, width);
     const char* names[4] = { "far", "hills", "post", "leaves" };
     for (size_t i = 0; i < layers.size(); ++i) {
         const bench::FloorLayer& l = layers[i];
@@ -345,7 +345,7 @@ int main(int argc, const char* argv[])
     add("spread and composite, 4 layers 4096x2160", [&] {
         return seconds([&] {
             ImageBuf out;
-            return defocus::render_layered_dof(out, floor_scene.scene, floor_scene.settings);
+            return defocus::render_layered_dof(out, floor_scene.scene, floor_scene.camera);
         });
     });
 

@@ -8,7 +8,7 @@
 #include <OpenImageIO/imagebufalgo.h>
 
 #include <defocus/composite/layered_dof.h>
-#include <defocus/io/aperture_images.h>
+#include <defocus/io/aperture_files.h>
 #include <defocus/spread/hybrid.h>
 
 #include "test_support.h"
@@ -83,18 +83,19 @@ TEST_CASE("a PSF image is scaled to the CoC and normalised")
 
 TEST_CASE("the hybrid method spreads highlights with the PSF image and keeps energy")
 {
-    RenderSettings settings;
-    settings.camera = synthetic_camera(1.0);
-    settings.aperture.shape = ApertureShape::Box;
+    const Camera camera = synthetic_camera(1.0);
+    SpreadOptions spread;
+    spread.aperture.shape = ApertureShape::Box;
     auto psf = std::make_shared<PsfImage>();
     std::string error;
     REQUIRE(read_psf_image(shipped_psf + "disc_rim.exr", *psf, error));
-    settings.psf_image = psf;
+    ApertureImages images;
+    images.psf = psf;
     // A lone highlight (on a transparent wall, so no coverage overlaps).
     ImageBuf out;
     std::vector<LayerReport> report;
-    REQUIRE(render_layered_dof(out, layered_scene(highlight_scene(0.0f), settings.camera),
-                               settings, &report));
+    REQUIRE(render_layered_dof(out, layered_scene(highlight_scene(0.0f), camera), camera, spread,
+                               images, OutputWindow::Input, &report));
     CHECK(report[0].psf_pixels == 1);
     CHECK(channel_sum(out, 0) == Approx(50.0).epsilon(1e-5));
     CHECK(channel_sum(out, 3) == Approx(1.0).epsilon(1e-5));
@@ -109,8 +110,8 @@ TEST_CASE("the hybrid method spreads highlights with the PSF image and keeps ene
     CHECK(corner[0] == 0.0f);
     // On the grey wall, the wall is spread the fast way around it (less
     // the highlight pixel's own 1/730 share of grey).
-    REQUIRE(render_layered_dof(out, layered_scene(highlight_scene(), settings.camera), settings,
-                               &report));
+    REQUIRE(render_layered_dof(out, layered_scene(highlight_scene(), camera), camera, spread,
+                               images, OutputWindow::Input, &report));
     out.getpixel(60 + 12, 40 + 12, corner);
     CHECK(corner[0] == Approx(0.1f).margin(2e-4));
 }

@@ -39,12 +39,11 @@ Scene flat_scene(Shade&& shade)
 
 ImageBuf render(Scene scene, double focus, const LayeringOptions& options = {})
 {
-    RenderSettings settings;
-    settings.camera = synthetic_camera(focus);
+    const Camera camera = synthetic_camera(focus);
     LayeredScene layers;
-    decompose_layers(std::move(scene), CircleOfConfusion(settings.camera, 120), options, layers);
+    decompose_layers(std::move(scene), CircleOfConfusion(camera, 120), options, layers);
     ImageBuf out;
-    REQUIRE(render_layered_dof(out, layers, settings));
+    REQUIRE(render_layered_dof(out, layers, camera));
     return out;
 }
 

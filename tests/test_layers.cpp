@@ -49,10 +49,9 @@ Scene two_layer_scene()
 
 ImageBuf layered(double focus)
 {
-    RenderSettings settings;
-    settings.camera = synthetic_camera(focus);
+    const Camera camera = synthetic_camera(focus);
     ImageBuf out;
-    REQUIRE(render_layered_dof(out, layered_scene(two_layer_scene(), settings.camera), settings));
+    REQUIRE(render_layered_dof(out, layered_scene(two_layer_scene(), camera), camera));
     return out;
 }
 
@@ -133,12 +132,11 @@ TEST_CASE("gathering gives a blurred foreground a sharp silhouette")
 
 TEST_CASE("layers are composited back to front whatever their file order")
 {
-    RenderSettings settings;
-    settings.camera = synthetic_camera(near_z);
+    const Camera camera = synthetic_camera(near_z);
     std::vector<LayerReport> report;
     ImageBuf out;
-    REQUIRE(render_layered_dof(out, layered_scene(two_layer_scene(), settings.camera), settings,
-                               &report));
+    REQUIRE(render_layered_dof(out, layered_scene(two_layer_scene(), camera), camera, {}, {},
+                               OutputWindow::Input, &report));
     REQUIRE(report.size() == 2);
     CHECK(report[0].name == "wall");
     CHECK(report[1].name == "card");

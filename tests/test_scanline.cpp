@@ -6,7 +6,7 @@
 
 #include <OpenImageIO/imagebufalgo.h>
 
-#include <defocus/io/aperture_images.h>
+#include <defocus/io/aperture_files.h>
 #include <defocus/spread/spread.h>
 
 #include "test_support.h"

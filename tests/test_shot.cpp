@@ -7,7 +7,7 @@
 #include <OpenImageIO/strutil.h>
 
 #include <defocus/focus/focus_at.h>
-#include <defocus/io/aperture_images.h>
+#include <defocus/io/aperture_files.h>
 #include <defocus/io/frames.h>
 #include <defocus/shot/keyframes.h>
 #include <defocus/shot/shot.h>
@@ -150,8 +150,8 @@ TEST_CASE("shot settings: command-line text, errors, focus and focus-at exclude 
     std::string error;
     REQUIRE(set_shot_setting(shot, "focus", "3", error));
     REQUIRE(set_shot_setting(shot, "aperture", "mask:iris.png", error));
-    CHECK(shot.aperture.shape == ApertureShape::Mask);
-    CHECK(shot.aperture.mask_file == "iris.png");
+    CHECK(shot.spread.aperture.shape == ApertureShape::Mask);
+    CHECK(shot.spread.aperture.mask_file == "iris.png");
     REQUIRE(set_shot_setting(shot, "focus-at", "10,20", error));
     CHECK(shot.focus.empty());
     REQUIRE(set_shot_setting(shot, "focus", "2", error));

@@ -148,11 +148,11 @@ bool ShotArguments::apply(Shot& shot, std::string& error) const
     // Options that shape only a polygon do nothing to other apertures.
     for (const Given& g : m_given)
         if ((g.setting == "blades" || g.setting == "roundness" || g.setting == "rotation")
-            && shot.aperture.shape != ApertureShape::Polygon) {
+            && shot.spread.aperture.shape != ApertureShape::Polygon) {
             error = OIIO::Strutil::fmt::format("{} applies only to --aperture polygon (the "
                                                "aperture is {})",
                                                g.option,
-                                               aperture_shape_name(shot.aperture.shape));
+                                               aperture_shape_name(shot.spread.aperture.shape));
             return false;
         }
     return true;

@@ -258,7 +258,7 @@ std::string verbose_report(const FrameResult& frame, const CommandLine& cl,
     r += format("  camera: {:.4g} mm f/{:.3g} focus {:.4g} sensor {:.4g} mm, {} lens, {} aperture, "
                 "max blur {:.4g} px\n",
                 c.focal_length_mm, c.fstop, c.focus_distance, c.sensor_width_mm,
-                lens_model_name(c.lens), aperture_shape_name(cl.shot.aperture.shape),
+                lens_model_name(c.lens), aperture_shape_name(cl.shot.spread.aperture.shape),
                 c.max_blur_px);
     for (const std::string& note : frame.notes)
         r += "  " + note + "\n";
@@ -276,7 +276,7 @@ std::string verbose_report(const FrameResult& frame, const CommandLine& cl,
         slow += l.psf_pixels;
         covered += l.pixels;
     }
-    if (!cl.shot.psf_image.empty())
+    if (!cl.shot.spread.psf_image.empty())
         r += format("  hybrid: {} of {} pixels ({:.2f}%) spread with the PSF image\n", slow,
                     covered, covered ? 100.0 * slow / covered : 0.0);
     r += format("  pixels fixed: {} with NaN/inf colour dropped, {} with bad depth taken as "

@@ -41,7 +41,7 @@ void describe_output(ImageSpec& spec, const ImageSpec& input, const Shot& shot,
     if (!shot.compression.empty())
         spec.attribute("compression", shot.compression);
     record_camera(spec, camera);
-    const Aperture& aperture = shot.aperture;
+    const Aperture& aperture = shot.spread.aperture;
     spec.attribute("defocus:aperture", aperture_shape_name(aperture.shape));
     spec.attribute("defocus:aspect", float(aperture.aspect));
     if (aperture.shape == ApertureShape::Mask)
@@ -134,14 +134,6 @@ bool render(const Shot& shot, int frame, const ApertureImages& images, FrameResu
         }
         lap("focus map");
     } else {
-        RenderSettings settings;
-        settings.camera   = out.camera;
-        settings.aperture = shot.aperture;
-        settings.window   = shot.window;
-        settings.hybrid_threshold = shot.hybrid_threshold;
-        settings.exact_shape = shot.exact_shape;
-        settings.mask = images.mask;
-        settings.psf_image = images.psf;
         const int extended = extend_edges(layered, coc, shot.edge, nthreads);
         if (extended > 0)
             out.edges = format("edges: layers extended up to {} px past the data window ({}; "
@@ -151,7 +143,8 @@ bool render(const Shot& shot, int frame, const ApertureImages& images, FrameResu
                                    ? "--edge extend"
                                    : "the data window does not cover the blur's reach");
         RenderTimings timings;
-        if (!render_layered_dof(image, layered, settings, &out.layers, &timings, nthreads)) {
+        if (!render_layered_dof(image, layered, out.camera, shot.spread, images, shot.window,
+                                &out.layers, &timings, nthreads)) {
             error = layered.source + ": " + image.geterror();
             return false;
         }

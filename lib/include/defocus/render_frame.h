@@ -15,7 +15,7 @@
 
 #include <defocus/color/color_plan.h>
 #include <defocus/composite/layered_dof.h>
-#include <defocus/io/aperture_images.h>
+#include <defocus/io/aperture_files.h>
 #include <defocus/layers/layered_scene.h>
 #include <defocus/scene.h>
 #include <defocus/shot/shot.h>

@@ -72,25 +72,26 @@ private:
 /// with the PSF image, the rest with the aperture's filter) or the smooth
 /// filters.
 bool spread_apart(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
-                  const RenderSettings& settings, const RowProfile* profile,
+                  const SpreadOptions& spread, const ApertureImages& images,
+                  const RowProfile* profile,
                   int64_t& psf_pixels, int nthreads)
 {
     auto fast = [&](ImageBuf& out, const ImageBuf& in) {
-        switch (settings.aperture.shape) {
+        switch (spread.aperture.shape) {
         case ApertureShape::Box: return spread_box(out, in, radius, {}, nthreads);
         case ApertureShape::Tent: return spread_smooth(out, in, radius, 2, {}, nthreads);
         case ApertureShape::Smooth: return spread_smooth(out, in, radius, 3, {}, nthreads);
         default:
-            return settings.exact_shape
+            return spread.exact_shape
                        ? spread_scanline(out, in, radius, *profile, {}, nthreads)
                        : spread_aperture(out, in, radius, *profile, exact_highlight_threshold,
                                          {}, nthreads);
         }
     };
-    if (!settings.psf_image)
+    if (!images.psf)
         return fast(dst, color);
 
-    const std::vector<uint8_t> slow = visible_bokeh(color, radius, settings.hybrid_threshold,
+    const std::vector<uint8_t> slow = visible_bokeh(color, radius, spread.hybrid_threshold,
                                                     nthreads);
     psf_pixels = std::count(slow.begin(), slow.end(), uint8_t(1));
     // Split the layer: the selected pixels go one way, the rest the other.
@@ -108,7 +109,7 @@ bool spread_apart(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
             }
         }
     }, by_rows(nthreads));
-    const std::shared_ptr<const PsfImage> psf = settings.psf_image;
+    const std::shared_ptr<const PsfImage> psf = images.psf;
     ImageBuf fast_spread, slow_spread;
     if (!fast(fast_spread, fast_part)
         || !spread_direct(slow_spread, slow_part, radius,
@@ -137,10 +138,10 @@ void composite_image(ImageBuf& frame, const ImageBuf& layer, int nthreads)
 
 /// Whether a layer goes through the spreading engine, composited as it is
 /// spread, rather than spread apart.
-bool spread_in_engine(const RenderSettings& settings)
+bool spread_in_engine(const SpreadOptions& spread, const ApertureImages& images)
 {
-    return !settings.psf_image && settings.aperture.shape != ApertureShape::Tent
-           && settings.aperture.shape != ApertureShape::Smooth;
+    return !images.psf && spread.aperture.shape != ApertureShape::Tent
+           && spread.aperture.shape != ApertureShape::Smooth;
 }
 
 /// One layer ready for the engine: its radii, float pixels and
@@ -152,11 +153,13 @@ struct EngineLayer {
     std::unique_ptr<SpreadEngine> engine;
 };
 
-bool render_layers(ImageBuf& dst, const LayeredScene& scene, const RenderSettings& settings,
-                   std::vector<LayerReport>* report, RenderTimings& timings, int nthreads)
+bool render_layers(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
+                   const SpreadOptions& spread, const ApertureImages& images,
+                   OutputWindow output_window, std::vector<LayerReport>* report,
+                   RenderTimings& timings, int nthreads)
 {
     Timer spread_timer;
-    const CircleOfConfusion coc(settings.camera, scene.spec.full_width);
+    const CircleOfConfusion coc(camera, scene.spec.full_width);
     std::vector<LayerReport> depths = scene.reports;
 
     // Shape apertures share one profile and its footprints, sized to the
@@ -165,20 +168,20 @@ bool render_layers(ImageBuf& dst, const LayeredScene& scene, const RenderSetting
     double max_radius = 0.0;
     for (const LayerReport& d : depths)
         max_radius = std::max({ max_radius, 0.5 * std::abs(d.coc_min), 0.5 * std::abs(d.coc_max) });
-    const Aperture& aperture = settings.aperture;
+    const Aperture& aperture = spread.aperture;
     if (aperture.shape == ApertureShape::Disc || aperture.shape == ApertureShape::Polygon) {
         profile = std::make_shared<ApertureProfile>(aperture);
     } else if (aperture.shape == ApertureShape::Mask) {
-        if (!settings.mask) {
+        if (!images.mask) {
             dst.errorfmt("a mask aperture needs its shape (read_aperture_mask)");
             return false;
         }
-        profile = settings.mask;
+        profile = images.mask;
     }
     const std::unique_ptr<ShapePrograms> programs =
         profile ? std::make_unique<ShapePrograms>(profile, max_radius) : nullptr;
     const SpreadMethod method = aperture.shape == ApertureShape::Box ? SpreadMethod::Box
-                                : settings.exact_shape               ? SpreadMethod::Exact
+                                : spread.exact_shape                 ? SpreadMethod::Exact
                                                                      : SpreadMethod::Bounded;
 
     // Every layer's radii, and its spread (set up in the engine, or done
@@ -197,8 +200,8 @@ bool render_layers(ImageBuf& dst, const LayeredScene& scene, const RenderSetting
             dst.errorfmt("layer '{}': {}", layer.name, e.radius.geterror());
             return false;
         }
-        if (!spread_in_engine(settings)) {
-            if (!spread_apart(apart[i], layer.color, e.radius, settings, profile.get(),
+        if (!spread_in_engine(spread, images)) {
+            if (!spread_apart(apart[i], layer.color, e.radius, spread, images, profile.get(),
                               depths[i].psf_pixels, nthreads)) {
                 dst.errorfmt("layer '{}': {}", layer.name, apart[i].geterror());
                 return false;
@@ -225,8 +228,8 @@ bool render_layers(ImageBuf& dst, const LayeredScene& scene, const RenderSetting
         grown = roi_union(grown, e.engine->extent());
     }
 
-    ROI window = settings.window == OutputWindow::Display ? display
-                 : settings.window == OutputWindow::Grown ? grown
+    ROI window = output_window == OutputWindow::Display ? display
+                 : output_window == OutputWindow::Grown ? grown
                                                           : scene.spec.roi();
     window.chbegin = 0;
     window.chend = 4;
@@ -263,17 +266,17 @@ ImageSpec result_spec(const ImageSpec& scene, const ROI& window, TypeDesc format
     return spec;
 }
 
-bool render_layered_dof(ImageBuf& dst, const LayeredScene& scene,
-                        const RenderSettings& settings,
-                        std::vector<LayerReport>* report, RenderTimings* timings,
-                        int nthreads)
+bool render_layered_dof(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
+                        const SpreadOptions& spread, const ApertureImages& images,
+                        OutputWindow window, std::vector<LayerReport>* report,
+                        RenderTimings* timings, int nthreads)
 {
     RenderTimings unused;
     // Errors are reported, never thrown through the API; running out of
     // memory on a huge blur is the one exception the filters can raise.
     try {
-        return render_layers(dst, scene, settings, report, timings ? *timings : unused,
-                             nthreads);
+        return render_layers(dst, scene, camera, spread, images, window, report,
+                             timings ? *timings : unused, nthreads);
     } catch (const std::bad_alloc&) {
         dst.errorfmt("out of memory (the layers and the blur are too large)");
         return false;

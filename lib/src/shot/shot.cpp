@@ -116,7 +116,7 @@ const std::vector<SettingRule>& rules()
 
         { { "aperture", "aperture", "shape", K::Text },
           [](Shot& shot, const std::string& label, const std::string& value, std::string& error) {
-              Aperture& a = shot.aperture;
+              Aperture& a = shot.spread.aperture;
               if (OIIO::Strutil::starts_with(value, "mask:")) {
                   a.shape     = ApertureShape::Mask;
                   a.mask_file = value.substr(5);
@@ -129,32 +129,32 @@ const std::vector<SettingRule>& rules()
               return false;
           },
           [](const Shot& shot) {
-              return std::string(aperture_shape_name(shot.aperture.shape));
+              return std::string(aperture_shape_name(shot.spread.aperture.shape));
           } },
         text({ "aperture-mask", "aperture", "mask", K::Path },
-             [](auto& s) -> auto& { return s.aperture.mask_file; }),
+             [](auto& s) -> auto& { return s.spread.aperture.mask_file; }),
         number({ "blades", "aperture", "blades", K::Number },
-                     [](auto& s) -> auto& { return s.aperture.blades; }, 3, 16),
+                     [](auto& s) -> auto& { return s.spread.aperture.blades; }, 3, 16),
         number({ "rotation", "aperture", "rotation", K::Number },
-               [](auto& s) -> auto& { return s.aperture.rotation_deg; }, -3600, 3600),
+               [](auto& s) -> auto& { return s.spread.aperture.rotation_deg; }, -3600, 3600),
         number({ "roundness", "aperture", "roundness", K::Number },
-               [](auto& s) -> auto& { return s.aperture.roundness; }, 0, 1),
+               [](auto& s) -> auto& { return s.spread.aperture.roundness; }, 0, 1),
         number({ "aspect", "aperture", "aspect", K::Number },
-               [](auto& s) -> auto& { return s.aperture.aspect; }, 0.05, 20),
+               [](auto& s) -> auto& { return s.spread.aperture.aspect; }, 0.05, 20),
         { { "spread", "aperture", "spread", K::Text },
           [](Shot& shot, const std::string& label, const std::string& value, std::string& error) {
               if (value == "bounded" || value == "exact") {
-                  shot.exact_shape = value == "exact";
+                  shot.spread.exact_shape = value == "exact";
                   return true;
               }
               error = label + ": unknown method '" + value + "' (choose bounded or exact)";
               return false;
           },
-          [](const Shot& shot) { return std::string(shot.exact_shape ? "exact" : "bounded"); } },
+          [](const Shot& shot) { return std::string(shot.spread.exact_shape ? "exact" : "bounded"); } },
         text({ "psf-image", "aperture", "psf_image", K::Path },
-             [](auto& s) -> auto& { return s.psf_image; }),
+             [](auto& s) -> auto& { return s.spread.psf_image; }),
         number({ "hybrid-threshold", "aperture", "hybrid_threshold", K::Number },
-               [](auto& s) -> auto& { return s.hybrid_threshold; }, 1.0, 1e6),
+               [](auto& s) -> auto& { return s.spread.hybrid_threshold; }, 1.0, 1e6),
 
         text({ "colorconfig", "color", "config", K::Path },
              [](auto& s) -> auto& { return s.color_config; }),
@@ -243,7 +243,7 @@ std::string validate(const Shot& shot)
         return "no input file";
     if (shot.focus.empty() && shot.focus_at.empty())
         return "--focus DIST or --focus-at X,Y is required: where the focus is";
-    if (shot.aperture.shape == ApertureShape::Mask && shot.aperture.mask_file.empty())
+    if (shot.spread.aperture.shape == ApertureShape::Mask && shot.spread.aperture.mask_file.empty())
         return "--aperture mask:FILE needs the image of the shape";
     if (!shot.color_config.empty() && !OIIO::Filesystem::is_regular(shot.color_config))
         return "--colorconfig: " + shot.color_config + ": no such file";

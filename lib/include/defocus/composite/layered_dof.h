@@ -14,8 +14,7 @@
 #include <defocus/shot/aperture.h>
 #include <defocus/shot/camera.h>
 #include <defocus/shot/options.h>
-#include <defocus/spread/aperture_profile.h>
-#include <defocus/spread/hybrid.h>
+#include <defocus/spread/aperture_images.h>
 
 namespace defocus {
 
@@ -24,22 +23,6 @@ namespace defocus {
 bool coc_radius(OIIO::ImageBuf& dst, const OIIO::ImageBuf& depth,
                 const CircleOfConfusion& coc, OIIO::ROI roi = {},
                 int nthreads = 0);
-
-struct RenderSettings {
-    Camera camera;
-    Aperture aperture;
-    /// The shape of a mask aperture (see read_aperture_mask).
-    std::shared_ptr<const MaskProfile> mask;
-    /// The hybrid method: when set, the pixels whose bokeh is visible (see
-    /// visible_bokeh, with hybrid_threshold) are spread directly with this
-    /// PSF image, the others with the aperture's fast filter.
-    std::shared_ptr<const PsfImage> psf_image;
-    double hybrid_threshold = 4.0;
-    /// Shapes (disc, polygon, mask) spread exactly, every pixel on its own
-    /// (spread_scanline), rather than in bounded time (spread_aperture).
-    bool exact_shape = false;
-    OutputWindow window = OutputWindow::Input;
-};
 
 /// The spec of a defocused result over `window`: R, G, B, A of type
 /// `format`, in the display window of `scene` (a scene's spec). Its
@@ -57,8 +40,12 @@ struct RenderTimings {
 /// lists its layers' reports in that order, with the pixels the hybrid
 /// method spread with its PSF image. The result keeps the scene's display
 /// window; it has no metadata.
-bool render_layered_dof(OIIO::ImageBuf& dst, const LayeredScene& scene,
-                        const RenderSettings& settings,
+/// The layers are spread as `spread` says, through `camera`, with the
+/// images the options name read beforehand (read_aperture_images); the
+/// result covers `window`.
+bool render_layered_dof(OIIO::ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
+                        const SpreadOptions& spread = {}, const ApertureImages& images = {},
+                        OutputWindow window = OutputWindow::Input,
                         std::vector<LayerReport>* report = nullptr,
                         RenderTimings* timings = nullptr, int nthreads = 0);
 

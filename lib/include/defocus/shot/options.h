@@ -4,7 +4,22 @@
 
 #include <string>
 
+#include <defocus/shot/aperture.h>
+
 namespace defocus {
+
+/// How each layer is spread: the aperture, and by which method.
+struct SpreadOptions {
+    Aperture aperture;
+    /// Shapes (disc, polygon, mask) spread exactly, every pixel on its own
+    /// (spread_scanline), rather than in bounded time (spread_aperture).
+    bool exact_shape = false;
+    /// The hybrid method's PSF image ("" = off): the pixels whose bokeh is
+    /// visible (see visible_bokeh, with hybrid_threshold) are spread with
+    /// it, the others with the aperture's fast filter.
+    std::string psf_image;
+    double hybrid_threshold = 4.0;
+};
 
 /// How the readers take the input files.
 struct ReadOptions {

@@ -37,12 +37,7 @@ struct Shot {
     LensModel lens         = LensModel::ThinLens;
     double max_blur_px     = 512.0;
 
-    Aperture aperture;
-    /// Shapes (disc, polygon, mask) spread exactly, every pixel on its own,
-    /// rather than in bounded time with large footprints merged.
-    bool exact_shape = false;
-    std::string psf_image;  ///< the hybrid method's PSF image ("" = off)
-    double hybrid_threshold = 4.0;
+    SpreadOptions spread;
 
     std::string color_config;  ///< "" = $OCIO, else the shipped config
     std::string input_space;   ///< "" = the file's oiio:ColorSpace, else linear

@@ -6,8 +6,7 @@
 #include <string>
 
 #include <defocus/shot/shot.h>
-#include <defocus/spread/aperture_profile.h>
-#include <defocus/spread/hybrid.h>
+#include <defocus/spread/aperture_images.h>
 
 namespace defocus {
 
@@ -19,12 +18,6 @@ bool read_aperture_mask(const std::string& filename, double aspect, MaskProfile&
 /// The PSF of the hybrid method. False with `error` naming the file and
 /// the problem.
 bool read_psf_image(const std::string& filename, PsfImage& psf, std::string& error);
-
-/// The images a shot's settings name.
-struct ApertureImages {
-    std::shared_ptr<const MaskProfile> mask;  ///< a mask aperture's shape, else null
-    std::shared_ptr<const PsfImage> psf;      ///< the hybrid method's PSF, else null
-};
 
 /// Reads the images `shot` names. False with `error` naming the option,
 /// the file and the problem.

@@ -1,4 +1,4 @@
-#include <defocus/io/aperture_images.h>
+#include <defocus/io/aperture_files.h>
 
 #include <defocus/io/image_input.h>
 
@@ -34,17 +34,17 @@ bool read_psf_image(const std::string& filename, PsfImage& psf, std::string& err
 bool read_aperture_images(const Shot& shot, ApertureImages& images, std::string& error)
 {
     images = ApertureImages();
-    if (shot.aperture.shape == ApertureShape::Mask) {
+    if (shot.spread.aperture.shape == ApertureShape::Mask) {
         auto mask = std::make_shared<MaskProfile>();
-        if (!read_aperture_mask(shot.aperture.mask_file, shot.aperture.aspect, *mask, error)) {
+        if (!read_aperture_mask(shot.spread.aperture.mask_file, shot.spread.aperture.aspect, *mask, error)) {
             error = "--aperture: " + error;
             return false;
         }
         images.mask = std::move(mask);
     }
-    if (!shot.psf_image.empty()) {
+    if (!shot.spread.psf_image.empty()) {
         auto psf = std::make_shared<PsfImage>();
-        if (!read_psf_image(shot.psf_image, *psf, error)) {
+        if (!read_psf_image(shot.spread.psf_image, *psf, error)) {
             error = "--psf-image: " + error;
             return false;
         }
