@@ -107,6 +107,28 @@ float value(const ImageBuf& image, int channel)
 
 }  // namespace
 
+TEST_CASE("every piece of a scene's content is visited: layers, flat renders, deep images")
+{
+    Scene scene;
+    scene.layers.push_back(Layer { "given", ImageBuf(), ImageBuf() });
+    scene.flat.push_back(Layer { "render", ImageBuf(), ImageBuf() });
+    DeepImage deep;
+    deep.name = "deep";
+    scene.deep.push_back(deep);
+    std::vector<std::string> seen;
+    const Scene& as_read = scene;
+    CHECK(for_each_content(as_read,
+        [&](const Layer& layer) { seen.push_back(layer.name); return true; },
+        [&](const DeepImage& image) { seen.push_back(image.name); return true; }));
+    CHECK(seen == std::vector<std::string> { "given", "render", "deep" });
+    // A visit that fails stops there.
+    seen.clear();
+    CHECK_FALSE(for_each_content(scene,
+        [&](Layer& layer) { seen.push_back(layer.name); return layer.name != "render"; },
+        [&](DeepImage& image) { seen.push_back(image.name); return true; }));
+    CHECK(seen == std::vector<std::string> { "given", "render" });
+}
+
 TEST_CASE("a single RGBA+Z image is a flat render")
 {
     const std::string f = write_parts("flat.exr", { { { "R", "G", "B", "A", "Z" }, { 1, 2, 3, 1, 5 } } });

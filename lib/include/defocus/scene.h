@@ -51,6 +51,22 @@ struct Scene {
     std::vector<std::string> notes;
 };
 
+/// Calls on_layer(layer) for every layer and flat render of `scene`, then
+/// on_deep(image) for every deep image, until one returns false (false
+/// then): the one walk over every piece of content. `scene` may be const.
+template<typename SceneType, typename OnLayer, typename OnDeep>
+bool for_each_content(SceneType& scene, OnLayer&& on_layer, OnDeep&& on_deep)
+{
+    for (auto* list : { &scene.layers, &scene.flat })
+        for (auto& layer : *list)
+            if (!on_layer(layer))
+                return false;
+    for (auto& image : scene.deep)
+        if (!on_deep(image))
+            return false;
+    return true;
+}
+
 /// Removes the attributes that describe one part of an input file (its
 /// name, view, part count), not a result made from all of them.
 void erase_part_attributes(OIIO::ImageSpec& spec);

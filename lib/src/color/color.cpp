@@ -228,14 +228,9 @@ bool ColorManagement::display(ImageBuf& dst, const ImageBuf& src, const std::str
 bool convert_scene(Scene& scene, const ColorManagement& config, const std::string& from,
                    const std::string& to, std::string& error, int nthreads)
 {
-    for (auto* list : { &scene.layers, &scene.flat })
-        for (Layer& layer : *list)
-            if (!config.convert(layer.color, from, to, error, nthreads))
-                return false;
-    for (DeepImage& image : scene.deep)
-        if (!config.convert(image, from, to, error, nthreads))
-            return false;
-    return true;
+    return for_each_content(scene,
+        [&](Layer& layer) { return config.convert(layer.color, from, to, error, nthreads); },
+        [&](DeepImage& image) { return config.convert(image, from, to, error, nthreads); });
 }
 
 }  // namespace defocus

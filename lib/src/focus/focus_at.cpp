@@ -17,21 +17,23 @@ namespace {
 std::vector<std::pair<float, float>> surfaces_at(const Scene& scene, int x, int y)
 {
     std::vector<std::pair<float, float>> found;
-    for (const auto* group : { &scene.layers, &scene.flat })
-        for (const Layer& layer : *group) {
+    for_each_content(scene,
+        [&](const Layer& layer) {
             if (!layer.color.roi().contains(x, y))
-                continue;
+                return true;
             const float a = static_cast<const float*>(layer.color.pixeladdr(x, y))[3];
             if (a > 0.0f)
                 found.emplace_back(*static_cast<const float*>(layer.depth.pixeladdr(x, y)), a);
-        }
-    for (const DeepImage& deep : scene.deep) {
-        if (!deep.roi.contains(x, y))
-            continue;
-        const int64_t i = deep.pixel_index(x, y);
-        for (uint64_t s = deep.offsets[i]; s < deep.offsets[i + 1]; ++s)
-            found.emplace_back(deep.samples[s].z, deep.samples[s].a);
-    }
+            return true;
+        },
+        [&](const DeepImage& deep) {
+            if (!deep.roi.contains(x, y))
+                return true;
+            const int64_t i = deep.pixel_index(x, y);
+            for (uint64_t s = deep.offsets[i]; s < deep.offsets[i + 1]; ++s)
+                found.emplace_back(deep.samples[s].z, deep.samples[s].a);
+            return true;
+        });
     return found;
 }
 

@@ -126,13 +126,16 @@ void sanitize_deep(DeepImage& image, AtomicCounts& counts, int nthreads)
 PixelCounts sanitize(Scene& scene, int nthreads)
 {
     AtomicCounts counts;
-    for (auto* list : { &scene.layers, &scene.flat })
-        for (Layer& layer : *list) {
+    for_each_content(scene,
+        [&](Layer& layer) {
             sanitize_layer(layer, counts, nthreads);
             fill_edge_depth(layer, counts, nthreads);
-        }
-    for (DeepImage& image : scene.deep)
-        sanitize_deep(image, counts, nthreads);
+            return true;
+        },
+        [&](DeepImage& image) {
+            sanitize_deep(image, counts, nthreads);
+            return true;
+        });
     return { counts.nonfinite, counts.depth, counts.transparent, counts.edge };
 }
 

@@ -636,20 +636,23 @@ namespace {
 /// Depth in metres: every Z, and a deep sample's Z back, times `scale`.
 void scale_depth(Scene& scene, float scale)
 {
-    for (auto* list : { &scene.layers, &scene.flat })
-        for (Layer& layer : *list) {
+    for_each_content(scene,
+        [&](Layer& layer) {
             const ROI roi = layer.depth.roi();
             parallel_for(roi.ybegin, roi.yend, [&](int y) {
                 float* z = static_cast<float*>(layer.depth.pixeladdr(roi.xbegin, y));
                 for (int x = 0; x < roi.width(); ++x)
                     z[x] *= scale;
             }, by_rows(0));
-        }
-    for (DeepImage& image : scene.deep)
-        for (DeepSample& s : image.samples) {
-            s.z *= scale;
-            s.zback *= scale;
-        }
+            return true;
+        },
+        [&](DeepImage& image) {
+            for (DeepSample& s : image.samples) {
+                s.z *= scale;
+                s.zback *= scale;
+            }
+            return true;
+        });
 }
 
 /// Checks that there are inputs, and that a depth file is given to one.
@@ -727,11 +730,15 @@ bool read_scene(const std::vector<std::string>& filenames, const ReadOptions& op
         scene.deep.push_back(std::move(merged));
     }
     ROI data_window;
-    for (const auto* list : { &scene.layers, &scene.flat })
-        for (const Layer& layer : *list)
+    for_each_content(scene,
+        [&](const Layer& layer) {
             data_window = roi_union(data_window, layer.color.roi());
-    for (const DeepImage& image : scene.deep)
-        data_window = roi_union(data_window, image.roi);
+            return true;
+        },
+        [&](const DeepImage& image) {
+            data_window = roi_union(data_window, image.roi);
+            return true;
+        });
     scene.spec.set_roi(data_window);
     if (options.depth_scale != 1.0)
         scale_depth(scene, float(options.depth_scale));
