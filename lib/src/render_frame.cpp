@@ -179,7 +179,7 @@ bool frame_spec(const Shot& shot, int frame, ImageSpec& spec, std::string& error
         if (shot.window == OutputWindow::Grown) {
             // The largest blur there can be: a footprint reaches one pixel
             // beyond its radius for the fractional edge.
-            const int reach = int(std::ceil(0.5 * shot.max_blur_px)) + 2;
+            const int reach = int(std::ceil(0.5 * shot.camera.max_blur_px)) + 2;
             window = ROI(window.xbegin - reach, window.xend + reach, window.ybegin - reach,
                          window.yend + reach);
         }

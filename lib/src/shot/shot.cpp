@@ -108,11 +108,12 @@ const std::vector<SettingRule>& rules()
                   1e-3, 1e5),
         keyframes({ "fstop", "camera", "fstop", K::Keyframes }, &Shot::fstop, 1, 0.1, 1e4),
         number({ "sensor", "camera", "sensor", K::Number },
-               [](auto& s) -> auto& { return s.sensor_width_mm; }, 1e-3, 1e4),
-        choice({ "lens", "camera", "lens", K::Text }, [](auto& s) -> auto& { return s.lens; },
-               parse_lens_model, lens_model_name, "model", "thin or optical"),
+               [](auto& s) -> auto& { return s.camera.sensor_width_mm; }, 1e-3, 1e4),
+        choice({ "lens", "camera", "lens", K::Text },
+               [](auto& s) -> auto& { return s.camera.lens; }, parse_lens_model,
+               lens_model_name, "model", "thin or optical"),
         number({ "max-blur", "camera", "max_blur", K::Number },
-               [](auto& s) -> auto& { return s.max_blur_px; }, 0.0, 1e5),
+               [](auto& s) -> auto& { return s.camera.max_blur_px; }, 0.0, 1e5),
 
         { { "aperture", "aperture", "shape", K::Text },
           [](Shot& shot, const std::string& label, const std::string& value, std::string& error) {
@@ -259,13 +260,11 @@ bool is_animated(const Shot& shot)
 Camera camera_at(const Shot& shot, int frame)
 {
     Camera camera;
+    static_cast<CameraBody&>(camera) = shot.camera;
     camera.focal_length_mm = shot.focal_length_mm.at(frame, Interpolation::Linear)[0];
     camera.fstop           = shot.fstop.at(frame, Interpolation::Reciprocal)[0];
     if (!shot.focus.empty())
         camera.focus_distance = shot.focus.at(frame, Interpolation::Reciprocal)[0];
-    camera.sensor_width_mm = shot.sensor_width_mm;
-    camera.lens            = shot.lens;
-    camera.max_blur_px     = shot.max_blur_px;
     return camera;
 }
 

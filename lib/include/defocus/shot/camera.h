@@ -18,15 +18,21 @@ enum class LensModel {
     Optical,
 };
 
-/// Camera settings, in the units a cinematographer uses. Depths and the
-/// focus distance share the scene's unit (metres for most renderers).
-struct Camera {
-    double focal_length_mm = 50.0;
-    double fstop           = 2.8;
-    double focus_distance  = 1.0;
+/// What a camera keeps for a whole shot: its filmback, its lens model and
+/// the largest blur it draws.
+struct CameraBody {
     double sensor_width_mm = 36.0;   ///< horizontal filmback
     LensModel lens         = LensModel::ThinLens;
     double max_blur_px     = 512.0;  ///< clamp on the CoC diameter
+};
+
+/// Camera settings at one frame, in the units a cinematographer uses.
+/// Depths and the focus distance share the scene's unit (metres for most
+/// renderers).
+struct Camera : CameraBody {
+    double focal_length_mm = 50.0;
+    double fstop           = 2.8;
+    double focus_distance  = 1.0;
 };
 
 /// The circle of confusion of one camera over an image `display_width`

@@ -32,10 +32,10 @@ struct Shot {
     /// Focus distance, or the pixel (X,Y in the display window) whose
     /// depth is the focus distance: exactly one is set.
     Keyframes focus, focus_at;
-    Keyframes focal_length_mm { 50.0 }, fstop { 2.8 };
-    double sensor_width_mm = 36.0;
-    LensModel lens         = LensModel::ThinLens;
-    double max_blur_px     = 512.0;
+    /// The camera's settings that may change over the shot, from Camera's
+    /// defaults, and those that hold for all of it.
+    Keyframes focal_length_mm { Camera().focal_length_mm }, fstop { Camera().fstop };
+    CameraBody camera;
 
     SpreadOptions spread;
 
