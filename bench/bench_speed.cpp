@@ -35,7 +35,7 @@
 #include <OpenImageIO/sysutil.h>
 #include <OpenImageIO/timer.h>
 
-#include <defocus/composite/layered_dof.h>
+#include <defocus/composite/defocus_layers.h>
 #include <defocus/io/aperture_files.h>
 #include <defocus/io/scene_io.h>
 #include <defocus/spread/spread.h>
@@ -345,7 +345,7 @@ int main(int argc, const char* argv[])
     add("spread and composite, 4 layers 4096x2160", [&] {
         return seconds([&] {
             ImageBuf out;
-            return defocus::render_layered_dof(out, floor_scene.scene, floor_scene.camera);
+            return defocus::defocus_layers(out, floor_scene.scene, floor_scene.camera);
         });
     });
 

@@ -7,7 +7,7 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 
-#include <defocus/composite/layered_dof.h>
+#include <defocus/composite/defocus_layers.h>
 #include <defocus/io/aperture_files.h>
 #include <defocus/spread/hybrid.h>
 
@@ -94,7 +94,7 @@ TEST_CASE("the hybrid method spreads highlights with the PSF image and keeps ene
     // A lone highlight (on a transparent wall, so no coverage overlaps).
     ImageBuf out;
     std::vector<LayerReport> report;
-    REQUIRE(render_layered_dof(out, layered_scene(highlight_scene(0.0f), camera), camera, spread,
+    REQUIRE(defocus_layers(out, layered_scene(highlight_scene(0.0f), camera), camera, spread,
                                images, OutputWindow::Input, &report));
     CHECK(report[0].psf_pixels == 1);
     CHECK(channel_sum(out, 0) == Approx(50.0).epsilon(1e-5));
@@ -110,7 +110,7 @@ TEST_CASE("the hybrid method spreads highlights with the PSF image and keeps ene
     CHECK(corner[0] == 0.0f);
     // On the grey wall, the wall is spread the fast way around it (less
     // the highlight pixel's own 1/730 share of grey).
-    REQUIRE(render_layered_dof(out, layered_scene(highlight_scene(), camera), camera, spread,
+    REQUIRE(defocus_layers(out, layered_scene(highlight_scene(), camera), camera, spread,
                                images, OutputWindow::Input, &report));
     out.getpixel(60 + 12, 40 + 12, corner);
     CHECK(corner[0] == Approx(0.1f).margin(2e-4));

@@ -5,7 +5,7 @@
 
 #include <OpenImageIO/imagebufalgo.h>
 
-#include <defocus/composite/layered_dof.h>
+#include <defocus/composite/defocus_layers.h>
 #include <defocus/layers/layering.h>
 
 #include "test_support.h"
@@ -43,7 +43,7 @@ ImageBuf render(Scene scene, double focus, const LayeringOptions& options = {})
     LayeredScene layers;
     decompose_layers(std::move(scene), CircleOfConfusion(camera, 120), options, layers);
     ImageBuf out;
-    REQUIRE(render_layered_dof(out, layers, camera));
+    REQUIRE(defocus_layers(out, layers, camera));
     return out;
 }
 

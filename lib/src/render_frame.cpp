@@ -114,8 +114,9 @@ bool prepare_layers(const Shot& shot, int frame, LayeredScene& layered, FrameRes
 
 namespace {
 
-bool render(const Shot& shot, int frame, const ApertureImages& images, FrameResult& out,
-            std::string& error, const StageCallback& on_stage, int nthreads)
+/// A frame from its prepared layers to the image to write.
+bool finish_frame(const Shot& shot, int frame, const ApertureImages& images, FrameResult& out,
+                  std::string& error, const StageCallback& on_stage, int nthreads)
 {
     LayeredScene layered;
     if (!prepare_layers(shot, frame, layered, out, error, on_stage, nthreads))
@@ -142,8 +143,8 @@ bool render(const Shot& shot, int frame, const ApertureImages& images, FrameResu
                                shot.edge == EdgeMode::Extend
                                    ? "--edge extend"
                                    : "the data window does not cover the blur's reach");
-        RenderTimings timings;
-        if (!render_layered_dof(image, layered, out.camera, shot.spread, images, shot.window,
+        SpreadTimings timings;
+        if (!defocus_layers(image, layered, out.camera, shot.spread, images, shot.window,
                                 &out.layers, &timings, nthreads)) {
             error = layered.source + ": " + image.geterror();
             return false;
@@ -198,7 +199,7 @@ bool render_frame(const Shot& shot, int frame, const ApertureImages& images,
 {
     result = FrameResult();
     try {
-        return render(shot, frame, images, result, error, on_stage, nthreads);
+        return finish_frame(shot, frame, images, result, error, on_stage, nthreads);
     } catch (const std::bad_alloc&) {
         error = result.source + ": out of memory";
         return false;

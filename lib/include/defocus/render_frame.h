@@ -14,7 +14,7 @@
 #include <OpenImageIO/imagebuf.h>
 
 #include <defocus/color/color_plan.h>
-#include <defocus/composite/layered_dof.h>
+#include <defocus/composite/defocus_layers.h>
 #include <defocus/io/aperture_files.h>
 #include <defocus/layers/layered_scene.h>
 #include <defocus/scene.h>

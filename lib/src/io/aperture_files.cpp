@@ -34,9 +34,10 @@ bool read_psf_image(const std::string& filename, PsfImage& psf, std::string& err
 bool read_aperture_images(const Shot& shot, ApertureImages& images, std::string& error)
 {
     images = ApertureImages();
-    if (shot.spread.aperture.shape == ApertureShape::Mask) {
+    const Aperture& aperture = shot.spread.aperture;
+    if (aperture.shape == ApertureShape::Mask) {
         auto mask = std::make_shared<MaskProfile>();
-        if (!read_aperture_mask(shot.spread.aperture.mask_file, shot.spread.aperture.aspect, *mask, error)) {
+        if (!read_aperture_mask(aperture.mask_file, aperture.aspect, *mask, error)) {
             error = "--aperture: " + error;
             return false;
         }

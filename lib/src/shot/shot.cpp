@@ -151,7 +151,9 @@ const std::vector<SettingRule>& rules()
               error = label + ": unknown method '" + value + "' (choose bounded or exact)";
               return false;
           },
-          [](const Shot& shot) { return std::string(shot.spread.exact_shape ? "exact" : "bounded"); } },
+          [](const Shot& shot) {
+              return std::string(shot.spread.exact_shape ? "exact" : "bounded");
+          } },
         text({ "psf-image", "aperture", "psf_image", K::Path },
              [](auto& s) -> auto& { return s.spread.psf_image; }),
         number({ "hybrid-threshold", "aperture", "hybrid_threshold", K::Number },

@@ -1,4 +1,4 @@
-#include <defocus/composite/layered_dof.h>
+#include <defocus/composite/defocus_layers.h>
 
 #include <algorithm>
 #include <cmath>
@@ -153,10 +153,10 @@ struct EngineLayer {
     std::unique_ptr<SpreadEngine> engine;
 };
 
-bool render_layers(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
-                   const SpreadOptions& spread, const ApertureImages& images,
-                   OutputWindow output_window, std::vector<LayerReport>* report,
-                   RenderTimings& timings, int nthreads)
+bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
+                          const SpreadOptions& spread, const ApertureImages& images,
+                          OutputWindow output_window, std::vector<LayerReport>* report,
+                          SpreadTimings& timings, int nthreads)
 {
     Timer spread_timer;
     const CircleOfConfusion coc(camera, scene.spec.full_width);
@@ -266,16 +266,16 @@ ImageSpec result_spec(const ImageSpec& scene, const ROI& window, TypeDesc format
     return spec;
 }
 
-bool render_layered_dof(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
+bool defocus_layers(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
                         const SpreadOptions& spread, const ApertureImages& images,
                         OutputWindow window, std::vector<LayerReport>* report,
-                        RenderTimings* timings, int nthreads)
+                        SpreadTimings* timings, int nthreads)
 {
-    RenderTimings unused;
+    SpreadTimings unused;
     // Errors are reported, never thrown through the API; running out of
     // memory on a huge blur is the one exception the filters can raise.
     try {
-        return render_layers(dst, scene, camera, spread, images, window, report,
+        return spread_and_composite(dst, scene, camera, spread, images, window, report,
                              timings ? *timings : unused, nthreads);
     } catch (const std::bad_alloc&) {
         dst.errorfmt("out of memory (the layers and the blur are too large)");

@@ -6,7 +6,7 @@
 
 #include <OpenImageIO/imagebufalgo.h>
 
-#include <defocus/composite/layered_dof.h>
+#include <defocus/composite/defocus_layers.h>
 #include <defocus/focus/focus_map.h>
 #include <defocus/spread/spread.h>
 
@@ -51,7 +51,7 @@ ImageBuf layered(double focus)
 {
     const Camera camera = synthetic_camera(focus);
     ImageBuf out;
-    REQUIRE(render_layered_dof(out, layered_scene(two_layer_scene(), camera), camera));
+    REQUIRE(defocus_layers(out, layered_scene(two_layer_scene(), camera), camera));
     return out;
 }
 
@@ -135,7 +135,7 @@ TEST_CASE("layers are composited back to front whatever their file order")
     const Camera camera = synthetic_camera(near_z);
     std::vector<LayerReport> report;
     ImageBuf out;
-    REQUIRE(render_layered_dof(out, layered_scene(two_layer_scene(), camera), camera, {}, {},
+    REQUIRE(defocus_layers(out, layered_scene(two_layer_scene(), camera), camera, {}, {},
                                OutputWindow::Input, &report));
     REQUIRE(report.size() == 2);
     CHECK(report[0].name == "wall");

@@ -30,8 +30,8 @@ bool coc_radius(OIIO::ImageBuf& dst, const OIIO::ImageBuf& depth,
 OIIO::ImageSpec result_spec(const OIIO::ImageSpec& scene, const OIIO::ROI& window,
                             OIIO::TypeDesc format);
 
-/// Where render_layered_dof() spends its time, in seconds.
-struct RenderTimings {
+/// Where defocus_layers() spends its time, in seconds.
+struct SpreadTimings {
     double spread = 0.0;  ///< CoC radii, spreading and compositing, all layers
 };
 
@@ -43,10 +43,10 @@ struct RenderTimings {
 /// The layers are spread as `spread` says, through `camera`, with the
 /// images the options name read beforehand (read_aperture_images); the
 /// result covers `window`.
-bool render_layered_dof(OIIO::ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
+bool defocus_layers(OIIO::ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
                         const SpreadOptions& spread = {}, const ApertureImages& images = {},
                         OutputWindow window = OutputWindow::Input,
                         std::vector<LayerReport>* report = nullptr,
-                        RenderTimings* timings = nullptr, int nthreads = 0);
+                        SpreadTimings* timings = nullptr, int nthreads = 0);
 
 }  // namespace defocus
