@@ -98,8 +98,8 @@ bool DofInput::open(const std::string& name, ImageSpec& newspec, const ImageSpec
         bool frame_given = false;
         if (!apply_hints(config, frame_given, error))
             return fail(error);
-        error = defocus::validate(m_shot);
-        if (!error.empty() || !defocus::read_aperture_images(m_shot, m_images, error))
+        if (!defocus::check_shot(m_shot, error)
+            || !defocus::read_aperture_images(m_shot, m_images, error))
             return fail(error);
         if (!frame_given) {
             std::vector<int> frames;

@@ -53,11 +53,14 @@ TEST_CASE("max blur clamps the CoC")
 TEST_CASE("invalid cameras are named")
 {
     Camera cam;
-    CHECK(validate(cam).empty());
+    std::string error;
+    CHECK(check_camera(cam, error));
     cam.fstop = 0;
-    CHECK_THAT(validate(cam), Catch::Contains("f-stop"));
+    CHECK_FALSE(check_camera(cam, error));
+    CHECK_THAT(error, Catch::Contains("f-stop"));
     cam = Camera();
     cam.lens = LensModel::Optical;
     cam.focus_distance = 0.01;  // inside the 50 mm focal length
-    CHECK_THAT(validate(cam), Catch::Contains("optical"));
+    CHECK_FALSE(check_camera(cam, error));
+    CHECK_THAT(error, Catch::Contains("optical"));
 }

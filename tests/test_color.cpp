@@ -57,9 +57,11 @@ TEST_CASE("the shipped config has the spaces, roles and display the pipeline nee
     CHECK_FALSE(c.is_linear("sRGB - Texture"));
     CHECK_FALSE(c.is_linear("ACEScct"));
     CHECK(c.default_display() == "sRGB");
-    CHECK(c.check_display_view("sRGB", "ACES 1.0 - SDR Video").empty());
-    CHECK(c.check_display_view("sRGB", "Raw").empty());
-    CHECK_THAT(c.check_display_view("sRGB", "Film"), Catch::Contains("ACES 1.0 - SDR Video"));
+    std::string why;
+    CHECK(c.check_display_view("sRGB", "ACES 1.0 - SDR Video", why));
+    CHECK(c.check_display_view("sRGB", "Raw", why));
+    CHECK_FALSE(c.check_display_view("sRGB", "Film", why));
+    CHECK_THAT(why, Catch::Contains("ACES 1.0 - SDR Video"));
     std::string error;
     CHECK(c.require_space("Rec.2020", error).empty());
     CHECK_THAT(error, Catch::Contains("ACEScct"));

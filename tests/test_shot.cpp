@@ -186,7 +186,7 @@ TEST_CASE("checking a shot reads no file; the images its aperture names are read
     const std::string dir = scratch_dir("aperture_images");
     REQUIRE(set_shot_setting(shot, "aperture", "mask:" + dir + "/no_mask.png", error));
     REQUIRE(set_shot_setting(shot, "psf-image", dir + "/no_psf.exr", error));
-    CHECK(validate(shot).empty());
+    CHECK(check_shot(shot, error));
 
     ApertureImages images;
     CHECK_FALSE(read_aperture_images(shot, images, error));

@@ -37,10 +37,15 @@ struct CommandLine {
     int threads = 0;
 };
 
-// Returns "" on success, or the error message.
-std::string parse_command_line(int argc, const char* argv[], CommandLine& cl,
-                               bool& help_only)
+/// Reads the arguments into `cl`. False with `error` the problem; true
+/// with `help_only` set when --help printed the help.
+bool parse_command_line(int argc, const char* argv[], CommandLine& cl, bool& help_only,
+                        std::string& error)
 {
+    auto fail = [&](std::string why) {
+        error = std::move(why);
+        return false;
+    };
     ArgParse ap;
     ap.intro("defocus -- depth of field for layered scenes by constant-time "
              "rectangle spreading\n"
@@ -173,36 +178,34 @@ std::string parse_command_line(int argc, const char* argv[], CommandLine& cl,
     shot_args.add_threads(ap);
 
     if (parse_arguments(ap, argc, argv) < 0)
-        return ap.geterror();
+        return fail(ap.geterror());
     if (ap.aborted()) {  // --help
         help_only = true;
-        return "";
+        return true;
     }
 
-    std::string error;
     const bool from_file = inputs.size() == 1 && Strutil::iends_with(inputs[0], ".dof");
     if (from_file) {
         if (!load_shot(inputs[0], cl.shot, error))
-            return error;
+            return false;
     } else {
         for (const std::string& input : inputs)
             if (Strutil::iends_with(input, ".dof"))
-                return input + ": a .dof scene file must be the only input";
+                return fail(input + ": a .dof scene file must be the only input");
         cl.shot.inputs = inputs;
     }
     if (!shot_args.apply(cl.shot, error) || !shot_args.threads(cl.threads, error))
-        return error;
+        return false;
     if (inputs.empty())
-        return "no input file (usage: defocus INPUT -o OUTPUT [options]; see --help)";
-    error = validate(cl.shot);
-    if (!error.empty())
-        return error;
+        return fail("no input file (usage: defocus INPUT -o OUTPUT [options]; see --help)");
+    if (!check_shot(cl.shot, error))
+        return false;
     if (cl.shot.output == OutputKind::FocusMap && !cl.preview.empty())
-        return "--preview does not apply to --output focusmap, which is already a "
-               "display image";
+        return fail("--preview does not apply to --output focusmap, which is already a "
+                    "display image");
     if (cl.output.empty() && cl.save_scene.empty())
-        return "no output file: give -o OUTPUT";
-    return "";
+        return fail("no output file: give -o OUTPUT");
+    return true;
 }
 
 /// The file a per-frame output (-o, --preview) names for each frame.
@@ -299,14 +302,15 @@ int main(int argc, const char* argv[])
     Filesystem::convert_native_arguments(argc, argv);
     CommandLine cl;
     bool help_only = false;
-    std::string error = parse_command_line(argc, argv, cl, help_only);
+    std::string error;
+    const bool parsed = parse_command_line(argc, argv, cl, help_only, error);
     if (help_only)
         return EXIT_SUCCESS;
     auto fail = [](const std::string& message) {
         Strutil::print(stderr, "defocus: {}\n", message);
         return EXIT_FAILURE;
     };
-    if (!error.empty())
+    if (!parsed)
         return fail(error);
     const Shot& shot = cl.shot;
     // Read once, for every frame.

@@ -82,8 +82,7 @@ int main(int argc, const char* argv[])
         return fail("{}", error);
     if (inputs.empty())
         return fail("no input file (see --help)");
-    error = validate(shot);
-    if (!error.empty())
+    if (!check_shot(shot, error))
         return fail("{}", error);
     if (is_animated(shot))
         return fail("layerize renders no frames: give the camera without keyframes");

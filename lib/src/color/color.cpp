@@ -144,22 +144,26 @@ std::string ColorManagement::default_view(const std::string& display) const
     return m_impl ? m_impl->ocio->getDefaultView(display.c_str()) : "";
 }
 
-std::string ColorManagement::check_display_view(const std::string& display,
-                                            const std::string& view) const
+bool ColorManagement::check_display_view(const std::string& display, const std::string& view,
+                                         std::string& error) const
 {
     const OCIO::Config& c = *m_impl->ocio;
     std::vector<std::string> displays, views;
     for (int i = 0; i < c.getNumDisplays(); ++i)
         displays.emplace_back(c.getDisplay(i));
-    if (std::find(displays.begin(), displays.end(), display) == displays.end())
-        return format("unknown display '{}' (displays: {})", display,
-                      Strutil::join(displays, ", "));
+    if (std::find(displays.begin(), displays.end(), display) == displays.end()) {
+        error = format("unknown display '{}' (displays: {})", display,
+                       Strutil::join(displays, ", "));
+        return false;
+    }
     for (int i = 0; i < c.getNumViews(display.c_str()); ++i)
         views.emplace_back(c.getView(display.c_str(), i));
-    if (std::find(views.begin(), views.end(), view) == views.end())
-        return format("unknown view '{}' of display '{}' (views: {})", view, display,
-                      Strutil::join(views, ", "));
-    return "";
+    if (std::find(views.begin(), views.end(), view) == views.end()) {
+        error = format("unknown view '{}' of display '{}' (views: {})", view, display,
+                       Strutil::join(views, ", "));
+        return false;
+    }
+    return true;
 }
 
 namespace {
@@ -214,8 +218,7 @@ bool ColorManagement::display(ImageBuf& dst, const ImageBuf& src, const std::str
                           const std::string& display, const std::string& view,
                           std::string& error, int nthreads) const
 {
-    error = check_display_view(display, view);
-    if (!error.empty())
+    if (!check_display_view(display, view, error))
         return false;
     if (!ImageBufAlgo::ociodisplay(dst, src, display, view, from, "", true, "", "",
                                    &m_impl->oiio, {}, nthreads)) {

@@ -90,8 +90,7 @@ bool shot_camera(const Shot& shot, const Scene& scene, int frame, Camera& camera
             return false;
         }
     }
-    error = validate(camera);
-    return error.empty();
+    return check_camera(camera, error);
 }
 
 }  // namespace defocus

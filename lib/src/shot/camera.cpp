@@ -61,25 +61,29 @@ void record_camera(OIIO::ImageSpec& spec, const Camera& c)
     spec.attribute("defocus:lens", lens_model_name(c.lens));
 }
 
-std::string validate(const Camera& c)
+bool check_camera(const Camera& c, std::string& error)
 {
+    auto fail = [&](std::string why) {
+        error = std::move(why);
+        return false;
+    };
     auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
     if (!positive(c.focal_length_mm))
-        return "focal length must be a positive number of mm";
+        return fail("focal length must be a positive number of mm");
     if (!positive(c.fstop))
-        return "f-stop must be positive";
+        return fail("f-stop must be positive");
     if (!positive(c.focus_distance))
-        return "focus distance must be positive";
+        return fail("focus distance must be positive");
     if (!positive(c.sensor_width_mm))
-        return "sensor width must be a positive number of mm";
+        return fail("sensor width must be a positive number of mm");
     if (!(c.max_blur_px >= 0.0) || !std::isfinite(c.max_blur_px))
-        return "max blur must be a finite number of pixels >= 0";
+        return fail("max blur must be a finite number of pixels >= 0");
     if (c.lens == LensModel::Optical
         && c.focus_distance <= c.focal_length_mm * 1e-3)
-        return OIIO::Strutil::fmt::format(
+        return fail(OIIO::Strutil::fmt::format(
             "the optical lens cannot focus at {} (inside the focal length {} mm)",
-            c.focus_distance, c.focal_length_mm);
-    return "";
+            c.focus_distance, c.focal_length_mm));
+    return true;
 }
 
 }  // namespace defocus

@@ -240,17 +240,22 @@ std::string shot_setting(const Shot& shot, const std::string& name)
     return rule ? rule->get(shot) : std::string();
 }
 
-std::string validate(const Shot& shot)
+bool check_shot(const Shot& shot, std::string& error)
 {
+    auto fail = [&](std::string why) {
+        error = std::move(why);
+        return false;
+    };
     if (shot.inputs.empty())
-        return "no input file";
+        return fail("no input file");
     if (shot.focus.empty() && shot.focus_at.empty())
-        return "--focus DIST or --focus-at X,Y is required: where the focus is";
-    if (shot.spread.aperture.shape == ApertureShape::Mask && shot.spread.aperture.mask_file.empty())
-        return "--aperture mask:FILE needs the image of the shape";
+        return fail("--focus DIST or --focus-at X,Y is required: where the focus is");
+    const Aperture& aperture = shot.spread.aperture;
+    if (aperture.shape == ApertureShape::Mask && aperture.mask_file.empty())
+        return fail("--aperture mask:FILE needs the image of the shape");
     if (!shot.color_config.empty() && !OIIO::Filesystem::is_regular(shot.color_config))
-        return "--colorconfig: " + shot.color_config + ": no such file";
-    return "";
+        return fail("--colorconfig: " + shot.color_config + ": no such file");
+    return true;
 }
 
 bool is_animated(const Shot& shot)

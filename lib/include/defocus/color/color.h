@@ -49,10 +49,10 @@ public:
 
     std::string default_display() const;
     std::string default_view(const std::string& display) const;
-    /// "" when the display has the view, else a message listing the
-    /// displays or the display's views.
-    std::string check_display_view(const std::string& display,
-                                   const std::string& view) const;
+    /// True when the display has the view; else false with `error`
+    /// listing the displays or the display's views.
+    bool check_display_view(const std::string& display, const std::string& view,
+                            std::string& error) const;
 
     /// Converts the colour channels (R,G,B) of premultiplied RGBA `image`
     /// from one space to another in place. Conversions involving a space

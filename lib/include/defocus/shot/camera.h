@@ -70,7 +70,8 @@ const char* lens_model_name(LensModel lens);
 /// defocus:lens.
 void record_camera(OIIO::ImageSpec& spec, const Camera& camera);
 
-/// The first problem with the camera's settings, or "" when they are valid.
-std::string validate(const Camera& camera);
+/// True when the camera's settings are valid; else false with `error` the
+/// first problem.
+bool check_camera(const Camera& camera, std::string& error);
 
 }  // namespace defocus

@@ -85,8 +85,9 @@ bool set_shot_setting(Shot& shot, const std::string& name, const std::string& va
 /// unset).
 std::string shot_setting(const Shot& shot, const std::string& name);
 
-/// The first reason the shot cannot be rendered, or "".
-std::string validate(const Shot& shot);
+/// True when the shot can be rendered; else false with `error` the first
+/// reason it cannot. Reads no file.
+bool check_shot(const Shot& shot, std::string& error);
 
 /// True when a setting changes over frames.
 bool is_animated(const Shot& shot);
