@@ -136,7 +136,7 @@ TEST_CASE("layers are composited back to front whatever their file order")
     std::vector<LayerReport> report;
     ImageBuf out;
     REQUIRE(defocus_layers(out, layered_scene(two_layer_scene(), camera), camera, {}, {},
-                               OutputWindow::Input, &report));
+                           OutputWindow::Input, &report));
     REQUIRE(report.size() == 2);
     CHECK(report[0].name == "wall");
     CHECK(report[1].name == "card");

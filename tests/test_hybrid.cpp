@@ -95,7 +95,7 @@ TEST_CASE("the hybrid method spreads highlights with the PSF image and keeps ene
     ImageBuf out;
     std::vector<LayerReport> report;
     REQUIRE(defocus_layers(out, layered_scene(highlight_scene(0.0f), camera), camera, spread,
-                               images, OutputWindow::Input, &report));
+                           images, OutputWindow::Input, &report));
     CHECK(report[0].psf_pixels == 1);
     CHECK(channel_sum(out, 0) == Approx(50.0).epsilon(1e-5));
     CHECK(channel_sum(out, 3) == Approx(1.0).epsilon(1e-5));
@@ -111,7 +111,7 @@ TEST_CASE("the hybrid method spreads highlights with the PSF image and keeps ene
     // On the grey wall, the wall is spread the fast way around it (less
     // the highlight pixel's own 1/730 share of grey).
     REQUIRE(defocus_layers(out, layered_scene(highlight_scene(), camera), camera, spread,
-                               images, OutputWindow::Input, &report));
+                           images, OutputWindow::Input, &report));
     out.getpixel(60 + 12, 40 + 12, corner);
     CHECK(corner[0] == Approx(0.1f).margin(2e-4));
 }

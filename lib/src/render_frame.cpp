@@ -145,7 +145,7 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images, Fra
                                    : "the data window does not cover the blur's reach");
         SpreadTimings timings;
         if (!defocus_layers(image, layered, out.camera, shot.spread, images, shot.window,
-                                &out.layers, &timings, nthreads)) {
+                            &out.layers, &timings, nthreads)) {
             error = layered.source + ": " + image.geterror();
             return false;
         }

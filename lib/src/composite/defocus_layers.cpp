@@ -267,9 +267,9 @@ ImageSpec result_spec(const ImageSpec& scene, const ROI& window, TypeDesc format
 }
 
 bool defocus_layers(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
-                        const SpreadOptions& spread, const ApertureImages& images,
-                        OutputWindow window, std::vector<LayerReport>* report,
-                        SpreadTimings* timings, int nthreads)
+                    const SpreadOptions& spread, const ApertureImages& images,
+                    OutputWindow window, std::vector<LayerReport>* report,
+                    SpreadTimings* timings, int nthreads)
 {
     SpreadTimings unused;
     // Errors are reported, never thrown through the API; running out of

@@ -2,16 +2,12 @@
 // per-pixel CoC, composite back to front with "over" on the spread alpha.
 #pragma once
 
-#include <cstdint>
-#include <memory>
-#include <string>
 #include <vector>
 
 #include <OpenImageIO/imagebuf.h>
 
 #include <defocus/layers/layered_scene.h>
 #include <defocus/scene.h>
-#include <defocus/shot/aperture.h>
 #include <defocus/shot/camera.h>
 #include <defocus/shot/options.h>
 #include <defocus/spread/aperture_images.h>
@@ -35,18 +31,17 @@ struct SpreadTimings {
     double spread = 0.0;  ///< CoC radii, spreading and compositing, all layers
 };
 
-/// Renders the defocused, flattened premultiplied RGBA of a sanitized
-/// (see sanitize()), layered scene, back to front; `report`, when given,
-/// lists its layers' reports in that order, with the pixels the hybrid
-/// method spread with its PSF image. The result keeps the scene's display
-/// window; it has no metadata.
-/// The layers are spread as `spread` says, through `camera`, with the
-/// images the options name read beforehand (read_aperture_images); the
-/// result covers `window`.
+/// Spreads each layer of a sanitized (see sanitize()), layered scene as
+/// `spread` says, through `camera`, with the images the options name read
+/// beforehand (read_aperture_images), and composites the layers back to
+/// front: the defocused, flattened premultiplied RGBA over `window`, in the
+/// scene's display window, without metadata. `report`, when given, lists
+/// the layers' reports in that order, with the pixels the hybrid method
+/// spread with its PSF image.
 bool defocus_layers(OIIO::ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
-                        const SpreadOptions& spread = {}, const ApertureImages& images = {},
-                        OutputWindow window = OutputWindow::Input,
-                        std::vector<LayerReport>* report = nullptr,
-                        SpreadTimings* timings = nullptr, int nthreads = 0);
+                    const SpreadOptions& spread = {}, const ApertureImages& images = {},
+                    OutputWindow window = OutputWindow::Input,
+                    std::vector<LayerReport>* report = nullptr,
+                    SpreadTimings* timings = nullptr, int nthreads = 0);
 
 }  // namespace defocus
