@@ -11,6 +11,7 @@
 #include <OpenImageIO/imagebufalgo.h>
 
 #include <defocus/io/image_input.h>
+#include <defocus/layers/layering.h>
 
 namespace defocus_test {
 
@@ -19,10 +20,8 @@ using namespace OIIO;
 defocus::LayeredScene layered_scene(defocus::Scene scene, const defocus::Camera& camera)
 {
     defocus::LayeredScene out;
-    out.source = scene.source;
-    out.spec = scene.spec;
-    out.layers = std::move(scene.layers);
-    defocus::order_layers(out, defocus::CircleOfConfusion(camera, out.spec.full_width));
+    const defocus::CircleOfConfusion coc(camera, scene.spec.full_width);
+    defocus::decompose_layers(std::move(scene), coc, {}, out);
     return out;
 }
 

@@ -21,8 +21,8 @@ using OIIO::ROI;
 /// not see; see defocus::read_image_file). Empty when unreadable.
 ImageBuf read_image(const std::string& file);
 
-/// The layers of `scene` (no flat or deep content), described with
-/// `camera` and ordered back to front, as layering gives them.
+/// `scene` layered for `camera`, as the layering stage gives it (scenes
+/// of layers only: described and ordered back to front).
 defocus::LayeredScene layered_scene(defocus::Scene scene, const defocus::Camera& camera);
 
 /// A float image of `nchannels` over `roi`, all zero.

@@ -115,12 +115,10 @@ bool prepare_layers(const Shot& shot, int frame, LayeredScene& layered, FrameRes
 namespace {
 
 /// A frame from its prepared layers to the image to write.
-bool finish_frame(const Shot& shot, int frame, const ApertureImages& images, FrameResult& out,
-                  std::string& error, const StageCallback& on_stage, int nthreads)
+bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
+                  LayeredScene& layered, FrameResult& out, std::string& error,
+                  const StageCallback& on_stage, int nthreads)
 {
-    LayeredScene layered;
-    if (!prepare_layers(shot, frame, layered, out, error, on_stage, nthreads))
-        return false;
     const ColorPlan& color = out.color;
     const CircleOfConfusion coc(out.camera, layered.spec.full_width);
     Timer timer;
@@ -199,7 +197,9 @@ bool render_frame(const Shot& shot, int frame, const ApertureImages& images,
 {
     result = FrameResult();
     try {
-        return finish_frame(shot, frame, images, result, error, on_stage, nthreads);
+        LayeredScene layered;
+        return prepare_layers(shot, frame, layered, result, error, on_stage, nthreads)
+               && finish_frame(shot, frame, images, layered, result, error, on_stage, nthreads);
     } catch (const std::bad_alloc&) {
         error = result.source + ": out of memory";
         return false;
