@@ -45,7 +45,7 @@ private:
 
     std::string m_filename;
     Shot m_shot;
-    defocus::ApertureImages m_images;  ///< read once when the .dof is opened
+    defocus::ShotAssets m_assets;  ///< read once when the .dof is opened
     int m_frame = 1;
     std::mutex m_render_mutex;
     bool m_rendered = false;
@@ -99,7 +99,7 @@ bool DofInput::open(const std::string& name, ImageSpec& newspec, const ImageSpec
         if (!apply_hints(config, frame_given, error))
             return fail(error);
         if (!defocus::check_shot(m_shot, error)
-            || !defocus::read_aperture_images(m_shot, m_images, error))
+            || !defocus::read_shot_assets(m_shot, m_assets, error))
             return fail(error);
         if (!frame_given) {
             std::vector<int> frames;
@@ -107,7 +107,7 @@ bool DofInput::open(const std::string& name, ImageSpec& newspec, const ImageSpec
                 return fail(error);
             m_frame = frames.front();
         }
-        if (!defocus::frame_spec(m_shot, m_frame, m_spec, error))
+        if (!defocus::frame_spec(m_shot, m_frame, m_assets, m_spec, error))
             return fail(error);
     } catch (const std::exception& e) {
         return fail(e.what());
@@ -120,7 +120,7 @@ bool DofInput::close()
 {
     std::lock_guard<std::mutex> lock(m_render_mutex);
     m_shot = Shot();
-    m_images = defocus::ApertureImages();
+    m_assets = defocus::ShotAssets();
     m_frame = 1;
     m_rendered = false;
     m_render_error.clear();
@@ -134,7 +134,7 @@ std::string DofInput::render()
     try {
         defocus::FrameResult frame;
         std::string error;
-        if (!defocus::render_frame(m_shot, m_frame, m_images, frame, error))
+        if (!defocus::render_frame(m_shot, m_frame, m_assets, frame, error))
             return error;
         // In the spec's window and pixel type, as open() promised: where the
         // spec's window is larger (a grown window is the largest the blur

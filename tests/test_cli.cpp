@@ -447,6 +447,7 @@ TEST_CASE("colour: bad spaces, displays, views and configs are one-line errors")
         { " --tocolorspace P3", "unknown colour space 'P3'" },
         { " --iscolorspace raw", "'Raw' is data" },
         { " --colorconfig " + broken, "broken.ocio: colour config (--colorconfig) fails to load" },
+        { " --colorconfig " + dir + "/gone.ocio", "gone.ocio: colour config (--colorconfig) not found" },
         { " --preview " + dir + "/p.png --display Projector", "displays: sRGB" },
         { " --preview " + dir + "/p.png --display-view Film", "views: ACES 1.0 - SDR Video, Raw" },
     };

@@ -1,5 +1,7 @@
 // Shots: keyframes, frame patterns, settings, .dof files and focusing on a
 // pixel.
+#include <set>
+
 #include <catch2/catch.hpp>
 
 #include <OpenImageIO/filesystem.h>
@@ -12,6 +14,7 @@
 #include <defocus/shot/keyframes.h>
 #include <defocus/shot/shot.h>
 #include <defocus/shot/shot_file.h>
+#include <defocus/shot/shot_options.h>
 
 #include "test_support.h"
 
@@ -175,6 +178,28 @@ TEST_CASE("shot settings: command-line text, errors, focus and focus-at exclude 
     CHECK(camera.focus_distance == 2.0);
     CHECK(camera.fstop == 2.8);  // the defaults
     CHECK(camera.focal_length_mm == 50.0);
+}
+
+TEST_CASE("every command-line option sets a setting; every setting but the mask file has one")
+{
+    std::set<std::string> with_option;
+    for (const ShotOption& option : shot_options()) {
+        INFO(option.spec);
+        Shot shot;
+        std::string error;
+        // A switch sets its own value; other options are checked for a
+        // setting of that name by an unknown value's error.
+        if (option.value)
+            CHECK(set_shot_setting(shot, option.setting, option.value, error));
+        else if (!set_shot_setting(shot, option.setting, "?", error))
+            CHECK_FALSE(contains(error, "unknown setting"));
+        with_option.insert(option.setting);
+    }
+    for (const ShotSetting& s : shot_settings()) {
+        INFO(s.name);
+        // The mask's file is given with its shape: --aperture mask:FILE.
+        CHECK(with_option.count(s.name) == (std::string(s.name) == "aperture-mask" ? 0 : 1));
+    }
 }
 
 TEST_CASE("checking a shot reads no file; the images its aperture names are read apart")

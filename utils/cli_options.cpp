@@ -63,60 +63,15 @@ std::function<void(cspan<const char*>)> ShotArguments::store_into(std::string& i
     };
 }
 
-void ShotArguments::add(ArgParse& ap, const char* spec, const char* setting, const char* help,
-                        const char* value)
+void ShotArguments::add_options(ArgParse& ap, OptionGroup group)
 {
-    ap.arg(spec).help(help).action([this, setting, value](cspan<const char*> argv) {
-        m_given.push_back({ argv[0], setting, value ? value : argv[1] });
-    });
-}
-
-void ShotArguments::add_camera(ArgParse& ap)
-{
-    ap.separator("Camera (DIST, N and MM take keyframes FRAME:VALUE,... for a focus pull):");
-    add(ap, "--focus DIST", "focus",
-        "Focus distance in metres, e.g. 3 or 1001:3,1040:1.2 (required, or --focus-at)");
-    add(ap, "--focus-at X,Y", "focus-at",
-        "Focus on what is seen at display-window pixel X,Y: the median depth of the "
-        "front-most opaque surface over 5x5 pixels; keyframes F:X,Y,F:X,Y...");
-    add(ap, "--focal MM", "focal", "Focal length in mm (default: 50)");
-    add(ap, "--fstop N", "fstop", "Aperture f-number (default: 2.8)");
-    add(ap, "--sensor MM", "sensor",
-        "Horizontal filmback width in mm, spanning the display window (default: 36)");
-    add(ap, "--lens MODEL", "lens",
-        "thin: render cameras, no breathing (default); optical: Potmesil & Chakravarty");
-    add(ap, "--max-blur PX", "max-blur",
-        "Largest CoC diameter in pixels; larger blur is clamped (default: 512)");
-}
-
-void ShotArguments::add_scene(ArgParse& ap)
-{
-    ap.separator("Scene:");
-    add(ap, "--view NAME", "view",
-        "View of a multi-view EXR (default: the first part's view)");
-    add(ap, "--layer NAME", "layer",
-        "Channel prefix of colour and depth, e.g. 'beauty' for beauty.R..beauty.Z, or "
-        "Blender's view layer name (default: plain R,G,B,A,Z or the file's only "
-        "prefixed set)");
-    add(ap, "--depth FILE|CHANNEL", "depth",
-        "Depth for a render without Z, or instead of its Z: a channel of the input by name, "
-        "or a depth image (its Z or only channel; a frame pattern for sequences)");
-    add(ap, "--depth-scale S", "depth-scale",
-        "Metres per depth unit of the input's Z, e.g. 0.01 for centimetres (default: 1; "
-        "--focus stays in metres)");
-    add(ap, "--layers N", "layers",
-        "Depth layers to cut deep and flat inputs into, spaced evenly in CoC (default: "
-        "0 = automatic: boundaries in the gaps between objects, at most 24 px of CoC "
-        "per layer)");
-}
-
-void ShotArguments::add_input_color(ArgParse& ap)
-{
-    add(ap, "--colorconfig FILE", "colorconfig",
-        "OCIO config (default: $OCIO, else the config shipped with defocus)");
-    add(ap, "--iscolorspace NAME", "iscolorspace",
-        "Colour space of the input (default: the file's oiio:ColorSpace if the config has "
-        "it, else linear)");
+    if (*option_group_heading(group))
+        ap.separator(option_group_heading(group));
+    for (const ShotOption& option : shot_options())
+        if (option.group == group)
+            ap.arg(option.spec).help(option.help).action([this, &option](cspan<const char*> argv) {
+                m_given.push_back({ argv[0], option.setting, option.value ? option.value : argv[1] });
+            });
 }
 
 void ShotArguments::add_threads(ArgParse& ap)
@@ -142,8 +97,7 @@ bool ShotArguments::apply(Shot& shot, std::string& error) const
         }
     for (const Given& g : m_given)
         if (!g.setting.empty()
-            && !set_shot_setting(shot, g.setting, g.value, error,
-                                 g.setting == "pixel-type" ? "-d" : ""))
+            && !set_shot_setting(shot, g.setting, g.value, error, g.option))
             return false;
     // Options that shape only a polygon do nothing to other apertures.
     for (const Given& g : m_given)

@@ -10,6 +10,7 @@
 #include <OpenImageIO/argparse.h>
 
 #include <defocus/shot/shot.h>
+#include <defocus/shot/shot_options.h>
 
 namespace defocus {
 
@@ -33,18 +34,9 @@ public:
     /// An ArgParse action that stores the option's value into `into`.
     std::function<void(OIIO::cspan<const char*>)> store_into(std::string& into);
 
-    /// Adds option `spec` (e.g. "--focus DIST") setting shot setting
-    /// `setting` to its value, or for a switch (e.g. "--crop") to `value`.
-    void add(OIIO::ArgParse& ap, const char* spec, const char* setting, const char* help,
-             const char* value = nullptr);
-
-    /// The "Camera:" options (--focus, --focus-at, --focal, --fstop,
-    /// --sensor, --lens, --max-blur).
-    void add_camera(OIIO::ArgParse& ap);
-    /// The "Scene:" options (--view, --layer, --layers).
-    void add_scene(OIIO::ArgParse& ap);
-    /// --colorconfig and --iscolorspace, the input's colour.
-    void add_input_color(OIIO::ArgParse& ap);
+    /// Adds the options of `group` (see shot_options.h), under the group's
+    /// heading when it has one.
+    void add_options(OIIO::ArgParse& ap, OptionGroup group);
     /// --threads.
     void add_threads(OIIO::ArgParse& ap);
 

@@ -89,44 +89,16 @@ bool parse_command_line(int argc, const char* argv[], CommandLine& cl, bool& hel
     });
 
     ShotArguments shot_args;
-    ap.separator("Sequences:");
-    shot_args.add(ap, "--frames LIST", "frames",
-                  "Frames to render: 1001-1100, 1-99x2 (every other), 1,5,9-12 "
-                  "(default: the frames the input pattern finds on disk)");
+    shot_args.add_options(ap, OptionGroup::Sequences);
     ap.arg("--stop-on-error").help("Stop at the first bad frame (default: report it, "
                                    "write the others, exit non-zero)")
         .action([&](cspan<const char*>) { cl.stop_on_error = true; });
-    shot_args.add_camera(ap);
-    ap.separator("Aperture:");
-    shot_args.add(ap, "--aperture SHAPE", "aperture",
-                  "Bokeh shape, each with the CoC disc's area: disc (default); polygon (an "
-                  "iris of --blades blades); mask:FILE (the shape in an image, thresholded "
-                  "at half its peak); box (a square: the fastest); tent and smooth (soft "
-                  "PSFs of the disc's spread, in constant time)");
-    shot_args.add(ap, "--blades N", "blades", "Polygon: number of blades, 3-16 (default: 6)");
-    shot_args.add(ap, "--rotation DEG", "rotation",
-                  "Polygon: counterclockwise rotation; 0 = a vertex pointing right "
-                  "(default: 0)");
-    shot_args.add(ap, "--roundness R", "roundness",
-                  "Polygon: 0 = straight blades, 1 = a disc (default: 0)");
-    shot_args.add(ap, "--aspect A", "aspect",
-                  "Anamorphic squeeze: < 1 narrows the bokeh horizontally (default: 1)");
-    shot_args.add(ap, "--spread METHOD", "spread",
-                  "Disc, polygon and mask: bounded (default: constant time, large "
-                  "footprints merged in blocks of at most r/4 pixels, highlights exact) or "
-                  "exact (every pixel on its own: time grows with the blur)");
-    shot_args.add(ap, "--psf-image FILE", "psf-image",
-                  "The hybrid method: pixels whose bokeh is visible (bright highlights) are "
-                  "spread with this PSF image, scaled to their CoC; all others with the "
-                  "fast --aperture filter");
-    shot_args.add(ap, "--hybrid-threshold T", "hybrid-threshold",
-                  "Hybrid: a pixel's bokeh is visible when it is T times brighter than the "
-                  "mean over its CoC (default: 4)");
-    shot_args.add_scene(ap);
+    shot_args.add_options(ap, OptionGroup::Camera);
+    shot_args.add_options(ap, OptionGroup::Aperture);
+    shot_args.add_options(ap, OptionGroup::Scene);
     ap.separator("Colour (OpenColorIO; spreading happens in scene-linear light):");
-    shot_args.add_input_color(ap);
-    shot_args.add(ap, "--tocolorspace NAME", "tocolorspace",
-                  "Colour space of the output (default: the input's)");
+    shot_args.add_options(ap, OptionGroup::InputColor);
+    shot_args.add_options(ap, OptionGroup::OutputColor);
     ap.arg("--preview FILE")
         .help("Also write an 8-bit display-referred preview (e.g. a .png) of the display "
               "window; a frame pattern for sequences")
@@ -147,26 +119,7 @@ bool parse_command_line(int argc, const char* argv[], CommandLine& cl, bool& hel
         .help("Output file, or frame pattern for sequences (required); its extension "
               "picks the format")
         .action(shot_args.store_into(cl.output));
-    shot_args.add(ap, "--output KIND", "output",
-                  "image: the defocused image (default); focusmap: where the focus falls, "
-                  "green in focus, red in front, blue behind, brighter with more blur, "
-                  "whitened where the blur reaches --max-blur");
-    shot_args.add(ap, "-d TYPE", "pixel-type",
-                  "Output pixel type: half or float (default: the input's)");
-    shot_args.add(ap, "--compression NAME", "compression",
-                  "Output compression, e.g. zip, piz, dwaa (default: the input's)");
-    shot_args.add(ap, "--crop", "window",
-                  "Clip the result to the display window (default: the input's data "
-                  "window, as oiiotool keeps it)",
-                  "display");
-    shot_args.add(ap, "--edge MODE", "edge",
-                  "Beyond the data window: extend (its edge pixels continue outwards, so "
-                  "the frame keeps its light to the corners), black (nothing), auto "
-                  "(default: extend where the data window does not cover the blur)");
-    shot_args.add(ap, "--grow", "window",
-                  "Grow the data window by the blur, keeping all of the light spread "
-                  "beyond the input's data window",
-                  "grown");
+    shot_args.add_options(ap, OptionGroup::Output);
     ap.arg("--save-scene FILE")
         .help("Write the inputs and settings as a .dof scene file (without -o: only that)")
         .action(shot_args.store_into(cl.save_scene));
@@ -229,11 +182,11 @@ bool frame_outputs(const std::string& option, const std::string& pattern,
 bool write_preview(const FrameResult& frame, const CommandLine& cl, const std::string& file,
                    std::string& error)
 {
-    if (!frame.color.loaded) {
+    if (!frame.color.config) {
         error = "--preview needs an OpenColorIO config: " + frame.color.summary;
         return false;
     }
-    const ColorManagement& c = frame.color.config;
+    const ColorManagement& c = *frame.color.config;
     const std::string display = cl.display.empty() ? c.default_display() : cl.display;
     const std::string view = cl.display_view.empty() ? c.default_view(display)
                                                      : cl.display_view;
@@ -314,8 +267,8 @@ int main(int argc, const char* argv[])
         return fail(error);
     const Shot& shot = cl.shot;
     // Read once, for every frame.
-    ApertureImages images;
-    if (!read_aperture_images(shot, images, error))
+    ShotAssets assets;
+    if (!read_shot_assets(shot, assets, error))
         return fail(error);
 
     std::vector<int> frames;
@@ -371,7 +324,7 @@ int main(int argc, const char* argv[])
         FrameResult frame;
         std::string error;
         const bool ok = [&] {
-            if (!render_frame(shot, frames[i], images, frame, error,
+            if (!render_frame(shot, frames[i], assets, frame, error,
                               [&](const char* stage) { progress.stage(label, stage); },
                               cl.threads))
                 return false;

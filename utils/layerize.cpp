@@ -58,10 +58,10 @@ int main(int argc, const char* argv[])
               "  layerize flat.exr -o layers.exr --focal 85 --fstop 1.4 --focus 3\n"
               "  defocus layers.exr -o out.exr --focal 85 --fstop 1.4 --focus 3\n");
     ap.arg("filename").hidden().action([&](cspan<const char*> a) { inputs.emplace_back(a[0]); });
-    shot_args.add_camera(ap);
-    shot_args.add_scene(ap);
+    shot_args.add_options(ap, OptionGroup::Camera);
+    shot_args.add_options(ap, OptionGroup::Scene);
     ap.separator("Colour (OpenColorIO; the layers are cut and written in scene-linear light):");
-    shot_args.add_input_color(ap);
+    shot_args.add_options(ap, OptionGroup::InputColor);
     ap.separator("Output:");
     ap.arg("-o FILE").help("Multi-part EXR to write the layers to")
         .action(shot_args.store_into(output));
@@ -94,9 +94,11 @@ int main(int argc, const char* argv[])
         return fail("{}", error);
     OIIO::attribute("threads", threads);
 
+    ShotAssets assets;
     LayeredScene layered;
     FrameResult prepared;
-    if (!prepare_layers(shot, 0, layered, prepared, error, {}, threads))
+    if (!read_shot_assets(shot, assets, error)
+        || !prepare_layers(shot, 0, assets, layered, prepared, error, {}, threads))
         return fail("{}", error);
 
     if (info) {
@@ -108,7 +110,7 @@ int main(int argc, const char* argv[])
     }
     ImageSpec spec = layered.spec;
     record_camera(spec, prepared.camera);
-    if (prepared.color.loaded)  // the layers are in the working space now
+    if (prepared.color.config)  // the layers are in the working space now
         spec.attribute("oiio:ColorSpace", prepared.color.working);
     if (!write_layers_atomic(layered.layers, spec, output, error))
         return fail("{}", error);

@@ -36,7 +36,7 @@ void describe_output(ImageSpec& spec, const ImageSpec& input, const Shot& shot,
     spec.extra_attribs = input.extra_attribs;
     erase_part_attributes(spec);
     // A focus map is false colour: it has no colour space.
-    if (color.loaded && shot.output == OutputKind::Image)
+    if (color.config && shot.output == OutputKind::Image)
         spec.attribute("oiio:ColorSpace", color.output);
     if (!shot.compression.empty())
         spec.attribute("compression", shot.compression);
@@ -58,8 +58,9 @@ void describe_output(ImageSpec& spec, const ImageSpec& input, const Shot& shot,
 
 }  // namespace
 
-bool prepare_layers(const Shot& shot, int frame, LayeredScene& layered, FrameResult& out,
-                    std::string& error, const StageCallback& on_stage, int nthreads)
+bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, LayeredScene& layered,
+                    FrameResult& out, std::string& error, const StageCallback& on_stage,
+                    int nthreads)
 {
     Timer timer;
     auto stage = [&](const char* name) {
@@ -79,11 +80,11 @@ bool prepare_layers(const Shot& shot, int frame, LayeredScene& layered, FrameRes
 
     stage("colour");
     ColorPlan& color = out.color;
-    if (!plan_color(color, shot.color_config, shot.input_space, shot.output_space,
+    if (!plan_color(color, assets.color, assets.no_color, shot.input_space, shot.output_space,
                     scene.spec, error))
         return false;
     if (color.convert_input
-        && !convert_scene(scene, color.config, color.input, color.working, error, nthreads)) {
+        && !convert_scene(scene, *color.config, color.input, color.working, error, nthreads)) {
         error = scene.source + ": " + error;
         return false;
     }
@@ -149,8 +150,8 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
         }
         out.timings.emplace_back("spread and composite", timings.spread);
         timer.lap();
-        if (color.loaded
-            && !color.config.convert(image, color.working, color.output, error, nthreads))
+        if (color.config
+            && !color.config->convert(image, color.working, color.output, error, nthreads))
             return false;
         lap("colour out");
     }
@@ -161,14 +162,15 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
 
 }  // namespace
 
-bool frame_spec(const Shot& shot, int frame, ImageSpec& spec, std::string& error)
+bool frame_spec(const Shot& shot, int frame, const ShotAssets& assets, ImageSpec& spec,
+                std::string& error)
 {
     ImageSpec input;
     ColorPlan color;
     if (!read_scene_spec(frame_inputs(shot, frame), frame_read_options(shot, frame), input,
                          error)
-        || !plan_color(color, shot.color_config, shot.input_space, shot.output_space, input,
-                       error))
+        || !plan_color(color, assets.color, assets.no_color, shot.input_space,
+                       shot.output_space, input, error))
         return false;
     const ROI display(input.full_x, input.full_x + input.full_width, input.full_y,
                       input.full_y + input.full_height, 0, 1, 0, 4);
@@ -191,15 +193,16 @@ bool frame_spec(const Shot& shot, int frame, ImageSpec& spec, std::string& error
     return true;
 }
 
-bool render_frame(const Shot& shot, int frame, const ApertureImages& images,
+bool render_frame(const Shot& shot, int frame, const ShotAssets& assets,
                   FrameResult& result, std::string& error, const StageCallback& on_stage,
                   int nthreads)
 {
     result = FrameResult();
     try {
         LayeredScene layered;
-        return prepare_layers(shot, frame, layered, result, error, on_stage, nthreads)
-               && finish_frame(shot, frame, images, layered, result, error, on_stage, nthreads);
+        return prepare_layers(shot, frame, assets, layered, result, error, on_stage, nthreads)
+               && finish_frame(shot, frame, assets.aperture, layered, result, error, on_stage,
+                               nthreads);
     } catch (const std::bad_alloc&) {
         error = result.source + ": out of memory";
         return false;

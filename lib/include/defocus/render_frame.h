@@ -15,7 +15,7 @@
 
 #include <defocus/color/color_plan.h>
 #include <defocus/composite/defocus_layers.h>
-#include <defocus/io/aperture_files.h>
+#include <defocus/io/shot_assets.h>
 #include <defocus/layers/layered_scene.h>
 #include <defocus/scene.h>
 #include <defocus/shot/shot.h>
@@ -49,8 +49,9 @@ using StageCallback = std::function<void(const char* stage)>;
 /// of `result`, the source, camera, colour plan, pixel fixes, notes,
 /// slicing and those stages' timings. False with `error` a one-line
 /// message naming the file and the problem.
-bool prepare_layers(const Shot& shot, int frame, LayeredScene& layers, FrameResult& result,
-                    std::string& error, const StageCallback& on_stage = {}, int nthreads = 0);
+bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, LayeredScene& layers,
+                    FrameResult& result, std::string& error, const StageCallback& on_stage = {},
+                    int nthreads = 0);
 
 /// The spec of `frame` of a shot as render_frame() gives it, from the
 /// inputs' headers alone, without reading pixels or rendering: display and
@@ -58,13 +59,14 @@ bool prepare_layers(const Shot& shot, int frame, LayeredScene& layers, FrameResu
 /// OutputWindow::Grown the data window is the largest the blur can make;
 /// when the shot focuses at a pixel the focus distance is not known yet and
 /// defocus:focusDistance is left out.
-bool frame_spec(const Shot& shot, int frame, OIIO::ImageSpec& spec, std::string& error);
+bool frame_spec(const Shot& shot, int frame, const ShotAssets& assets, OIIO::ImageSpec& spec,
+                std::string& error);
 
 /// Renders `frame` of a shot (the inputs' frame patterns and the keyframes
-/// are taken at it) with the images its aperture names, read once for all
-/// frames (read_aperture_images). False with `error` a one-line message
-/// naming the file and the problem.
-bool render_frame(const Shot& shot, int frame, const ApertureImages& images,
+/// are taken at it) with its assets, read once for all frames
+/// (read_shot_assets). False with `error` a one-line message naming the
+/// file and the problem.
+bool render_frame(const Shot& shot, int frame, const ShotAssets& assets,
                   FrameResult& result, std::string& error, const StageCallback& on_stage = {},
                   int nthreads = 0);
 

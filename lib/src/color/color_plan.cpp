@@ -6,23 +6,21 @@ namespace defocus {
 
 using OIIO::Strutil::fmt::format;
 
-bool plan_color(ColorPlan& plan, const std::string& config_file,
-                const std::string& input_space, const std::string& output_space,
-                const OIIO::ImageSpec& input_spec, std::string& error)
+bool plan_color(ColorPlan& plan, std::shared_ptr<const ColorManagement> config,
+                const std::string& no_config, const std::string& input_space,
+                const std::string& output_space, const OIIO::ImageSpec& input_spec,
+                std::string& error)
 {
-    const bool asked = !config_file.empty() || !input_space.empty()
-                       || !output_space.empty();
-    std::string load_error;
-    plan.loaded = plan.config.load(config_file, load_error);
-    if (!plan.loaded) {
-        if (asked) {
-            error = load_error;
+    plan.config = std::move(config);
+    if (!plan.config) {
+        if (!input_space.empty() || !output_space.empty()) {
+            error = no_config;
             return false;
         }
-        plan.summary = "colour: no config (" + load_error + "); the input is taken as linear";
+        plan.summary = "colour: no config (" + no_config + "); the input is taken as linear";
         return true;
     }
-    const ColorManagement& c = plan.config;
+    const ColorManagement& c = *plan.config;
     if (!input_space.empty()) {
         plan.input = c.require_space(input_space, error);
         if (plan.input.empty()) {

@@ -3,7 +3,6 @@
 #include <functional>
 #include <type_traits>
 
-#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/strutil.h>
 
 #include <defocus/shot/option_value.h>
@@ -253,8 +252,6 @@ bool check_shot(const Shot& shot, std::string& error)
     const Aperture& aperture = shot.spread.aperture;
     if (aperture.shape == ApertureShape::Mask && aperture.mask_file.empty())
         return fail("--aperture mask:FILE needs the image of the shape");
-    if (!shot.color_config.empty() && !OIIO::Filesystem::is_regular(shot.color_config))
-        return fail("--colorconfig: " + shot.color_config + ": no such file");
     return true;
 }
 

@@ -2,6 +2,7 @@
 // the layers are spread in, and the output's.
 #pragma once
 
+#include <memory>
 #include <string>
 
 #include <OpenImageIO/imageio.h>
@@ -11,8 +12,7 @@
 namespace defocus {
 
 struct ColorPlan {
-    ColorManagement config;
-    bool loaded = false;  ///< false: no config, and none was needed
+    std::shared_ptr<const ColorManagement> config;  ///< null: none, and none was needed
     std::string input, working, output;
     bool convert_input = false;  ///< the input is not linear: convert it to `working`
     /// Why the input space is a guess ("" when it was named or tagged
@@ -21,15 +21,15 @@ struct ColorPlan {
     std::string summary;         ///< one line for -v
 };
 
-/// Plans the colour of a render of an input with `input_spec`. Loads
-/// `config_file` (see ColorManagement::load). `input_space` ("" = the
-/// file's oiio:ColorSpace when the config knows it, OIIO's generic
-/// "Linear" as lin_rec709, else scene_linear; the last two are guesses) and
-/// `output_space` ("" = the input's) must be spaces of the config. Without
-/// any config the input is taken as linear, unless a config or a space was
-/// named: then that is an error.
-bool plan_color(ColorPlan& plan, const std::string& config_file,
-                const std::string& input_space, const std::string& output_space,
-                const OIIO::ImageSpec& input_spec, std::string& error);
+/// Plans the colour of a render of an input with `input_spec` in `config`.
+/// `input_space` ("" = the file's oiio:ColorSpace when the config knows it,
+/// OIIO's generic "Linear" as lin_rec709, else scene_linear; the last two
+/// are guesses) and `output_space` ("" = the input's) must be spaces of the
+/// config. Without a config (`no_config` says why) the input is taken as
+/// linear, unless a space is named: then that is an error.
+bool plan_color(ColorPlan& plan, std::shared_ptr<const ColorManagement> config,
+                const std::string& no_config, const std::string& input_space,
+                const std::string& output_space, const OIIO::ImageSpec& input_spec,
+                std::string& error);
 
 }  // namespace defocus

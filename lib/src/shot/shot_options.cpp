@@ -1,0 +1,113 @@
+#include <defocus/shot/shot_options.h>
+
+namespace defocus {
+
+const std::vector<ShotOption>& shot_options()
+{
+    using G = OptionGroup;
+    static const std::vector<ShotOption> options = {
+        { G::Sequences, "--frames LIST", "frames",
+          "Frames to render: 1001-1100, 1-99x2 (every other), 1,5,9-12 "
+          "(default: the frames the input pattern finds on disk)" },
+
+        { G::Camera, "--focus DIST", "focus",
+          "Focus distance in metres, e.g. 3 or 1001:3,1040:1.2 (required, or --focus-at)" },
+        { G::Camera, "--focus-at X,Y", "focus-at",
+          "Focus on what is seen at display-window pixel X,Y: the median depth of the "
+          "front-most opaque surface over 5x5 pixels; keyframes F:X,Y,F:X,Y..." },
+        { G::Camera, "--focal MM", "focal", "Focal length in mm (default: 50)" },
+        { G::Camera, "--fstop N", "fstop", "Aperture f-number (default: 2.8)" },
+        { G::Camera, "--sensor MM", "sensor",
+          "Horizontal filmback width in mm, spanning the display window (default: 36)" },
+        { G::Camera, "--lens MODEL", "lens",
+          "thin: render cameras, no breathing (default); optical: Potmesil & Chakravarty" },
+        { G::Camera, "--max-blur PX", "max-blur",
+          "Largest CoC diameter in pixels; larger blur is clamped (default: 512)" },
+
+        { G::Aperture, "--aperture SHAPE", "aperture",
+          "Bokeh shape, each with the CoC disc's area: disc (default); polygon (an "
+          "iris of --blades blades); mask:FILE (the shape in an image, thresholded "
+          "at half its peak); box (a square: the fastest); tent and smooth (soft "
+          "PSFs of the disc's spread, in constant time)" },
+        { G::Aperture, "--blades N", "blades", "Polygon: number of blades, 3-16 (default: 6)" },
+        { G::Aperture, "--rotation DEG", "rotation",
+          "Polygon: counterclockwise rotation; 0 = a vertex pointing right (default: 0)" },
+        { G::Aperture, "--roundness R", "roundness",
+          "Polygon: 0 = straight blades, 1 = a disc (default: 0)" },
+        { G::Aperture, "--aspect A", "aspect",
+          "Anamorphic squeeze: < 1 narrows the bokeh horizontally (default: 1)" },
+        { G::Aperture, "--spread METHOD", "spread",
+          "Disc, polygon and mask: bounded (default: constant time, large "
+          "footprints merged in blocks of at most r/4 pixels, highlights exact) or "
+          "exact (every pixel on its own: time grows with the blur)" },
+        { G::Aperture, "--psf-image FILE", "psf-image",
+          "The hybrid method: pixels whose bokeh is visible (bright highlights) are "
+          "spread with this PSF image, scaled to their CoC; all others with the "
+          "fast --aperture filter" },
+        { G::Aperture, "--hybrid-threshold T", "hybrid-threshold",
+          "Hybrid: a pixel's bokeh is visible when it is T times brighter than the "
+          "mean over its CoC (default: 4)" },
+
+        { G::Scene, "--view NAME", "view",
+          "View of a multi-view EXR (default: the first part's view)" },
+        { G::Scene, "--layer NAME", "layer",
+          "Channel prefix of colour and depth, e.g. 'beauty' for beauty.R..beauty.Z, or "
+          "Blender's view layer name (default: plain R,G,B,A,Z or the file's only "
+          "prefixed set)" },
+        { G::Scene, "--depth FILE|CHANNEL", "depth",
+          "Depth for a render without Z, or instead of its Z: a channel of the input by "
+          "name, or a depth image (its Z or only channel; a frame pattern for sequences)" },
+        { G::Scene, "--depth-scale S", "depth-scale",
+          "Metres per depth unit of the input's Z, e.g. 0.01 for centimetres (default: 1; "
+          "--focus stays in metres)" },
+        { G::Scene, "--layers N", "layers",
+          "Depth layers to cut deep and flat inputs into, spaced evenly in CoC (default: "
+          "0 = automatic: boundaries in the gaps between objects, at most 24 px of CoC "
+          "per layer)" },
+
+        { G::InputColor, "--colorconfig FILE", "colorconfig",
+          "OCIO config (default: $OCIO, else the config shipped with defocus)" },
+        { G::InputColor, "--iscolorspace NAME", "iscolorspace",
+          "Colour space of the input (default: the file's oiio:ColorSpace if the config "
+          "has it, else linear)" },
+
+        { G::OutputColor, "--tocolorspace NAME", "tocolorspace",
+          "Colour space of the output (default: the input's)" },
+
+        { G::Output, "--output KIND", "output",
+          "image: the defocused image (default); focusmap: where the focus falls, "
+          "green in focus, red in front, blue behind, brighter with more blur, "
+          "whitened where the blur reaches --max-blur" },
+        { G::Output, "-d TYPE", "pixel-type",
+          "Output pixel type: half or float (default: the input's)" },
+        { G::Output, "--compression NAME", "compression",
+          "Output compression, e.g. zip, piz, dwaa (default: the input's)" },
+        { G::Output, "--crop", "window",
+          "Clip the result to the display window (default: the input's data "
+          "window, as oiiotool keeps it)",
+          "display" },
+        { G::Output, "--edge MODE", "edge",
+          "Beyond the data window: extend (its edge pixels continue outwards, so "
+          "the frame keeps its light to the corners), black (nothing), auto "
+          "(default: extend where the data window does not cover the blur)" },
+        { G::Output, "--grow", "window",
+          "Grow the data window by the blur, keeping all of the light spread "
+          "beyond the input's data window",
+          "grown" },
+    };
+    return options;
+}
+
+const char* option_group_heading(OptionGroup group)
+{
+    switch (group) {
+    case OptionGroup::Sequences: return "Sequences:";
+    case OptionGroup::Camera:
+        return "Camera (DIST, N and MM take keyframes FRAME:VALUE,... for a focus pull):";
+    case OptionGroup::Aperture: return "Aperture:";
+    case OptionGroup::Scene: return "Scene:";
+    default: return "";
+    }
+}
+
+}  // namespace defocus
