@@ -36,6 +36,7 @@
 #include <OpenImageIO/timer.h>
 
 #include <defocus/composite/defocus_layers.h>
+#include <defocus/color/color.h>
 #include <defocus/io/aperture_files.h>
 #include <defocus/io/scene_io.h>
 #include <defocus/spread/spread.h>
@@ -302,21 +303,24 @@ int main(int argc, const char* argv[])
     auto hexagon = std::make_shared<defocus::ApertureProfile>(hexagon_aperture);
     auto mask = std::make_shared<defocus::MaskProfile>();
     std::string error;
-    if (!defocus::read_aperture_mask(std::string(EXAMPLES_DIR) + "/psf/blades7.exr", 1.0, *mask,
-                                     error)) {
+    if (!defocus::read_aperture_mask(std::string(EXAMPLES_DIR) + "/psf/blades7.exr", 1.0,
+                                     defocus::luma_weights(nullptr), *mask, error)) {
         std::fprintf(stderr, "bench_speed: %s\n", error.c_str());
         return 1;
     }
+    // As a frame spreads them: highlights in place.
+    const defocus::HighlightTest highlights { defocus::exact_highlight_threshold,
+                                              defocus::luma_weights(nullptr) };
     using Filter = std::function<bool(ImageBuf&, const TestLayer&)>;
     const std::vector<std::pair<std::string, Filter>> filters = {
         { "box", [](ImageBuf& out, const TestLayer& l) {
               return defocus::spread_box(out, l.color, l.radius); } },
         { "disc", [&](ImageBuf& out, const TestLayer& l) {
-              return defocus::spread_aperture(out, l.color, l.radius, *disc); } },
+              return defocus::spread_aperture(out, l.color, l.radius, *disc, highlights); } },
         { "polygon", [&](ImageBuf& out, const TestLayer& l) {
-              return defocus::spread_aperture(out, l.color, l.radius, *hexagon); } },
+              return defocus::spread_aperture(out, l.color, l.radius, *hexagon, highlights); } },
         { "mask", [&](ImageBuf& out, const TestLayer& l) {
-              return defocus::spread_aperture(out, l.color, l.radius, *mask); } },
+              return defocus::spread_aperture(out, l.color, l.radius, *mask, highlights); } },
         { "disc, --spread exact", [&](ImageBuf& out, const TestLayer& l) {
               return defocus::spread_scanline(out, l.color, l.radius, *disc); } },
         { "tent", [](ImageBuf& out, const TestLayer& l) {

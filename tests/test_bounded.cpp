@@ -7,6 +7,7 @@
 
 #include <OpenImageIO/imagebufalgo.h>
 
+#include <defocus/color/color.h>
 #include <defocus/spread/spread.h>
 
 #include "test_support.h"
@@ -19,7 +20,7 @@ using OIIO::ROI;
 namespace {
 
 /// No pixel counts as a highlight: every large footprint is merged.
-constexpr double merge_all = std::numeric_limits<double>::infinity();
+const HighlightTest merge_all {};
 
 Aperture hexagon()
 {
@@ -112,7 +113,8 @@ TEST_CASE("a highlight keeps its exact bokeh among merged pixels")
     color.setpixel(101, 97, bright);
     const ApertureProfile profile{Aperture()};
     ImageBuf bounded, exact;
-    REQUIRE(spread_aperture(bounded, color, radius, profile));
+    REQUIRE(spread_aperture(bounded, color, radius, profile,
+                            { exact_highlight_threshold, luma_weights(nullptr) }));
     REQUIRE(spread_scanline(exact, color, radius, profile));
     // The highlight lights each pixel of its disc with 1000 / (pi 40^2),
     // about 0.2, so a merged highlight would differ by that much at its

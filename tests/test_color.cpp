@@ -6,6 +6,7 @@
 #include <cstdlib>
 
 #include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/strutil.h>
 #include <OpenImageIO/imagebufalgo.h>
 
 #include <defocus/color/color.h>
@@ -141,4 +142,24 @@ TEST_CASE("the config comes from the argument, then $OCIO, then the shipped one"
     REQUIRE(default_config.load("", error));
     CHECK(default_config.origin() == "shipped");
     CHECK_THAT(default_config.path(), Catch::Contains("share/defocus/config.ocio"));
+}
+
+TEST_CASE("luminance weights come from the config in use")
+{
+    CHECK(shipped().luma() == Imath::V3d(0.2126, 0.7152, 0.0722));
+    // A config with other weights gives those.
+    std::string text;
+    REQUIRE(OIIO::Filesystem::read_text_file(SHIPPED_OCIO_CONFIG, text));
+    REQUIRE(OIIO::Strutil::contains(text, "luma: [0.2126, 0.7152, 0.0722]"));
+    const std::string other = scratch_dir("color_luma") + "/other_luma.ocio";
+    OIIO::Filesystem::write_text_file(
+        other, OIIO::Strutil::replace(text, "luma: [0.2126, 0.7152, 0.0722]",
+                                      "luma: [0.25, 0.5, 0.25]"));
+    ColorManagement config;
+    std::string error;
+    REQUIRE(config.load(other, error));
+    CHECK(config.luma() == Imath::V3d(0.25, 0.5, 0.25));
+    CHECK(luma_weights(&config) == config.luma());
+    // Without a config the input is linear Rec.709.
+    CHECK(luma_weights(nullptr) == Imath::V3d(0.2126, 0.7152, 0.0722));
 }

@@ -7,6 +7,7 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 
+#include <defocus/color/color.h>
 #include <defocus/composite/defocus_layers.h>
 #include <defocus/io/aperture_files.h>
 #include <defocus/spread/hybrid.h>
@@ -48,21 +49,39 @@ TEST_CASE("visible bokeh: a highlight against its surroundings, not an even area
     ImageBuf radius;
     REQUIRE(coc_radius(radius, scene.layers[0].depth,
                        CircleOfConfusion(synthetic_camera(1.0), 120)));
-    const std::vector<uint8_t> slow = visible_bokeh(scene.layers[0].color, radius, 4.0);
+    const std::vector<uint8_t> slow = visible_bokeh(scene.layers[0].color, radius, { 4.0, luma_weights(nullptr) });
     CHECK(std::count(slow.begin(), slow.end(), uint8_t(1)) == 1);
     CHECK(slow[40 * 120 + 60] == 1);
     // In focus, nothing's bokeh is visible.
     REQUIRE(coc_radius(radius, scene.layers[0].depth,
                        CircleOfConfusion(synthetic_camera(10.0), 120)));
-    const std::vector<uint8_t> sharp = visible_bokeh(scene.layers[0].color, radius, 4.0);
+    const std::vector<uint8_t> sharp = visible_bokeh(scene.layers[0].color, radius, { 4.0, luma_weights(nullptr) });
     CHECK(std::count(sharp.begin(), sharp.end(), uint8_t(1)) == 0);
+}
+
+TEST_CASE("visible bokeh weighs colour by the luminance weights it is given")
+{
+    // A blue highlight, 3x the grey wall in blue alone: 1.1x its luminance
+    // by Rec.709's weights (blue counts 7%), 3x when only blue counts.
+    Scene scene = highlight_scene();
+    const float blue[4] = { 0.1f, 0.1f, 0.3f, 1.0f };
+    scene.layers[0].color.setpixel(60, 40, blue);
+    ImageBuf radius;
+    REQUIRE(coc_radius(radius, scene.layers[0].depth,
+                       CircleOfConfusion(synthetic_camera(1.0), 120)));
+    auto selected = [&](const Imath::V3d& luma) {
+        const std::vector<uint8_t> s = visible_bokeh(scene.layers[0].color, radius, { 2.0, luma });
+        return std::count(s.begin(), s.end(), uint8_t(1));
+    };
+    CHECK(selected(luma_weights(nullptr)) == 0);
+    CHECK(selected(Imath::V3d(0.0, 0.0, 1.0)) == 1);
 }
 
 TEST_CASE("a PSF image is scaled to the CoC and normalised")
 {
     PsfImage psf;
     std::string error;
-    REQUIRE(read_psf_image(shipped_psf + "disc_rim.exr", psf, error));
+    REQUIRE(read_psf_image(shipped_psf + "disc_rim.exr", luma_weights(nullptr), psf, error));
     for (double r : { 0.5, 3.0, 7.5, 20.0 }) {
         const Footprint fp = psf.footprint(r);
         double sum = 0.0;
@@ -77,7 +96,7 @@ TEST_CASE("a PSF image is scaled to the CoC and normalised")
     CHECK(fp.at(c + 19, c) > 1.5 * fp.at(c, c));
     CHECK(fp.at(c + 15, c + 15) == 0.0);
     PsfImage missing;
-    CHECK_FALSE(read_psf_image(shipped_psf + "nope.exr", missing, error));
+    CHECK_FALSE(read_psf_image(shipped_psf + "nope.exr", luma_weights(nullptr), missing, error));
     CHECK_THAT(error, Catch::Contains("nope.exr"));
 }
 
@@ -88,7 +107,7 @@ TEST_CASE("the hybrid method spreads highlights with the PSF image and keeps ene
     spread.aperture.shape = ApertureShape::Box;
     auto psf = std::make_shared<PsfImage>();
     std::string error;
-    REQUIRE(read_psf_image(shipped_psf + "disc_rim.exr", *psf, error));
+    REQUIRE(read_psf_image(shipped_psf + "disc_rim.exr", luma_weights(nullptr), *psf, error));
     ApertureImages images;
     images.psf = psf;
     // A lone highlight (on a transparent wall, so no coverage overlaps).

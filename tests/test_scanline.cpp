@@ -7,6 +7,7 @@
 #include <OpenImageIO/imagebufalgo.h>
 
 #include <defocus/io/aperture_files.h>
+#include <defocus/color/color.h>
 #include <defocus/spread/spread.h>
 
 #include "test_support.h"
@@ -156,7 +157,7 @@ std::shared_ptr<MaskProfile> load_mask(const std::string& path, double max_radiu
     auto mask = std::make_shared<MaskProfile>();
     std::string error;
     INFO(error);
-    REQUIRE(read_aperture_mask(path, 1.0, *mask, error));
+    REQUIRE(read_aperture_mask(path, 1.0, luma_weights(nullptr), *mask, error));
     return mask;
 }
 

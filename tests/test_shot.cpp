@@ -214,7 +214,7 @@ TEST_CASE("checking a shot reads no file; the images its aperture names are read
     CHECK(check_shot(shot, error));
 
     ApertureImages images;
-    CHECK_FALSE(read_aperture_images(shot, images, error));
+    CHECK_FALSE(read_aperture_images(shot, luma_weights(nullptr), images, error));
     CHECK(contains(error, "--aperture: "));
     CHECK(contains(error, "no_mask.png: cannot read the aperture mask"));
 
@@ -223,13 +223,13 @@ TEST_CASE("checking a shot reads no file; the images its aperture names are read
     mask.setpixel(4, 4, &one);
     REQUIRE(mask.write(dir + "/mask.exr"));
     REQUIRE(set_shot_setting(shot, "aperture", "mask:" + dir + "/mask.exr", error));
-    CHECK_FALSE(read_aperture_images(shot, images, error));
+    CHECK_FALSE(read_aperture_images(shot, luma_weights(nullptr), images, error));
     CHECK(contains(error, "--psf-image: "));
     CHECK(contains(error, "no_psf.exr: cannot read the PSF image"));
 
     REQUIRE(set_shot_setting(shot, "psf-image", "", error));
     INFO(error);
-    REQUIRE(read_aperture_images(shot, images, error));
+    REQUIRE(read_aperture_images(shot, luma_weights(nullptr), images, error));
     CHECK(images.mask);
     CHECK_FALSE(images.psf);
 }

@@ -98,6 +98,7 @@ bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, Layer
     const size_t layers_given = scene.layers.size();
     const LayerBounds bounds =
         decompose_layers(std::move(scene), coc, shot.layering, layered, nthreads);
+    layered.luma = color.luma;
     if (to_slice) {
         std::vector<std::string> edges;
         for (int k = 0; k <= bounds.count(); ++k)

@@ -83,6 +83,20 @@ bool ColorManagement::load(const std::string& explicit_file, std::string& error)
     return true;
 }
 
+Imath::V3d ColorManagement::luma() const
+{
+    if (!m_impl)
+        return luma_weights(nullptr);
+    double weights[3];
+    m_impl->ocio->getDefaultLumaCoefs(weights);
+    return Imath::V3d(weights[0], weights[1], weights[2]);
+}
+
+Imath::V3d luma_weights(const ColorManagement* config)
+{
+    return config ? config->luma() : Imath::V3d(0.2126, 0.7152, 0.0722);
+}
+
 std::string ColorManagement::find_space(const std::string& name) const
 {
     if (!m_impl || name.empty())

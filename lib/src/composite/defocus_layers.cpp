@@ -73,7 +73,7 @@ private:
 /// filters.
 bool spread_apart(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
                   const SpreadOptions& spread, const ApertureImages& images,
-                  const RowProfile* profile,
+                  const RowProfile* profile, const Imath::V3d& luma,
                   int64_t& psf_pixels, int nthreads)
 {
     auto fast = [&](ImageBuf& out, const ImageBuf& in) {
@@ -84,15 +84,15 @@ bool spread_apart(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
         default:
             return spread.exact_shape
                        ? spread_scanline(out, in, radius, *profile, {}, nthreads)
-                       : spread_aperture(out, in, radius, *profile, exact_highlight_threshold,
-                                         {}, nthreads);
+                       : spread_aperture(out, in, radius, *profile,
+                                         { exact_highlight_threshold, luma }, {}, nthreads);
         }
     };
     if (!images.psf)
         return fast(dst, color);
 
-    const std::vector<uint8_t> slow = visible_bokeh(color, radius, spread.hybrid_threshold,
-                                                    nthreads);
+    const std::vector<uint8_t> slow = visible_bokeh(color, radius,
+                                                    { spread.hybrid_threshold, luma }, nthreads);
     psf_pixels = std::count(slow.begin(), slow.end(), uint8_t(1));
     // Split the layer: the selected pixels go one way, the rest the other.
     ImageBuf fast_part(color.spec()), slow_part(color.spec());
@@ -202,6 +202,7 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
         }
         if (!spread_in_engine(spread, images)) {
             if (!spread_apart(apart[i], layer.color, e.radius, spread, images, profile.get(),
+                              scene.luma,
                               depths[i].psf_pixels, nthreads)) {
                 dst.errorfmt("layer '{}': {}", layer.name, apart[i].geterror());
                 return false;
@@ -220,8 +221,8 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
         const double layer_radius
             = 0.5 * std::max(std::abs(depths[i].coc_min), std::abs(depths[i].coc_max));
         if (method == SpreadMethod::Bounded && layer_radius >= smallest_merged_radius()) {
-            e.highlights = visible_bokeh(layer.color, e.radius, exact_highlight_threshold,
-                                         nthreads);
+            e.highlights = visible_bokeh(layer.color, e.radius,
+                                         { exact_highlight_threshold, scene.luma }, nthreads);
             source.keep_exact = e.highlights.data();
         }
         e.engine = std::make_unique<SpreadEngine>(source, method, programs.get(), nthreads);

@@ -162,18 +162,20 @@ double ApertureProfile::rows(double r, std::vector<RowSpan>& spans) const
     return area;
 }
 
-bool MaskProfile::set_shape(const OIIO::ImageBuf& image, double aspect, std::string& error)
+bool MaskProfile::set_shape(const OIIO::ImageBuf& image, double aspect, const Imath::V3d& luma,
+                            std::string& error)
 {
+    const float wr = float(luma.x), wg = float(luma.y), wb = float(luma.z);
     const OIIO::ROI roi = image.roi();
     const int nc = image.nchannels();
-    std::vector<float> luma(roi.npixels());
+    std::vector<float> luminance(roi.npixels());
     float peak = 0.0f;
     for (int y = 0; y < roi.height(); ++y)
         for (int x = 0; x < roi.width(); ++x) {
             float c[4] = { 0, 0, 0, 0 };
             image.getpixel(roi.xbegin + x, roi.ybegin + y, c, std::min(nc, 4));
-            const float l = nc >= 3 ? 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2] : c[0];
-            luma[size_t(y) * roi.width() + x] = l;
+            const float l = nc >= 3 ? wr * c[0] + wg * c[1] + wb * c[2] : c[0];
+            luminance[size_t(y) * roi.width() + x] = l;
             if (std::isfinite(l))
                 peak = std::max(peak, l);
         }
@@ -185,7 +187,7 @@ bool MaskProfile::set_shape(const OIIO::ImageBuf& image, double aspect, std::str
     m_runs.assign(roi.height(), {});
     for (int y = 0; y < roi.height(); ++y)
         for (int x = 0; x < roi.width(); ++x) {
-            if (!(luma[size_t(y) * roi.width() + x] >= 0.5f * peak))
+            if (!(luminance[size_t(y) * roi.width() + x] >= 0.5f * peak))
                 continue;
             std::vector<Run>& row = m_runs[y];
             if (!row.empty() && row.back().end == x)

@@ -16,14 +16,14 @@ using namespace OIIO;
 
 namespace {
 
-double luminance(const float* c)
+double luminance(const float* c, const Imath::V3d& luma)
 {
-    return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+    return luma.x * c[0] + luma.y * c[1] + luma.z * c[2];
 }
 
 }  // namespace
 
-bool PsfImage::set_image(const ImageBuf& image, std::string& error)
+bool PsfImage::set_image(const ImageBuf& image, const Imath::V3d& luma, std::string& error)
 {
     const ROI roi = image.roi();
     const int nc = image.nchannels();
@@ -35,7 +35,7 @@ bool PsfImage::set_image(const ImageBuf& image, std::string& error)
         for (int x = 0; x < m_width; ++x) {
             float c[4] = { 0, 0, 0, 0 };
             image.getpixel(roi.xbegin + x, roi.ybegin + y, c, std::min(nc, 4));
-            const double l = nc >= 3 ? luminance(c) : c[0];
+            const double l = nc >= 3 ? luminance(c, luma) : c[0];
             if (!(l >= 0.0) || !std::isfinite(l)) {
                 error = "the PSF image has negative or non-finite values";
                 return false;
@@ -96,7 +96,7 @@ Footprint PsfImage::footprint(double r) const
 }
 
 std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius,
-                                double threshold, int nthreads)
+                                   const HighlightTest& test, int nthreads)
 {
     const ROI roi = color.roi();
     const int w = roi.width(), h = roi.height();
@@ -114,7 +114,7 @@ std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius
         const float* c = pixels(roi.xbegin, roi.ybegin + y);
         double sum = 0.0;
         for (int x = 0; x < w; ++x, c += pixels.nchannels())
-            row[x] = sum += luminance(c);
+            row[x] = sum += luminance(c, test.luma);
     }, by_rows(nthreads));
     parallel_for_chunked(0, w + 1, 0, [&](int64_t x0, int64_t x1) {
         for (int y = 1; y <= h; ++y) {
@@ -129,13 +129,14 @@ std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius
         // Locals, not the captures: a store through a byte pointer may
         // alias anything, so captured values would be reloaded every pixel.
         const double* table = sat.get();
-        const double contrast = threshold;
+        const double contrast = test.threshold;
+        const Imath::V3d luma = test.luma;
         const int channels = pixels.nchannels();
         uint8_t* out = selected.data() + size_t(y) * w;
         const float* c = pixels(roi.xbegin, roi.ybegin + y);
         const float* r = radii(roi.xbegin, roi.ybegin + y);
         for (int x = 0; x < w; ++x, c += channels) {
-            const double l = luminance(c);
+            const double l = luminance(c, luma);
             if (r[x] < 1.0f || l <= 0.0)
                 continue;
             const int k = int(std::ceil(r[x]));

@@ -14,11 +14,11 @@ bool spread_scanline(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
 }
 
 bool spread_aperture(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
-                     const RowProfile& profile, double highlight_threshold, ROI roi,
+                     const RowProfile& profile, const HighlightTest& highlights, ROI roi,
                      int nthreads)
 {
     return spread_image(dst, src, radius, roi, nthreads, SpreadMethod::Bounded, &profile,
-                        highlight_threshold);
+                        highlights);
 }
 
 }  // namespace defocus

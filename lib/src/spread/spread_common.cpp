@@ -120,7 +120,7 @@ std::shared_ptr<const RowProfile> borrow(const RowProfile& profile)
 
 bool spread_image(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const OIIO::ImageBuf& radius,
                   ROI roi, int nthreads, SpreadMethod method, const RowProfile* shape,
-                  double visible_threshold)
+                  const HighlightTest& highlights)
 {
     const SpreadInputs in = prepare_spread(dst, src, radius, roi, nthreads);
     if (!in.valid)
@@ -145,15 +145,14 @@ bool spread_image(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const OIIO::Im
     source.color = color;
     source.radius = in.radii(roi.xbegin, roi.ybegin);
     std::vector<uint8_t> visible;
-    if (visible_threshold > 0.0 && in.max_radius >= smallest_merged_radius()) {
+    if (highlights.threshold > 0.0 && in.max_radius >= smallest_merged_radius()) {
         auto view = [&](int nchannels, const float* pixels) {
             ImageSpec spec(roi.width(), roi.height(), nchannels, OIIO::TypeFloat);
             spec.x = roi.xbegin;
             spec.y = roi.ybegin;
             return OIIO::ImageBuf(spec, const_cast<float*>(pixels));
         };
-        visible = visible_bokeh(view(4, color), view(1, source.radius), visible_threshold,
-                                nthreads);
+        visible = visible_bokeh(view(4, color), view(1, source.radius), highlights, nthreads);
         source.keep_exact = visible.data();
     }
     std::unique_ptr<ShapePrograms> programs;

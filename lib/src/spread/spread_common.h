@@ -3,6 +3,8 @@
 
 #include <OpenImageIO/imagebuf.h>
 
+#include <defocus/spread/hybrid.h>
+
 #include "spread/spread_engine.h"
 #include "util/float_pixels.h"
 
@@ -40,10 +42,10 @@ ImageSpec output_spec(const OIIO::ImageBuf& src, const OIIO::ROI& window);
 
 /// Spreads src (at most 4 channels) into dst, a float image over every
 /// pixel the spread lights, with the engine `method`; `shape` for the
-/// shape methods. With a `visible_threshold`, the pixels visible_bokeh()
-/// selects are never merged into blocks.
+/// shape methods. The pixels that pass `highlights` (see visible_bokeh)
+/// are never merged into blocks.
 bool spread_image(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const OIIO::ImageBuf& radius,
                   OIIO::ROI roi, int nthreads, SpreadMethod method,
-                  const RowProfile* shape = nullptr, double visible_threshold = 0.0);
+                  const RowProfile* shape = nullptr, const HighlightTest& highlights = {});
 
 }  // namespace defocus

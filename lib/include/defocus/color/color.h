@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include <Imath/ImathVec.h>
 #include <OpenImageIO/imagebuf.h>
 
 #include <defocus/scene.h>
@@ -46,6 +47,9 @@ public:
     /// two of them is a 3x3 matrix, which commutes with spreading.
     bool is_linear(const std::string& space) const;
     std::string scene_linear() const;
+    /// The weights of R, G and B in luminance, for the config's
+    /// scene_linear space (its `luma` entry; unloaded: luma_weights()).
+    Imath::V3d luma() const;
 
     std::string default_display() const;
     std::string default_view(const std::string& display) const;
@@ -75,6 +79,10 @@ private:
     std::unique_ptr<Impl> m_impl;
     std::string m_path, m_origin;
 };
+
+/// The luminance weights of `config`, or without one (null) those of
+/// linear Rec.709 (ITU-R BT.709), as which an input is then taken.
+Imath::V3d luma_weights(const ColorManagement* config);
 
 /// Converts every layer, flat render and deep image of a scene from
 /// `from` to `to` (see ColorManagement::convert).

@@ -7,8 +7,10 @@
 #include <string>
 #include <vector>
 
+#include <Imath/ImathVec.h>
 #include <OpenImageIO/imageio.h>
 
+#include <defocus/color/color.h>
 #include <defocus/scene.h>
 #include <defocus/shot/camera.h>
 
@@ -35,6 +37,10 @@ struct LayeredScene {
     OIIO::ImageSpec spec;
     std::vector<Layer> layers;         ///< back to front
     std::vector<LayerReport> reports;  ///< one per layer, in the same order
+    /// The weights of R, G and B in luminance, in the layers' colour space
+    /// (the working space of the colour plan), by which highlights are
+    /// found.
+    Imath::V3d luma = luma_weights(nullptr);
 };
 
 /// Describes every layer of `scene` and orders them back to front.

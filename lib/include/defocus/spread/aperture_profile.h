@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include <Imath/ImathVec.h>
 #include <OpenImageIO/imagebuf.h>
 
 #include <defocus/shot/aperture.h>
@@ -67,10 +68,12 @@ private:
 /// each an eighth of the row.
 class MaskProfile final : public RowProfile {
 public:
-    /// The shape drawn in `mask` (its luminance, thresholded at half its
-    /// peak), squeezed horizontally by `aspect`. False with `error` saying
-    /// why (read the file with read_aperture_mask).
-    bool set_shape(const OIIO::ImageBuf& mask, double aspect, std::string& error);
+    /// The shape drawn in `mask` (its luminance, R, G and B weighted by
+    /// `luma`, thresholded at half its peak), squeezed horizontally by
+    /// `aspect`. False with `error` saying why (read the file with
+    /// read_aperture_mask).
+    bool set_shape(const OIIO::ImageBuf& mask, double aspect, const Imath::V3d& luma,
+                   std::string& error);
 
     double rows(double r, std::vector<RowSpan>& spans) const override;
     double extent() const override { return m_extent; }

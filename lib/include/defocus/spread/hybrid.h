@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include <Imath/ImathVec.h>
 #include <OpenImageIO/imagebuf.h>
 
 #include <defocus/spread/footprint.h>
@@ -19,9 +20,10 @@ namespace defocus {
 /// CoC's diameter, scaled to each pixel's CoC radius.
 class PsfImage {
 public:
-    /// The PSF drawn in `image` (its luminance). False with `error` saying
-    /// why (read the file with read_psf_image).
-    bool set_image(const OIIO::ImageBuf& image, std::string& error);
+    /// The PSF drawn in `image`: its luminance, R, G and B weighted by
+    /// `luma` (see ColorManagement::luma). False with `error` saying why
+    /// (read the file with read_psf_image).
+    bool set_image(const OIIO::ImageBuf& image, const Imath::V3d& luma, std::string& error);
 
     /// The footprint for CoC radius r: the image resampled (bilinearly)
     /// over [-r, r]², normalised to sum to 1. Below a pixel, the pixel.
@@ -33,12 +35,20 @@ private:
     float sample(double u, double v) const;  ///< u, v in [0, 1]
 };
 
-/// The pixels of premultiplied RGBA `color` whose bokeh is visible: those
-/// with CoC radius of at least a pixel whose luminance exceeds `threshold`
-/// times the mean luminance over the square of their CoC diameter around
-/// them (from a summed-area table, so each costs constant time). One byte
-/// per pixel of color's data window, row by row: 1 where selected.
+/// Which pixels are highlights whose bokeh is visible: those with CoC
+/// radius of at least a pixel whose luminance exceeds `threshold` times the
+/// mean luminance over the square of their CoC diameter around them.
+struct HighlightTest {
+    double threshold = 0.0;  ///< 0: none
+    /// The weights of R, G and B in luminance, in the pixels' colour space
+    /// (see ColorManagement::luma).
+    Imath::V3d luma { 0.0, 0.0, 0.0 };
+};
+
+/// The pixels of premultiplied RGBA `color` that pass `test` (the means
+/// from a summed-area table, so each costs constant time). One byte per
+/// pixel of color's data window, row by row: 1 where selected.
 std::vector<uint8_t> visible_bokeh(const OIIO::ImageBuf& color, const OIIO::ImageBuf& radius,
-                                double threshold, int nthreads = 0);
+                                   const HighlightTest& test, int nthreads = 0);
 
 }  // namespace defocus

@@ -13,6 +13,7 @@
 
 #include <defocus/spread/aperture_profile.h>
 #include <defocus/spread/footprint.h>
+#include <defocus/spread/hybrid.h>
 
 namespace defocus {
 
@@ -38,14 +39,15 @@ bool spread_scanline(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
                      const RowProfile& profile, ROI roi = {}, int nthreads = 0);
 
 /// Pixels brighter than this many times the mean over their CoC square
-/// (see visible_bokeh) are spread exactly by spread_aperture, never merged.
+/// (see HighlightTest) are spread exactly by spread_aperture, never merged.
 /// Lower than the hybrid method's default: merging may move a pixel, and on
 /// the garden scene keeping those pixels in place is worth 0.015 dB.
 constexpr double exact_highlight_threshold = 2.0;
 
 /// The same shapes in bounded time per pixel, whatever the blur. Pixels of
-/// CoC radius below 7.5, and highlights (see exact_highlight_threshold),
-/// are spread exactly, as spread_scanline does. Larger footprints are
+/// CoC radius below 7.5, and the highlights that pass `highlights` (the
+/// frame pipeline's threshold is exact_highlight_threshold), are spread
+/// exactly, as spread_scanline does. Larger footprints are
 /// merged: the pixels of one size in a block of s x s pixels (s = 2, 4, ...
 /// 32, at most r/4) are spread once, blocks of up to 4 with the footprint
 /// of a uniform block (each pixel's shape on its own centre, so a uniform
@@ -55,9 +57,8 @@ constexpr double exact_highlight_threshold = 2.0;
 /// continuously. Energy is conserved exactly; dst covers every pixel the
 /// footprints reach.
 bool spread_aperture(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
-                     const RowProfile& profile,
-                     double highlight_threshold = exact_highlight_threshold, ROI roi = {},
-                     int nthreads = 0);
+                     const RowProfile& profile, const HighlightTest& highlights = {},
+                     ROI roi = {}, int nthreads = 0);
 
 /// Smooth PSFs in constant time by repeated integration: order 2 is the
 /// tent (two boxes convolved), order 3 a quadratic B-spline (three boxes),
