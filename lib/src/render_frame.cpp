@@ -77,22 +77,26 @@ bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, Layer
     out.notes  = scene.notes;
     out.fixed  = sanitize(scene, nthreads);
     lap("read");
+    // The readers name the file that failed; later stages' errors are
+    // named here, once.
+    auto fail = [&]() {
+        error = out.source + ": " + error;
+        return false;
+    };
 
     stage("colour");
     ColorPlan& color = out.color;
     if (!plan_color(color, assets.color, assets.no_color, shot.input_space, shot.output_space,
-                    scene.spec, error))
-        return false;
-    if (color.convert_input
-        && !convert_scene(scene, *color.config, color.input, color.working, error, nthreads)) {
-        error = scene.source + ": " + error;
-        return false;
-    }
+                    scene.spec, error)
+        || (color.convert_input
+            && !convert_scene(scene, *color.config, color.input, color.working, error,
+                              nthreads)))
+        return fail();
     lap("colour");
 
     stage("slice");
     if (!shot_camera(shot, scene, frame, out.camera, error))
-        return false;
+        return fail();
     const CircleOfConfusion coc(out.camera, scene.spec.full_width);
     const bool to_slice = !scene.flat.empty() || !scene.deep.empty();
     const size_t layers_given = scene.layers.size();
@@ -116,7 +120,8 @@ bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, Layer
 
 namespace {
 
-/// A frame from its prepared layers to the image to write.
+/// A frame from its prepared layers to the image to write. Errors do not
+/// name the source: the caller does.
 bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
                   LayeredScene& layered, FrameResult& out, std::string& error,
                   const StageCallback& on_stage, int nthreads)
@@ -130,7 +135,7 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
     ImageBuf& image = out.image;
     if (shot.output == OutputKind::FocusMap) {
         if (!focus_map(image, layered, out.camera, 8.0, nthreads)) {
-            error = layered.source + ": " + image.geterror();
+            error = image.geterror();
             return false;
         }
         lap("focus map");
@@ -146,7 +151,7 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
         SpreadTimings timings;
         if (!defocus_layers(image, layered, out.camera, shot.spread, images, shot.window,
                             &out.layers, &timings, nthreads)) {
-            error = layered.source + ": " + image.geterror();
+            error = image.geterror();
             return false;
         }
         out.timings.emplace_back("spread and composite", timings.spread);
@@ -201,13 +206,17 @@ bool render_frame(const Shot& shot, int frame, const ShotAssets& assets,
     result = FrameResult();
     try {
         LayeredScene layered;
-        return prepare_layers(shot, frame, assets, layered, result, error, on_stage, nthreads)
-               && finish_frame(shot, frame, assets.aperture, layered, result, error, on_stage,
-                               nthreads);
+        if (!prepare_layers(shot, frame, assets, layered, result, error, on_stage, nthreads))
+            return false;  // named there
+        if (finish_frame(shot, frame, assets.aperture, layered, result, error, on_stage,
+                         nthreads))
+            return true;
     } catch (const std::bad_alloc&) {
-        error = result.source + ": out of memory";
-        return false;
+        error = "out of memory";
     }
+    if (!result.source.empty())
+        error = result.source + ": " + error;
+    return false;
 }
 
 }  // namespace defocus

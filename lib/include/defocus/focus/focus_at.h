@@ -22,8 +22,7 @@ bool focus_distance_at(const Scene& scene, double x, double y, double& distance,
 
 /// The camera of a shot at `frame` over a read scene: camera_at(), with the
 /// focus measured by focus_distance_at() when the shot focuses at a pixel,
-/// then validated. False with `error` naming `scene.source` and the
-/// problem.
+/// then validated. False with `error` the problem.
 bool shot_camera(const Shot& shot, const Scene& scene, int frame, Camera& camera,
                  std::string& error);
 
