@@ -34,6 +34,23 @@ ImageBuf read_image(const std::string& file)
     return image;
 }
 
+ImageSpec read_spec(const std::string& file, int subimage)
+{
+    auto in = OIIO::ImageInput::open(file);
+    if (!in || !in->seek_subimage(subimage, 0))
+        return ImageSpec();
+    return in->spec();
+}
+
+int count_subimages(const std::string& file)
+{
+    auto in = OIIO::ImageInput::open(file);
+    int n = 0;
+    while (in && in->seek_subimage(n, 0))
+        ++n;
+    return n;
+}
+
 ImageBuf zero_image(const ROI& roi, int nchannels)
 {
     ImageSpec spec(roi.width(), roi.height(), nchannels, TypeFloat);

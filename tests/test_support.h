@@ -21,6 +21,12 @@ using OIIO::ROI;
 /// not see; see defocus::read_image_file). Empty when unreadable.
 ImageBuf read_image(const std::string& file);
 
+/// The header of a subimage of `file` as it is on disk now (as
+/// read_image), and how many subimages it has. Empty spec / 0 when
+/// unreadable.
+OIIO::ImageSpec read_spec(const std::string& file, int subimage = 0);
+int count_subimages(const std::string& file);
+
 /// `scene` layered for `camera`, as the layering stage gives it (scenes
 /// of layers only: described and ordered back to front).
 defocus::LayeredScene layered_scene(defocus::Scene scene, const defocus::Camera& camera);
