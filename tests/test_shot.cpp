@@ -346,6 +346,17 @@ TEST_CASE("focus-at: the median depth of the front-most opaque surface")
     std::string error;
     REQUIRE(focus_distance_at(scene, 10, 10, distance, error));
     CHECK(distance == 2.0);  // the veil is not opaque; the stray pixel is outvoted
+    // A shot's --focus-at-radius 0 looks at the pixel alone, where the
+    // stray 30 m puts the post behind the wall: the wall is seen.
+    Shot shot;
+    REQUIRE(set_shot_setting(shot, "focus-at", "10,10", error));
+    REQUIRE(set_shot_setting(shot, "focus-at-radius", "0", error));
+    Camera camera;
+    REQUIRE(shot_camera(shot, scene, 1, camera, error));
+    CHECK(camera.focus_distance == 8.0);
+    REQUIRE(set_shot_setting(shot, "focus-at-radius", "2", error));
+    REQUIRE(shot_camera(shot, scene, 1, camera, error));
+    CHECK(camera.focus_distance == 2.0);
     REQUIRE(focus_distance_at(scene, 2, 3, distance, error));
     CHECK(distance == 8.0);
     scene.layers[1] = layer(1.0f, 0.6f, ROI(0, 20, 0, 20));

@@ -85,7 +85,8 @@ bool shot_camera(const Shot& shot, const Scene& scene, int frame, Camera& camera
     camera = camera_at(shot, frame);
     if (!shot.focus_at.empty()) {
         const Keyframes::Value at = shot.focus_at.at(frame, Interpolation::Linear);
-        if (!focus_distance_at(scene, at[0], at[1], camera.focus_distance, error))
+        if (!focus_distance_at(scene, at[0], at[1], camera.focus_distance, error,
+                               2 * shot.focus_at_radius + 1))
             return false;
     }
     return check_camera(camera, error);

@@ -103,6 +103,8 @@ const std::vector<SettingRule>& rules()
                   1e30, &Shot::focus_at),
         keyframes({ "focus-at", "camera", "focus_at", K::Point }, &Shot::focus_at, 2,
                   -1e7, 1e7, &Shot::focus),
+        number({ "focus-at-radius", "camera", "focus_at_radius", K::Number },
+               [](auto& s) -> auto& { return s.focus_at_radius; }, 0, 50),
         keyframes({ "focal", "camera", "focal", K::Keyframes }, &Shot::focal_length_mm, 1,
                   1e-3, 1e5),
         keyframes({ "fstop", "camera", "fstop", K::Keyframes }, &Shot::fstop, 1, 0.1, 1e4),

@@ -15,6 +15,9 @@ const std::vector<ShotOption>& shot_options()
         { G::Camera, "--focus-at X,Y", "focus-at",
           "Focus on what is seen at display-window pixel X,Y: the median depth of the "
           "front-most opaque surface over 5x5 pixels; keyframes F:X,Y,F:X,Y..." },
+        { G::Camera, "--focus-at-radius R", "focus-at-radius",
+          "--focus-at takes the median over (2R+1)x(2R+1) pixels: 0 = the pixel alone, "
+          "larger for noisy depth (default: 2, 5x5)" },
         { G::Camera, "--focal MM", "focal", "Focal length in mm (default: 50)" },
         { G::Camera, "--fstop N", "fstop", "Aperture f-number (default: 2.8)" },
         { G::Camera, "--sensor MM", "sensor",

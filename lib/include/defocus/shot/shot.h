@@ -32,6 +32,9 @@ struct Shot {
     /// Focus distance, or the pixel (X,Y in the display window) whose
     /// depth is the focus distance: exactly one is set.
     Keyframes focus, focus_at;
+    /// Focusing at a pixel takes the median depth over the square of
+    /// 2 focus_at_radius + 1 pixels around it.
+    int focus_at_radius = 2;
     /// The camera's settings that may change over the shot, from Camera's
     /// defaults, and those that hold for all of it.
     Keyframes focal_length_mm { Camera().focal_length_mm }, fstop { Camera().fstop };
