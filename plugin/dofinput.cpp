@@ -40,7 +40,7 @@ public:
 
 private:
     bool apply_hints(const ImageSpec& config, bool& frame_given, std::string& error);
-    std::string render();
+    bool render(std::string& error);
     bool render_once();
 
     std::string m_filename;
@@ -128,30 +128,34 @@ bool DofInput::close()
     return true;
 }
 
-/// Renders the frame into m_pixels; the error, or "".
-std::string DofInput::render()
+/// Renders the frame into m_pixels. False with `error` the problem.
+bool DofInput::render(std::string& error)
 {
     try {
         defocus::FrameResult frame;
-        std::string error;
         if (!defocus::render_frame(m_shot, m_frame, m_assets, frame, error))
-            return error;
+            return false;
         // In the spec's window and pixel type, as open() promised: where the
         // spec's window is larger (a grown window is the largest the blur
         // could make), the rest is zero.
         m_pixels.reset(m_spec);
-        return m_pixels.copy_pixels(frame.image) ? "" : m_pixels.geterror();
+        if (m_pixels.copy_pixels(frame.image))
+            return true;
+        error = m_pixels.geterror();
     } catch (const std::exception& e) {
-        return m_filename + ": " + e.what();
+        error = m_filename + ": " + e.what();
     }
+    return false;
 }
 
 bool DofInput::render_once()
 {
     std::lock_guard<std::mutex> lock(m_render_mutex);
     if (!m_rendered) {
-        m_rendered     = true;
-        m_render_error = render();  // kept for every later read
+        m_rendered = true;
+        // The error is kept for every later read.
+        if (!render(m_render_error) && m_render_error.empty())
+            m_render_error = m_filename + ": cannot render";
     }
     if (!m_render_error.empty()) {
         errorfmt("{}", m_render_error);
