@@ -167,6 +167,37 @@ TEST_CASE("oiiotool --info reports the spec without rendering")
     CHECK(info < 0.25 * render);
 }
 
+TEST_CASE("with --grow the plugin's window holds all the light the defocus command spreads")
+{
+    // The plugin gives the window before it renders, from the headers: it
+    // must be the largest the blur can make, past the edges the layers are
+    // extended by and whatever reach each aperture has.
+    const std::string dir = scratch_dir("plugin_grow");
+    std::string log;
+    REQUIRE(run(format("{} {}/scene.exr --width 160 --height 90", MAKE_EXAMPLE_SCENE_BIN, dir),
+                log) == 0);
+    for (const char* aperture : { "disc", "polygon", "smooth" }) {
+        INFO(aperture);
+        const std::string dof = format("{}/{}.dof", dir, aperture);
+        REQUIRE(run(format("{} {}/scene.exr --focal 100 --fstop 1 --focus 0.5 --max-blur 60 "
+                           "--aperture {} --grow -d float --save-scene {}",
+                           DEFOCUS_BIN, dir, aperture, dof),
+                    log) == 0);
+        const std::string via_plugin = format("{}/{}_plugin.exr", dir, aperture);
+        REQUIRE(run(with_plugin + OIIOTOOL_BIN + " " + dof + " -o " + via_plugin, log) == 0);
+        const ImageBuf command = read_image(cli_render(dof)), plugin = read_image(via_plugin);
+        REQUIRE(command.initialized());
+        REQUIRE(plugin.initialized());
+        CHECK(OIIO::roi_union(plugin.roi(), command.roi()) == plugin.roi());
+        const ImageBuf same_window = ImageBufAlgo::crop(plugin, command.roi());
+        CHECK(ImageBufAlgo::compare(same_window, command, 0.0f, 0.0f).maxerror == 0.0);
+        const auto in_plugin = ImageBufAlgo::computePixelStats(plugin);
+        const auto in_command = ImageBufAlgo::computePixelStats(command);
+        for (int c = 0; c < 4; ++c)
+            CHECK(in_plugin.sum[c] == Approx(in_command.sum[c]).epsilon(1e-9));
+    }
+}
+
 TEST_CASE("Python's ImageBuf opens a .dof with the same pixels, and takes hints")
 {
     const std::string dof = scene_dof();

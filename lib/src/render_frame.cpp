@@ -1,6 +1,5 @@
 #include <defocus/render_frame.h>
 
-#include <cmath>
 
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/timer.h>
@@ -180,19 +179,17 @@ bool frame_spec(const Shot& shot, int frame, const ShotAssets& assets, ImageSpec
         return false;
     const ROI display(input.full_x, input.full_x + input.full_width, input.full_y,
                       input.full_y + input.full_height, 0, 1, 0, 4);
+    const Camera camera = camera_at(shot, frame);
     ROI window = display;
-    if (shot.output == OutputKind::Image && shot.window != OutputWindow::Display) {
+    if (shot.output == OutputKind::Image && shot.window == OutputWindow::Input)
         window = input.roi();
-        if (shot.window == OutputWindow::Grown) {
-            // The largest blur there can be: a footprint reaches one pixel
-            // beyond its radius for the fractional edge.
-            const int reach = int(std::ceil(0.5 * shot.camera.max_blur_px)) + 2;
-            window = ROI(window.xbegin - reach, window.xend + reach, window.ybegin - reach,
-                         window.yend + reach);
-        }
+    if (shot.output == OutputKind::Image && shot.window == OutputWindow::Grown) {
+        if (!largest_grown_window(window, input, camera, shot.spread, assets.aperture, error))
+            return false;
+        window = roi_union(window, display);
     }
     spec = result_spec(input, window, output_pixel_type(shot, input));
-    describe_output(spec, input, shot, camera_at(shot, frame), color, frame);
+    describe_output(spec, input, shot, camera, color, frame);
     // Focusing at a pixel measures the focus from the pixels.
     if (!shot.focus_at.empty())
         spec.erase_attribute("defocus:focusDistance");

@@ -9,6 +9,7 @@
 #include <OpenImageIO/parallel.h>
 #include <OpenImageIO/timer.h>
 
+#include <defocus/layers/edges.h>
 #include <defocus/spread/spread.h>
 
 #include "spread/spread_engine.h"
@@ -284,4 +285,57 @@ bool defocus_layers(ImageBuf& dst, const LayeredScene& scene, const Camera& came
     }
 }
 
+bool largest_grown_window(ROI& window, const ImageSpec& scene, const Camera& camera,
+                          const SpreadOptions& spread, const ApertureImages& images,
+                          std::string& error, int nthreads)
+{
+    const ROI data = scene.roi();
+    // Blocks of up to 32 pixels align to the pixel grid: a probe of that
+    // size at each corner meets the same alignment as the data window.
+    constexpr int probe = 64;
+    const CircleOfConfusion coc(camera, scene.full_width);
+    // In front of the focus plane with more blur than the camera allows:
+    // the largest blur.
+    const float depth = float(coc.depth_at(-4.0 * camera.max_blur_px - 4.0));
+    window = data;
+    for (const bool far_corner : { false, true }) {
+        const int x0 = far_corner ? data.xend - probe : data.xbegin;
+        const int y0 = far_corner ? data.yend - probe : data.ybegin;
+        const ROI square(x0, x0 + probe, y0, y0 + probe, 0, 1, 0, 4);
+        LayeredScene layered;
+        // The scene's display window (the CoC scales with its width), the
+        // square for data window.
+        layered.spec = result_spec(scene, square, TypeFloat);
+        ImageSpec depth_spec = layered.spec;
+        depth_spec.nchannels = 1;
+        depth_spec.channelnames = { "Z" };
+        depth_spec.alpha_channel = -1;
+        Layer layer { "probe", ImageBuf(layered.spec), ImageBuf(depth_spec) };
+        layer.color.specmod().alpha_channel = 3;
+        ImageBufAlgo::fill(layer.color, { 1.0f, 1.0f, 1.0f, 1.0f });
+        ImageBufAlgo::fill(layer.depth, { depth });
+        layered.layers.push_back(std::move(layer));
+        order_layers(layered, coc, nthreads);
+        extend_edges(layered, coc, EdgeMode::Extend, nthreads);
+        ImageBuf spread_probe;
+        if (!defocus_layers(spread_probe, layered, camera, spread, images, OutputWindow::Grown,
+                            nullptr, nullptr, nthreads)) {
+            error = spread_probe.geterror();
+            return false;
+        }
+        // The square shares the data window's corner, so what it lights
+        // past that corner is what the frame's layers can light.
+        const ROI lit = spread_probe.roi();
+        if (far_corner) {
+            window.xend = std::max(window.xend, lit.xend);
+            window.yend = std::max(window.yend, lit.yend);
+        } else {
+            window.xbegin = std::min(window.xbegin, lit.xbegin);
+            window.ybegin = std::min(window.ybegin, lit.ybegin);
+        }
+    }
+    return true;
+}
+
 }  // namespace defocus
+

@@ -2,6 +2,7 @@
 // per-pixel CoC, composite back to front with "over" on the spread alpha.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include <OpenImageIO/imagebuf.h>
@@ -43,5 +44,17 @@ bool defocus_layers(OIIO::ImageBuf& dst, const LayeredScene& scene, const Camera
                     OutputWindow window = OutputWindow::Input,
                     std::vector<LayerReport>* report = nullptr,
                     SpreadTimings* timings = nullptr, int nthreads = 0);
+
+/// The largest window defocus_layers() gives with OutputWindow::Grown for
+/// layers within the data window of `scene` (a scene's spec), extended
+/// past it by extend_edges(), at the largest blur `camera` allows (its max
+/// blur): what a frame's grown window is known to fit in from the headers
+/// alone. Found by spreading a uniform probe at that blur in the data
+/// window's corners, so that it follows the filters, edges, blocks and all.
+/// False with `error` when the probe cannot be spread (a mask aperture
+/// without its image, out of memory).
+bool largest_grown_window(OIIO::ROI& window, const OIIO::ImageSpec& scene, const Camera& camera,
+                          const SpreadOptions& spread, const ApertureImages& images,
+                          std::string& error, int nthreads = 0);
 
 }  // namespace defocus
