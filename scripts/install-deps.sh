@@ -7,6 +7,7 @@ packages=(
     libopenimageio-dev openimageio-tools   # image I/O, ImageBuf, ArgParse, threads
     python3-openimageio                    # tests: Python opens .dof scenes via the plugin
     libopenexr-dev openexr                 # EXR reading (decode and damage checks in one pass)
+    libdeflate-dev                         # faster inflating of zip-compressed EXR chunks
     libopencolorio-dev opencolorio-tools   # colour management, ociocheck
     nlohmann-json3-dev                     # .dof scene files (JSON)
     catch2                                 # tests

@@ -18,6 +18,8 @@
 #include <OpenImageIO/parallel.h>
 #include <OpenImageIO/strutil.h>
 
+#include "io/exr_zip.h"
+
 namespace defocus {
 
 using OIIO::Strutil::fmt::format;
@@ -92,8 +94,10 @@ bool ExrInput::read(int part, const std::vector<ChannelTarget>& targets, std::st
     const std::string& filename = m_context->filename;
     exr_storage_t storage;
     exr_attr_box2i_t dw;
+    exr_compression_t compression;
     if (exr_get_storage(file, part, &storage) != EXR_ERR_SUCCESS
-        || exr_get_data_window(file, part, &dw) != EXR_ERR_SUCCESS) {
+        || exr_get_data_window(file, part, &dw) != EXR_ERR_SUCCESS
+        || exr_get_compression(file, part, &compression) != EXR_ERR_SUCCESS) {
         error = damaged(filename, core_message);
         return false;
     }
@@ -129,6 +133,7 @@ bool ExrInput::read(int part, const std::vector<ChannelTarget>& targets, std::st
     // A few chunks a task: tasks of many chunks leave a thread idle.
     OIIO::parallel_for_chunked(0, chunks, 4, [&](int64_t c0, int64_t c1) {
         exr_decode_pipeline_t decoder = EXR_DECODE_PIPELINE_INITIALIZER;
+        ZipChunks zip;
         auto fail = [&](const std::string& why) {
             std::lock_guard<std::mutex> lock(first_error);
             if (!failed.exchange(true))
@@ -177,8 +182,12 @@ bool ExrInput::read(int part, const std::vector<ChannelTarget>& targets, std::st
             }
             if (failed)
                 break;
-            if (exr_decoding_choose_default_routines(file, part, &decoder) != EXR_ERR_SUCCESS
-                || exr_decoding_run(file, part, &decoder) != EXR_ERR_SUCCESS) {
+            if (exr_decoding_choose_default_routines(file, part, &decoder) != EXR_ERR_SUCCESS) {
+                fail(damaged(filename, core_message));
+                break;
+            }
+            inflate_zip_chunks(decoder, compression, zip);
+            if (exr_decoding_run(file, part, &decoder) != EXR_ERR_SUCCESS) {
                 fail(damaged(filename, core_message));
                 break;
             }
