@@ -15,6 +15,7 @@
 #include "spread/spread_engine.h"
 #include "util/float_pixels.h"
 #include "util/parallel_rows.h"
+#include "util/prefault.h"
 #include "util/zeroed_image.h"
 
 namespace defocus {
@@ -31,6 +32,7 @@ bool coc_radius(ImageBuf& dst, const ImageBuf& depth,
     ImageSpec spec(roi, TypeFloat);
     spec.channelnames = { "radius" };
     dst.reset(spec, InitializePixels::No);  // every pixel is written below
+    prefault(dst.localpixels(), spec.image_bytes(), nthreads);
     const FloatPixels z(depth, roi);
     parallel_for(roi.ybegin, roi.yend, [&](int y) {
         const float* in = z(roi.xbegin, y);

@@ -12,6 +12,7 @@
 #include <OpenImageIO/strutil.h>
 
 #include "io/exr_input.h"
+#include "util/prefault.h"
 #include "util/parallel_rows.h"
 
 namespace defocus {
@@ -185,6 +186,8 @@ bool allocate_layer(const std::string& name, const ROI& window, const ImageSpec&
     layer.name = name;
     layer.color.reset(color_spec, InitializePixels::No);
     layer.depth.reset(depth_spec, InitializePixels::No);
+    prefault(layer.color.localpixels(), color_spec.image_bytes(), 0);
+    prefault(layer.depth.localpixels(), depth_spec.image_bytes(), 0);
     return true;
 }
 

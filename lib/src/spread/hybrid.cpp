@@ -9,6 +9,7 @@
 
 #include "util/float_pixels.h"
 #include "util/parallel_rows.h"
+#include "util/prefault.h"
 
 namespace defocus {
 
@@ -107,6 +108,7 @@ std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius
     // Not zero-filled on allocation: the passes below write every entry,
     // in parallel, which also spreads the fresh pages' faults over threads.
     const std::unique_ptr<double[]> sat(new double[size_t(w + 1) * (h + 1)]);
+    prefault(sat.get(), sizeof(double) * size_t(w + 1) * (h + 1), nthreads);
     std::fill(&sat[0], &sat[0] + w + 1, 0.0);
     parallel_for(0, h, [&](int y) {
         double* row = &sat[size_t(y + 1) * (w + 1)];

@@ -7,6 +7,7 @@
 #include <OpenImageIO/parallel.h>
 
 #include "util/parallel_rows.h"
+#include "util/prefault.h"
 
 namespace defocus {
 
@@ -18,6 +19,7 @@ inline void reset_zeroed(OIIO::ImageBuf& image, const OIIO::ImageSpec& spec, int
 {
     image.reset(spec, OIIO::InitializePixels::No);
     char* pixels = static_cast<char*>(image.localpixels());
+    prefault(pixels, spec.image_bytes(), nthreads);
     const size_t row_bytes = spec.scanline_bytes();
     OIIO::parallel_for(int64_t(0), int64_t(spec.height) * spec.depth, [&](int64_t row) {
         std::memset(pixels + size_t(row) * row_bytes, 0, row_bytes);
