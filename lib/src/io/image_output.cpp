@@ -11,6 +11,8 @@
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 
+#include "io/half_pixels.h"
+
 namespace defocus {
 
 using namespace OIIO;
@@ -140,8 +142,12 @@ bool write_image_atomic(const ImageBuf& image, const std::string& filename,
     if (!compression.empty())
         spec.attribute("compression", compression);
     return write_atomic(filename, [&](ImageOutput& out, const std::string& tmp) {
-        if (out.supports("displaywindow"))
+        if (out.supports("displaywindow")) {
+            ImageBuf half;
+            if (spec.format == TypeHalf && convert_to_half(image, half))
+                return out.open(tmp, spec) && half.write(&out);
             return out.open(tmp, spec) && image.write(&out);
+        }
         // Formats without a display window (PNG, JPEG, ...) get the picture
         // a viewer shows: the display window.
         ImageBuf framed;
