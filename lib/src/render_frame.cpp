@@ -1,6 +1,5 @@
 #include <defocus/render_frame.h>
 
-
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/timer.h>
 
@@ -101,7 +100,7 @@ bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, Layer
     const size_t layers_given = scene.layers.size();
     const LayerBounds bounds =
         decompose_layers(std::move(scene), coc, shot.layering, layered, nthreads);
-    layered.luma = color.luma;
+    layered.luma = luma_weights(color.config.get());
     if (to_slice) {
         std::vector<std::string> edges;
         for (int k = 0; k <= bounds.count(); ++k)

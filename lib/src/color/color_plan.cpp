@@ -12,7 +12,6 @@ bool plan_color(ColorPlan& plan, std::shared_ptr<const ColorManagement> config,
                 std::string& error)
 {
     plan.config = std::move(config);
-    plan.luma   = luma_weights(plan.config.get());
     if (!plan.config) {
         if (!input_space.empty() || !output_space.empty()) {
             error = no_config;

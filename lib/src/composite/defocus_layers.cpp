@@ -205,8 +205,7 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
         }
         if (!spread_in_engine(spread, images)) {
             if (!spread_apart(apart[i], layer.color, e.radius, spread, images, profile.get(),
-                              scene.luma,
-                              depths[i].psf_pixels, nthreads)) {
+                              scene.luma, depths[i].psf_pixels, nthreads)) {
                 dst.errorfmt("layer '{}': {}", layer.name, apart[i].geterror());
                 return false;
             }
@@ -313,7 +312,6 @@ bool largest_grown_window(ROI& window, const ImageSpec& scene, const Camera& cam
         depth_spec.channelnames = { "Z" };
         depth_spec.alpha_channel = -1;
         Layer layer { "probe", ImageBuf(layered.spec), ImageBuf(depth_spec) };
-        layer.color.specmod().alpha_channel = 3;
         ImageBufAlgo::fill(layer.color, { 1.0f, 1.0f, 1.0f, 1.0f });
         ImageBufAlgo::fill(layer.depth, { depth });
         layered.layers.push_back(std::move(layer));

@@ -14,7 +14,8 @@ const std::vector<ShotOption>& shot_options()
           "Focus distance in metres, e.g. 3 or 1001:3,1040:1.2 (required, or --focus-at)" },
         { G::Camera, "--focus-at X,Y", "focus-at",
           "Focus on what is seen at display-window pixel X,Y: the median depth of the "
-          "front-most opaque surface over 5x5 pixels; keyframes F:X,Y,F:X,Y..." },
+          "front-most opaque surface over 5x5 pixels (--focus-at-radius); keyframes "
+          "F:X,Y,F:X,Y..." },
         { G::Camera, "--focus-at-radius R", "focus-at-radius",
           "--focus-at takes the median over (2R+1)x(2R+1) pixels: 0 = the pixel alone, "
           "larger for noisy depth (default: 2, 5x5)" },

@@ -14,7 +14,6 @@ namespace defocus {
 struct ColorPlan {
     std::shared_ptr<const ColorManagement> config;  ///< null: none, and none was needed
     std::string input, working, output;
-    Imath::V3d luma;  ///< luminance weights of the working space (luma_weights)
     bool convert_input = false;  ///< the input is not linear: convert it to `working`
     /// Why the input space is a guess ("" when it was named or tagged
     /// precisely): display-referred output then may not be what was meant.
