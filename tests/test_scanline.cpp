@@ -63,7 +63,7 @@ TEST_CASE("scanline spreading equals the direct reference for discs and polygons
     }
 }
 
-TEST_CASE("an impulse lights the analytic shape: disc pi r^2, hexagon 3 sqrt(3)/2 R^2")
+TEST_CASE("an impulse lights the analytic shape: disc pi r^2, inscribed hexagon 3 sqrt(3)/2 r^2")
 {
     const double r = 20.0;
     const ImageBuf one = impulse();
@@ -72,20 +72,58 @@ TEST_CASE("an impulse lights the analytic shape: disc pi r^2, hexagon 3 sqrt(3)/
     REQUIRE(spread_scanline(disc, one, constant_radius(one.roi(), float(r)), disc_profile));
     CHECK(lit_area(disc) == Approx(M_PI * r * r).epsilon(0.01));
     CHECK(channel_sum(disc, 0) == Approx(1.0).epsilon(1e-6));
-    // A hexagon of the disc's area has circumradius R with (3√3/2)R² = πr².
+    // As render cameras draw it: the hexagon inscribed in the CoC circle.
     const ApertureProfile hex_profile(polygon(6));
+    std::vector<RowSpan> spans;
+    // The outline is tabulated at 4096 heights: exact to about 1e-4.
+    CHECK(hex_profile.rows(r, spans) == Approx(3.0 * std::sqrt(3.0) / 2.0 * r * r).epsilon(2e-4));
     REQUIRE(spread_scanline(hexagon, one, constant_radius(one.roi(), float(r)), hex_profile));
-    const double R = std::sqrt(2.0 * M_PI * r * r / (3.0 * std::sqrt(3.0)));
-    CHECK(lit_area(hexagon) == Approx(3.0 * std::sqrt(3.0) / 2.0 * R * R).epsilon(0.01));
-    // With a vertex pointing right, the hexagon reaches R along x and
-    // R·√3/2 along y.
+    CHECK(lit_area(hexagon) == Approx(3.0 * std::sqrt(3.0) / 2.0 * r * r).epsilon(0.01));
+    CHECK(channel_sum(hexagon, 0) == Approx(1.0).epsilon(1e-6));
+    // Its vertices lie on the circle: with one pointing right, it reaches
+    // r along x and r·√3/2 (its edge) along y.
     float p[4];
-    hexagon.getpixel(int(R) - 1, 0, p);
+    hexagon.getpixel(int(r) - 1, 0, p);
     CHECK(p[0] > 0.0f);
-    hexagon.getpixel(0, int(R * std::sqrt(3.0) / 2.0) + 2, p);
+    hexagon.getpixel(int(r) + 1, 0, p);
     CHECK(p[0] == 0.0f);
-    hexagon.getpixel(0, int(R * std::sqrt(3.0) / 2.0) - 2, p);
+    hexagon.getpixel(0, int(r * std::sqrt(3.0) / 2.0) + 2, p);
+    CHECK(p[0] == 0.0f);
+    hexagon.getpixel(0, int(r * std::sqrt(3.0) / 2.0) - 2, p);
     CHECK(p[0] > 0.0f);
+}
+
+TEST_CASE("a polygon's rotation turns it clockwise in the image, as renderers do")
+{
+    // A triangle with a vertex pointing right, turned by 90 degrees
+    // clockwise (image y points down): its vertex points down, and its
+    // top is an edge r/2 above the centre.
+    const double r = 20.0;
+    const ImageBuf one = impulse();
+    ImageBuf triangle;
+    REQUIRE(spread_scanline(triangle, one, constant_radius(one.roi(), float(r)),
+                            ApertureProfile(polygon(3, 90.0))));
+    float p[4];
+    triangle.getpixel(0, int(r) - 2, p);
+    CHECK(p[0] > 0.0f);
+    triangle.getpixel(0, -int(r / 2) - 2, p);
+    CHECK(p[0] == 0.0f);
+    triangle.getpixel(0, -int(r / 2) + 2, p);
+    CHECK(p[0] > 0.0f);
+}
+
+TEST_CASE("roundness 1 makes the polygon the disc")
+{
+    std::vector<RowSpan> disc, round;
+    const double r = 13.3;
+    const double disc_area = ApertureProfile(Aperture()).rows(r, disc);
+    CHECK(disc_area == Approx(M_PI * r * r).epsilon(1e-5));
+    CHECK(ApertureProfile(polygon(5, 30.0, 1.0)).rows(r, round) == Approx(disc_area).epsilon(1e-9));
+    REQUIRE(round.size() == disc.size());
+    for (size_t i = 0; i < disc.size(); ++i) {
+        CHECK(round[i].left == Approx(disc[i].left).margin(1e-6));
+        CHECK(round[i].right == Approx(disc[i].right).margin(1e-6));
+    }
 }
 
 TEST_CASE("anamorphic squeeze narrows the bokeh horizontally")

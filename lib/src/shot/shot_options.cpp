@@ -29,13 +29,16 @@ const std::vector<ShotOption>& shot_options()
           "Largest CoC diameter in pixels; larger blur is clamped (default: 512)" },
 
         { G::Aperture, "--aperture SHAPE", "aperture",
-          "Bokeh shape, each with the CoC disc's area: disc (default); polygon (an "
-          "iris of --blades blades); mask:FILE (the shape in an image, thresholded "
-          "at half its peak); box (a square: the fastest); tent and smooth (soft "
+          "Bokeh shape: disc (default); polygon (an iris of --blades blades, its "
+          "vertices on the CoC circle, as render cameras draw it); mask:FILE (the "
+          "shape in an image, thresholded at half its peak, with the disc's area); "
+          "box (a square of the disc's area: the fastest); tent and smooth (soft "
           "PSFs of the disc's spread, in constant time)" },
         { G::Aperture, "--blades N", "blades", "Polygon: number of blades, 3-16 (default: 6)" },
         { G::Aperture, "--rotation DEG", "rotation",
-          "Polygon: counterclockwise rotation; 0 = a vertex pointing right (default: 0)" },
+          "Polygon: rotation clockwise in the image, as Blender/Cycles' aperture "
+          "rotation is given (the same number); 0 = a vertex pointing right "
+          "(default: 0)" },
         { G::Aperture, "--roundness R", "roundness",
           "Polygon: 0 = straight blades, 1 = a disc (default: 0)" },
         { G::Aperture, "--aspect A", "aspect",

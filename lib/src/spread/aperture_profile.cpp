@@ -14,21 +14,28 @@ namespace {
 constexpr double pi = 3.14159265358979323846;
 constexpr double min_radius = 0.5;   // a disc inside its own pixel
 
-/// The unit outline: counterclockwise as seen in the image (y down), area π.
+/// The unit outline, as render cameras draw it: a disc of radius 1, or a
+/// regular polygon inscribed in it (its vertices on the circle), turned
+/// clockwise as seen in the image by the camera's rotation (Cycles' blade
+/// rotation, for one: 0 = a vertex pointing right), squeezed keeping the area.
 void unit_outline(const Aperture& a, std::vector<double>& xs, std::vector<double>& ys)
 {
     const double theta = a.rotation_deg * pi / 180.0;
     const int n = a.shape == ApertureShape::Polygon ? a.blades : 0;
     auto add = [&](double phi, double rho) {
         xs.push_back(rho * std::cos(phi));
-        ys.push_back(-rho * std::sin(phi));  // image y points down
+        ys.push_back(rho * std::sin(phi));  // image y points down: clockwise
     };
     if (a.shape == ApertureShape::Polygon && a.roundness == 0.0) {
         for (int i = 0; i < n; ++i)
             add(theta + 2.0 * pi * i / n, 1.0);
     } else {
-        // The radial function of a regular n-gon, blended towards the circle.
+        // The radial function of a regular n-gon, blended towards the
+        // circle, sampled; the samples are scaled so that the circle's
+        // polygon of samples has the circle's area (a disc, and roundness 1,
+        // keep area π exactly).
         const int samples = 720;
+        const double sampling = std::sqrt(pi / (0.5 * samples * std::sin(2.0 * pi / samples)));
         for (int i = 0; i < samples; ++i) {
             const double phi = 2.0 * pi * i / samples;
             double rho = 1.0;
@@ -38,22 +45,13 @@ void unit_outline(const Aperture& a, std::vector<double>& xs, std::vector<double
                 const double polygon = std::cos(0.5 * sector) / std::cos(local);
                 rho = (1.0 - a.roundness) * polygon + a.roundness;
             }
-            add(phi, rho);
+            add(phi, rho * sampling);
         }
     }
-    // Anamorphic squeeze, keeping the area.
     const double sx = std::sqrt(a.aspect), sy = 1.0 / sx;
-    double area = 0.0;
     for (size_t i = 0; i < xs.size(); ++i) {
         xs[i] *= sx;
         ys[i] *= sy;
-    }
-    for (size_t i = 0, j = xs.size() - 1; i < xs.size(); j = i++)
-        area += xs[j] * ys[i] - xs[i] * ys[j];
-    const double scale = std::sqrt(pi / (0.5 * std::abs(area)));
-    for (size_t i = 0; i < xs.size(); ++i) {
-        xs[i] *= scale;
-        ys[i] *= scale;
     }
 }
 

@@ -8,7 +8,7 @@ namespace defocus {
 enum class ApertureShape {
     Box,      ///< a square of the CoC disc's area: constant-time rectangle spreading
     Disc,     ///< the CoC disc, spread scanline by scanline
-    Polygon,  ///< an iris of `blades` straight (or rounded) blades
+    Polygon,  ///< an iris of `blades` straight (or rounded) blades, inscribed in the CoC disc
     Tent,     ///< a smooth second-order PSF (two boxes convolved), constant time
     Smooth,   ///< a third-order B-spline PSF, close to a Gaussian, constant time
     Mask,     ///< a shape taken from an image, spread scanline by scanline
@@ -17,7 +17,7 @@ enum class ApertureShape {
 struct Aperture {
     ApertureShape shape = ApertureShape::Disc;
     int blades = 6;             ///< polygon: 3..16
-    double rotation_deg = 0.0;  ///< polygon: counterclockwise in the image; 0 = a vertex pointing right
+    double rotation_deg = 0.0;  ///< polygon: clockwise in the image, as renderers turn blades; 0 = a vertex pointing right
     double roundness = 0.0;     ///< polygon: 0 = straight edges, 1 = a disc
     double aspect = 1.0;        ///< anamorphic squeeze: < 1 narrows the bokeh horizontally
     std::string mask_file;      ///< mask: the image of the shape

@@ -37,9 +37,9 @@ public:
     virtual double extent() const = 0;
 };
 
-/// A convex aperture outline with the area of a disc of radius 1, scaled
-/// to each pixel's CoC radius: a disc of radius r, or a polygon (rounded,
-/// rotated, squeezed) of area πr². Each row [j - 1/2, j + 1/2] is one
+/// A convex aperture outline scaled to each pixel's CoC radius r: a disc
+/// of radius r, or a polygon (rounded, rotated) inscribed in it, as render
+/// cameras draw their blades; either squeezed keeping its area. Each row [j - 1/2, j + 1/2] is one
 /// interval with the shape's exact area in that row, centred on the area's
 /// centre.
 class ApertureProfile final : public RowProfile {
