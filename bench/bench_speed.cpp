@@ -224,7 +224,7 @@ FloorScene make_floor_scene(const std::vector<bench::FloorLayer>& layers)
     s.camera.sensor_width_mm = 36.0;
     s.camera.focus_distance = 4.0;
     const int width = 4096;
-    const defocus::CircleOfConfusion coc(s.camera, width);
+    const defocus::CircleOfConfusion coc(s.camera, OIIO::ROI(0, width, 0, 2160));
     const char* names[4] = { "far", "hills", "post", "leaves" };
     for (size_t i = 0; i < layers.size(); ++i) {
         const bench::FloorLayer& l = layers[i];
@@ -235,7 +235,7 @@ FloorScene make_floor_scene(const std::vector<bench::FloorLayer>& layers)
                                l.color.data());
         std::vector<float> depth(l.coc.size());
         std::transform(l.coc.begin(), l.coc.end(), depth.begin(),
-                       [&](float diameter) { return float(coc.depth_at(diameter)); });
+                       [&](float diameter) { return float(coc.depth_at(diameter, 0, 0)); });  // a plane of focus: the same everywhere
         layer.depth.set_pixels(ROI(0, l.width, 0, l.height, 0, 1, 0, 1), TypeFloat, depth.data());
         s.scene.layers.push_back(std::move(layer));
     }

@@ -787,3 +787,137 @@ TEST_CASE("the help and the README document the same options")
     CHECK(in_help == in_readme);
     CHECK(Strutil::contains(help, "Examples:"));
 }
+
+namespace {
+
+/// A flat RGBA+Z render, width x height, of a fine checkerboard: a ground
+/// plane `height_m` below a level camera (focal 50 mm, filmback 36 mm)
+/// below the horizon, a far sky above it; or, with height_m = 0, a wall
+/// at `wall_m` filling the frame.
+std::string checker_scene(const std::string& path, int width, int height, double height_m,
+                          double wall_m = 0.0)
+{
+    ImageSpec spec(width, height, 5, TypeFloat);
+    spec.channelnames = { "R", "G", "B", "A", "Z" };
+    ImageBuf image(spec);
+    const double focal_px = 50.0 / 36.0 * width;
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            const double v = (y + 0.5 - 0.5 * height) / focal_px;
+            const float z = height_m == 0.0 ? float(wall_m)
+                            : v > 0.02      ? float(height_m / v)
+                                            : 1000.0f;
+            const float c = ((x / 2 + y / 2) % 2) ? 0.9f : 0.1f;
+            const float pixel[5] = { c, c, c, 1.0f, z };
+            image.setpixel(x, y, pixel);
+        }
+    REQUIRE(image.write(path));
+    return path;
+}
+
+}  // namespace
+
+TEST_CASE("a tilted plane of focus puts the in-focus band on its predicted line")
+{
+    const std::string dir = scratch_dir("cli_focus_tilt");
+    const int width = 240, height = 160;
+    const std::string ground = checker_scene(dir + "/ground.exr", width, height, 1.0);
+    // Focused on the ground at pixel (120, 130), the plane turned 20 degrees
+    // about the vertical axis, its right side away.
+    std::string log;
+    REQUIRE(run_defocus(ground + " -o " + dir + "/map.exr --focal 50 --fstop 2 --focus-at 120,130"
+                            " --focus-tilt 0,20 --focus-at-radius 0 --output focusmap -d float",
+                        log) == 0);
+    const ImageBuf map = read_image(dir + "/map.exr");
+    // The ground at row y is at depth 1 / v, v = (y + 0.5 - 80) / f_px; the
+    // plane through the focus point with normal (-tan 20°, 0, 1) meets the
+    // ray of (u, v) at 1/z_f = (1 - tan 20° u) / (z_0 (1 - tan 20° u_0)). In
+    // focus: v = 1/z_f.
+    const double focal_px = 50.0 / 36.0 * width, t = std::tan(20.0 * M_PI / 180.0);
+    const double u0 = (120.5 - 120.0) / focal_px, z0 = focal_px / (130.5 - 80.0);
+    int tested = 0;
+    for (int x : { 10, 60, 120, 180, 230 }) {
+        const double u = (x + 0.5 - 120.0) / focal_px;
+        const double v = (1.0 - t * u) / (z0 * (1.0 - t * u0));
+        const double predicted = v * focal_px + 80.0 - 0.5;
+        // The focus map is greenest (G = 1 - |CoC| / 8 px) where it is sharp.
+        int sharpest = -1;
+        float best = -1.0f;
+        for (int y = 90; y < height; ++y) {
+            float p[4];
+            map.getpixel(x, y, p);
+            if (p[1] > best) {
+                best = p[1];
+                sharpest = y;
+            }
+        }
+        INFO("column " << x << ": predicted row " << predicted << ", sharpest " << sharpest);
+        CHECK(std::abs(sharpest - predicted) <= 1.0);
+        ++tested;
+    }
+    CHECK(tested == 5);
+    // Untilted, one row is in focus across the frame.
+    REQUIRE(run_defocus(ground + " -o " + dir + "/flat.exr --focal 50 --fstop 2 --focus-at 120,130"
+                            " --focus-at-radius 0 --output focusmap -d float",
+                        log) == 0);
+    const ImageBuf flat = read_image(dir + "/flat.exr");
+    for (int x : { 10, 230 }) {
+        float p[4];
+        flat.getpixel(x, 130, p);
+        CHECK(p[1] == Approx(1.0f).margin(0.05));
+    }
+    // The tilt is recorded with the camera.
+    const ImageSpec spec = read_spec(dir + "/map.exr");
+    const ParamValue* tilt = spec.find_attribute("defocus:focusTilt");
+    REQUIRE(tilt);
+    REQUIRE(tilt->type() == TypeDesc(TypeDesc::FLOAT, TypeDesc::VEC2));
+    CHECK(static_cast<const float*>(tilt->data())[0] == 0.0f);
+    CHECK(static_cast<const float*>(tilt->data())[1] == 20.0f);
+}
+
+TEST_CASE("a split diopter: each half matches a plain render at its distance")
+{
+    const std::string dir = scratch_dir("cli_split_diopter");
+    const int size = 160;
+    const std::string wall = checker_scene(dir + "/wall.exr", size, size, 0.0, 3.0);
+    const std::string common = " --focal 50 --fstop 2 --edge extend -d float";
+    std::string log;
+    // Beyond the line from (0, 80) to (160, 80), the lower half, the
+    // diopter focuses on the wall at 3 m; above it the lens is at 10 m.
+    REQUIRE(run_defocus(wall + " -o " + dir + "/split.exr --focus 10 --split-diopter 0,80,160,80:3"
+                            + common, log) == 0);
+    REQUIRE(run_defocus(wall + " -o " + dir + "/far.exr --focus 10" + common, log) == 0);
+    REQUIRE(run_defocus(wall + " -o " + dir + "/near.exr --focus 3" + common, log) == 0);
+    const ImageBuf split = read_image(dir + "/split.exr"), far = read_image(dir + "/far.exr"),
+                   near = read_image(dir + "/near.exr");
+    // The wall at 3 m blurs to a CoC of about 8 px at focus 10: rows more
+    // than that from the line see one half only.
+    const int reach = 12;
+    auto worst = [&](const ImageBuf& plain, int y0, int y1) {
+        double w = 0.0;
+        for (int y = y0; y < y1; ++y)
+            for (int x = 0; x < size; ++x) {
+                float a[4], b[4];
+                split.getpixel(x, y, a);
+                plain.getpixel(x, y, b);
+                for (int c = 0; c < 4; ++c)
+                    w = std::max(w, double(std::abs(a[c] - b[c])));
+            }
+        return w;
+    };
+    CHECK(worst(far, 0, 80 - reach) < 1e-5);
+    CHECK(worst(near, 80 + reach, size) < 1e-5);
+    // And the halves do differ: the upper one is blurred.
+    CHECK(worst(near, 0, 80 - reach) > 0.1);
+    // Keyframed: the diopter's focus moves over frames.
+    REQUIRE(run_defocus(wall + " -o " + dir + "/seq.#.exr --frames 1-2 --focus 10"
+                            " --split-diopter 0,80,160,80:1:3,2:10" + common, log) == 0);
+    CHECK(read_spec(dir + "/seq.0001.exr").get_string_attribute("defocus:splitDiopter")
+          == "0,80,160,80:3");
+    CHECK(read_spec(dir + "/seq.0002.exr").get_string_attribute("defocus:splitDiopter")
+          == "0,80,160,80:10");
+    // A line of one point is an error, named once.
+    REQUIRE(run_defocus(wall + " -o " + dir + "/bad.exr --focus 10 --split-diopter 5,5,5,5:3", log)
+            != 0);
+    CHECK(one_line_naming(log, "two different points"));
+}

@@ -68,7 +68,7 @@ ImageBuf gathered(double focus)
             depth.setpixel(x, y, card ? &near_z : &far_z);
         }
     ImageBuf radius, out;
-    REQUIRE(coc_radius(radius, depth, CircleOfConfusion(synthetic_camera(focus), 120)));
+    REQUIRE(coc_radius(radius, depth, CircleOfConfusion(synthetic_camera(focus), ROI(0, 120, 0, 120))));
     REQUIRE(gather(out, color, radius, box_footprint));
     return out;
 }

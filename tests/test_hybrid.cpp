@@ -48,13 +48,13 @@ TEST_CASE("visible bokeh: a highlight against its surroundings, not an even area
     Scene scene = highlight_scene();
     ImageBuf radius;
     REQUIRE(coc_radius(radius, scene.layers[0].depth,
-                       CircleOfConfusion(synthetic_camera(1.0), 120)));
+                       CircleOfConfusion(synthetic_camera(1.0), ROI(0, 120, 0, 120))));
     const std::vector<uint8_t> slow = visible_bokeh(scene.layers[0].color, radius, { 4.0, luma_weights(nullptr) });
     CHECK(std::count(slow.begin(), slow.end(), uint8_t(1)) == 1);
     CHECK(slow[40 * 120 + 60] == 1);
     // In focus, nothing's bokeh is visible.
     REQUIRE(coc_radius(radius, scene.layers[0].depth,
-                       CircleOfConfusion(synthetic_camera(10.0), 120)));
+                       CircleOfConfusion(synthetic_camera(10.0), ROI(0, 120, 0, 120))));
     const std::vector<uint8_t> sharp = visible_bokeh(scene.layers[0].color, radius, { 4.0, luma_weights(nullptr) });
     CHECK(std::count(sharp.begin(), sharp.end(), uint8_t(1)) == 0);
 }
@@ -68,7 +68,7 @@ TEST_CASE("visible bokeh weighs colour by the luminance weights it is given")
     scene.layers[0].color.setpixel(60, 40, blue);
     ImageBuf radius;
     REQUIRE(coc_radius(radius, scene.layers[0].depth,
-                       CircleOfConfusion(synthetic_camera(1.0), 120)));
+                       CircleOfConfusion(synthetic_camera(1.0), ROI(0, 120, 0, 120))));
     auto selected = [&](const Imath::V3d& luma) {
         const std::vector<uint8_t> s = visible_bokeh(scene.layers[0].color, radius, { 2.0, luma });
         return std::count(s.begin(), s.end(), uint8_t(1));

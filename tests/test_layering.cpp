@@ -41,7 +41,7 @@ ImageBuf render(Scene scene, double focus, const LayeringOptions& options = {})
 {
     const Camera camera = synthetic_camera(focus);
     LayeredScene layers;
-    decompose_layers(std::move(scene), CircleOfConfusion(camera, 120), options, layers);
+    decompose_layers(std::move(scene), CircleOfConfusion(camera, ROI(0, 120, 0, 120)), options, layers);
     ImageBuf out;
     REQUIRE(defocus_layers(out, layers, camera));
     return out;
@@ -104,7 +104,7 @@ TEST_CASE("automatic boundaries fall in the gaps between objects")
         rgba[3] = 1.0f;
         z = x < 60 ? 1.0f / (1.0f + 30.0f / 33.333f) : 1.0f / (1.0f - 20.0f / 33.333f);
     });
-    const CircleOfConfusion coc(synthetic_camera(1.0), 120);
+    const CircleOfConfusion coc(synthetic_camera(1.0), ROI(0, 120, 0, 120));
     LayeringOptions options;
     const LayerBounds bounds = choose_layer_bounds(scene, coc, options);
     REQUIRE(bounds.count() >= 2);
@@ -135,7 +135,7 @@ TEST_CASE("a deep volume sample split across layers composites back to itself")
     scene.deep.push_back(deep);
     LayeringOptions options;
     options.layers = 6;
-    const CircleOfConfusion coc(synthetic_camera(1.0), 120);
+    const CircleOfConfusion coc(synthetic_camera(1.0), ROI(0, 120, 0, 120));
     LayeredScene layers;
     decompose_layers(std::move(scene), coc, options, layers);
     REQUIRE(layers.layers.size() >= 3);
@@ -169,7 +169,7 @@ TEST_CASE("deep samples are ordered by Z, then ZBack")
                      { 0.5f, 0.0f, 0.0f, 0.5f, 2.0f, 2.0f } };  // red, point
     scene.deep.push_back(deep);
     LayeredScene layers;
-    decompose_layers(std::move(scene), CircleOfConfusion(synthetic_camera(1.0), 120), {}, layers);
+    decompose_layers(std::move(scene), CircleOfConfusion(synthetic_camera(1.0), ROI(0, 120, 0, 120)), {}, layers);
     float out[4];
     composite_pixel(layers.layers, 0, 0, out);
     CHECK(out[0] == Approx(0.5f));   // red in front

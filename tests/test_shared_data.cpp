@@ -265,7 +265,7 @@ TEST_CASE("Weta's deep passes, alone and together, give sane images in depth ord
     cam.focal_length_mm = 500;
     cam.fstop = 3;
     cam.focus_distance = 200;
-    const defocus::CircleOfConfusion coc(cam, scene.spec.full_width);
+    const defocus::CircleOfConfusion coc(cam, scene.spec.roi_full());
     const std::string all_three = v + "Trunks.exr " + v + "Leaves.exr " + v + "Balls.exr";
     run_ok(DEFOCUS_BIN, all_three + " -o " + dir + "/sharp.exr --focal 500 --fstop 1000 --focus 200 -d float");
     run_ok(DEFOCUS_BIN, all_three + " -o " + dir + "/blur.exr --focal 500 --fstop 3 --focus 200 -d float");
@@ -277,7 +277,9 @@ TEST_CASE("Weta's deep passes, alone and together, give sane images in depth ord
         for (uint64_t i = deep.offsets[p]; i < deep.offsets[p + 1]; ++i)
             if (deep.samples[i].a > 0.0f)
                 z = std::min(z, deep.samples[i].z);
-        front_coc[p] = std::isinf(z) ? NAN : float(coc.diameter(z));
+        front_coc[p] = std::isinf(z) ? NAN
+                                     : float(coc.diameter(z, roi.xbegin + int(p % roi.width()),
+                                                          roi.ybegin + int(p / roi.width())));
     }
     int64_t in_focus = 0;
     double diff = 0.0;

@@ -20,7 +20,7 @@ using namespace OIIO;
 defocus::LayeredScene layered_scene(defocus::Scene scene, const defocus::Camera& camera)
 {
     defocus::LayeredScene out;
-    const defocus::CircleOfConfusion coc(camera, scene.spec.full_width);
+    const defocus::CircleOfConfusion coc(camera, scene.spec.roi_full());
     defocus::decompose_layers(std::move(scene), coc, {}, out);
     return out;
 }

@@ -95,7 +95,7 @@ bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, Layer
     stage("slice");
     if (!shot_camera(shot, scene, frame, out.camera, error))
         return fail();
-    const CircleOfConfusion coc(out.camera, scene.spec.full_width);
+    const CircleOfConfusion coc(out.camera, scene.spec.roi_full());
     const bool to_slice = !scene.flat.empty() || !scene.deep.empty();
     const size_t layers_given = scene.layers.size();
     const LayerBounds bounds =
@@ -125,7 +125,7 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
                   const StageCallback& on_stage, int nthreads)
 {
     const ColorPlan& color = out.color;
-    const CircleOfConfusion coc(out.camera, layered.spec.full_width);
+    const CircleOfConfusion coc(out.camera, layered.spec.roi_full());
     Timer timer;
     auto lap = [&](const char* name) { out.timings.emplace_back(name, timer.lap()); };
     if (on_stage)

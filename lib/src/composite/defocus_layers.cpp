@@ -38,7 +38,7 @@ bool coc_radius(ImageBuf& dst, const ImageBuf& depth,
         const float* in = z(roi.xbegin, y);
         float* out = static_cast<float*>(dst.pixeladdr(roi.xbegin, y));
         for (int x = 0; x < roi.width(); ++x, in += z.nchannels())
-            out[x] = float(coc.radius(*in));
+            out[x] = float(coc.radius(*in, roi.xbegin + x, y));
     }, by_rows(nthreads));
     return true;
 }
@@ -162,7 +162,7 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
                           SpreadTimings& timings, int nthreads)
 {
     Timer spread_timer;
-    const CircleOfConfusion coc(camera, scene.spec.full_width);
+    const CircleOfConfusion coc(camera, scene.spec.roi_full());
     std::vector<LayerReport> depths = scene.reports;
 
     // Shape apertures share one profile and its footprints, sized to the
@@ -294,10 +294,14 @@ bool largest_grown_window(ROI& window, const ImageSpec& scene, const Camera& cam
     // Blocks of up to 32 pixels align to the pixel grid: a probe of that
     // size at each corner meets the same alignment as the data window.
     constexpr int probe = 64;
-    const CircleOfConfusion coc(camera, scene.full_width);
-    // In front of the focus plane with more blur than the camera allows:
-    // the largest blur.
-    const float depth = float(coc.depth_at(-4.0 * camera.max_blur_px - 4.0));
+    // The largest blur is the camera's clamp wherever the lens focuses: the
+    // probe takes a plain plane of focus, and a depth in front of it with
+    // more blur than the camera allows.
+    Camera plain = camera;
+    plain.tilt_deg[0] = plain.tilt_deg[1] = 0.0;
+    plain.split = SplitDiopter();
+    const CircleOfConfusion coc(plain, scene.roi_full());
+    const float depth = float(coc.depth_at(-4.0 * camera.max_blur_px - 4.0, 0, 0));
     window = data;
     for (const bool far_corner : { false, true }) {
         const int x0 = far_corner ? data.xend - probe : data.xbegin;
@@ -318,7 +322,7 @@ bool largest_grown_window(ROI& window, const ImageSpec& scene, const Camera& cam
         order_layers(layered, coc, nthreads);
         extend_edges(layered, coc, EdgeMode::Extend, nthreads);
         ImageBuf spread_probe;
-        if (!defocus_layers(spread_probe, layered, camera, spread, images, OutputWindow::Grown,
+        if (!defocus_layers(spread_probe, layered, plain, spread, images, OutputWindow::Grown,
                             nullptr, nullptr, nthreads)) {
             error = spread_probe.geterror();
             return false;

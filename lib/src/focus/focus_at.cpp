@@ -88,8 +88,10 @@ bool shot_camera(const Shot& shot, const Scene& scene, int frame, Camera& camera
         if (!focus_distance_at(scene, at[0], at[1], camera.focus_distance, error,
                                2 * shot.focus_at_radius + 1))
             return false;
+        camera.focus_x = at[0];
+        camera.focus_y = at[1];
     }
-    return check_camera(camera, error);
+    return check_camera(camera, scene.spec.roi_full(), error);
 }
 
 }  // namespace defocus

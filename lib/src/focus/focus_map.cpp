@@ -25,7 +25,7 @@ bool focus_map(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
     spec.channelnames = { "R", "G", "B", "A" };
     spec.alpha_channel = 3;
     dst.reset(spec, InitializePixels::No);  // every pixel is written below
-    const CircleOfConfusion coc(camera, s.full_width);
+    const CircleOfConfusion coc(camera, s.roi_full());
     const double max_blur = std::max(camera.max_blur_px, 1e-6);
     parallel_for(display.ybegin, display.yend, [&](int y) {
         for (int x = display.xbegin; x < display.xend; ++x) {
@@ -47,7 +47,7 @@ bool focus_map(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
                 p[0] = p[1] = p[2] = p[3] = 0.0f;
                 continue;
             }
-            const double c = coc.diameter(z);
+            const double c = coc.diameter(z, x, y);
             const double t = std::min(1.0, std::abs(c) / in_focus_px);
             // Brightness grows with the blur, on a log scale up to max blur.
             const double size = std::log2(1.0 + std::abs(c)) / std::log2(1.0 + max_blur);

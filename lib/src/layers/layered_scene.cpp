@@ -19,6 +19,7 @@ namespace {
 struct RowDepth {
     int64_t pixels = 0;
     double zmin = INFINITY, zmax = -INFINITY;
+    double cmin = INFINITY, cmax = -INFINITY;  ///< where the lens focuses varies over the frame
     double weight = 0, weighted_inverse = 0;
 };
 
@@ -42,6 +43,9 @@ LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc, int
             ++r.pixels;
             r.zmin = std::min(r.zmin, z);
             r.zmax = std::max(r.zmax, z);
+            const double c = coc.diameter(z, roi.xbegin + x, y);
+            r.cmin = std::min(r.cmin, c);
+            r.cmax = std::max(r.cmax, c);
             r.weight += a;
             r.weighted_inverse += a * (std::isinf(z) ? 0.0 : 1.0 / z);
         }
@@ -51,6 +55,8 @@ LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc, int
         total.pixels += r.pixels;
         total.zmin = std::min(total.zmin, r.zmin);
         total.zmax = std::max(total.zmax, r.zmax);
+        total.cmin = std::min(total.cmin, r.cmin);
+        total.cmax = std::max(total.cmax, r.cmax);
         total.weight += r.weight;
         total.weighted_inverse += r.weighted_inverse;
     }
@@ -60,8 +66,8 @@ LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc, int
     rep.pixels = total.pixels;
     rep.depth_min = total.pixels ? total.zmin : 0.0;
     rep.depth_max = total.pixels ? total.zmax : 0.0;
-    rep.coc_min = total.pixels ? coc.diameter(rep.depth_min) : 0.0;
-    rep.coc_max = total.pixels ? coc.diameter(rep.depth_max) : 0.0;
+    rep.coc_min = total.pixels ? total.cmin : 0.0;
+    rep.coc_max = total.pixels ? total.cmax : 0.0;
     return rep;
 }
 

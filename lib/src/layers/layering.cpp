@@ -70,9 +70,12 @@ struct Fragments {
     std::vector<Fragment> items;
 };
 
-void assign_layers(Fragment& f, const CircleOfConfusion& coc, const LayerBounds& bounds)
+/// Layers are bounded in CoC, which at one pixel grows with depth, so
+/// they stay in depth order wherever the lens focuses.
+void assign_layers(Fragment& f, int x, int y, const CircleOfConfusion& coc,
+                   const LayerBounds& bounds)
 {
-    const LayerBounds::Share s = bounds.share(coc.diameter(f.z));
+    const LayerBounds::Share s = bounds.share(coc.diameter(f.z, x, y));
     const SplitWeights w = split_weights(s.front_weight, f.a);
     f.front = s.front;
     f.front_weight = w.front;
@@ -97,7 +100,7 @@ Fragments flat_fragments(const Layer& flat, const CircleOfConfusion& coc,
             f = { c[0], c[1], c[2], c[3],
                   *static_cast<const float*>(flat.depth.pixeladdr(x, y)), 0, 1, 0 };
             if (f.a > 0.0f)
-                assign_layers(f, coc, bounds);
+                assign_layers(f, x, y, coc, bounds);
         }
     }, by_rows(nthreads));
     return out;
@@ -130,16 +133,16 @@ void split_volume(const DeepSample& s, const std::vector<double>& planes,
 Fragments deep_fragments(const DeepImage& deep, const CircleOfConfusion& coc,
                          const LayerBounds& bounds, int nthreads)
 {
-    std::vector<double> planes;
-    for (int k = 1; k < bounds.count(); ++k)
-        planes.push_back(coc.depth_at(bounds.boundary(k)));
-
     const int64_t n = deep.roi.npixels();
     std::vector<std::vector<Fragment>> rows(deep.roi.height());
     parallel_for(deep.roi.ybegin, deep.roi.yend, [&](int y) {
         std::vector<Fragment>& row = rows[y - deep.roi.ybegin];
         std::vector<DeepSample> samples;
+        std::vector<double> planes;  // the layer boundaries' depths at this pixel
         for (int x = deep.roi.xbegin; x < deep.roi.xend; ++x) {
+            planes.clear();
+            for (int k = 1; k < bounds.count(); ++k)
+                planes.push_back(coc.depth_at(bounds.boundary(k), x, y));
             const int64_t p = deep.pixel_index(x, y);
             samples.assign(deep.samples.begin() + deep.offsets[p],
                            deep.samples.begin() + deep.offsets[p + 1]);
@@ -161,7 +164,7 @@ Fragments deep_fragments(const DeepImage& deep, const CircleOfConfusion& coc,
             std::stable_sort(row.begin() + first, row.end(),
                              [](const Fragment& a, const Fragment& b) { return a.z < b.z; });
             for (size_t i = first; i < row.size(); ++i)
-                assign_layers(row[i], coc, bounds);
+                assign_layers(row[i], x, y, coc, bounds);
             row.push_back({ 0, 0, 0, 0, -1, -1, 0, 0 });  // end of pixel
         }
     }, by_rows(nthreads));
@@ -313,19 +316,22 @@ void for_each_coc(const Scene& scene, const CircleOfConfusion& coc, Fn&& fn)
             for (int x = roi.xbegin; x < roi.xend; ++x) {
                 const float a = static_cast<const float*>(flat.color.pixeladdr(x, y))[3];
                 if (a > 0.0f)
-                    fn(y, coc.diameter(*static_cast<const float*>(flat.depth.pixeladdr(x, y))), a);
+                    fn(y, coc.diameter(*static_cast<const float*>(flat.depth.pixeladdr(x, y)), x, y),
+                       a);
             }
         }, by_rows(0));
     }
     for (const DeepImage& deep : scene.deep)
         parallel_for(deep.roi.ybegin, deep.roi.yend, [&](int y) {
-            const int64_t begin = deep.pixel_index(deep.roi.xbegin, y);
-            for (uint64_t i = deep.offsets[begin]; i < deep.offsets[begin + deep.roi.width()]; ++i) {
-                const DeepSample& s = deep.samples[i];
-                if (s.a > 0.0f) {
-                    fn(y, coc.diameter(s.z), s.a);
-                    if (s.zback != s.z)
-                        fn(y, coc.diameter(s.zback), 0.0f);
+            for (int x = deep.roi.xbegin; x < deep.roi.xend; ++x) {
+                const int64_t p = deep.pixel_index(x, y);
+                for (uint64_t i = deep.offsets[p]; i < deep.offsets[p + 1]; ++i) {
+                    const DeepSample& s = deep.samples[i];
+                    if (s.a > 0.0f) {
+                        fn(y, coc.diameter(s.z, x, y), s.a);
+                        if (s.zback != s.z)
+                            fn(y, coc.diameter(s.zback, x, y), 0.0f);
+                    }
                 }
             }
         }, by_rows(0));

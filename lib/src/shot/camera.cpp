@@ -9,35 +9,74 @@
 
 namespace defocus {
 
-CircleOfConfusion::CircleOfConfusion(const Camera& camera, int display_width)
-    : m_lens(camera.lens)
-    , m_focus(camera.focus_distance)
-    , m_inv_focus(1.0 / camera.focus_distance)
-    , m_max_diameter(camera.max_blur_px)
+namespace {
+
+/// The focus point's share of the tilted plane's 1/z_f: 1/z_f along the
+/// ray through normalised image position (u, v) (v down) is
+/// (1 - tan(tilt_v) u + tan(tilt_h) v) / (this · focus distance), so this
+/// is that numerator at the focus point, where 1/z_f is 1/focus distance.
+struct TiltedPlane {
+    double tan_h, tan_v;  ///< about the horizontal and the vertical axis
+    double centre_x, centre_y, focal_px;
+    double focus_term;
+};
+
+TiltedPlane tilted_plane(const Camera& camera, const OIIO::ROI& display)
+{
+    constexpr double degree = 3.14159265358979323846 / 180.0;
+    TiltedPlane p;
+    p.tan_h = std::tan(camera.tilt_deg[0] * degree);
+    p.tan_v = std::tan(camera.tilt_deg[1] * degree);
+    p.centre_x = display.xbegin + 0.5 * display.width();
+    p.centre_y = display.ybegin + 0.5 * display.height();
+    p.focal_px = camera.focal_length_mm / camera.sensor_width_mm * display.width();
+    const double fx = std::isnan(camera.focus_x) ? p.centre_x : camera.focus_x + 0.5;
+    const double fy = std::isnan(camera.focus_y) ? p.centre_y : camera.focus_y + 0.5;
+    p.focus_term = 1.0 - p.tan_v * (fx - p.centre_x) / p.focal_px
+                   + p.tan_h * (fy - p.centre_y) / p.focal_px;
+    return p;
+}
+
+}  // namespace
+
+CircleOfConfusion::CircleOfConfusion(const Camera& camera, const OIIO::ROI& display)
+    : m_max_diameter(camera.max_blur_px)
 {
     // f and s only appear as f/s and f (in scene units): focal length in
     // mm, converted to metres, the unit of depth.
     const double f = camera.focal_length_mm * 1e-3;
     const double f_over_s = camera.focal_length_mm / camera.sensor_width_mm;
-    m_scale = f * f_over_s / camera.fstop * display_width;
-    if (m_lens == LensModel::Optical)
-        m_scale *= m_focus / (m_focus - f);
+    m_scale = f * f_over_s / camera.fstop * display.width();
+    if (camera.lens == LensModel::Optical)
+        m_scale *= camera.focus_distance / (camera.focus_distance - f);
+
+    // The plane of focus through the focus point, with normal
+    // (-tan_v, tan_h, 1) in camera space, meets the ray of (u, v) at
+    // 1/z_f linear in u and v (see TiltedPlane). Untilted, m_inv_focus is
+    // exactly 1/focus distance and the slopes are zero.
+    const TiltedPlane p = tilted_plane(camera, display);
+    const double k = 1.0 / (camera.focus_distance * p.focus_term);
+    m_inv_focus = k * (1.0 + p.tan_v * p.centre_x / p.focal_px - p.tan_h * p.centre_y / p.focal_px);
+    m_tilt_x = -k * p.tan_v / p.focal_px;
+    m_tilt_y = k * p.tan_h / p.focal_px;
+
+    // A diopter adds optical power, the same over its part of the frame:
+    // the power that moves the focus from the focus distance to its own.
+    const SplitDiopter& split = camera.split;
+    if (split.distance > 0.0) {
+        const double dx = split.x1 - split.x0, dy = split.y1 - split.y0;
+        const double length = std::hypot(dx, dy);
+        // On the right of the line's direction, as the image is seen (y down).
+        m_split_nx = -dy / length;
+        m_split_ny = dx / length;
+        m_split_offset = m_split_nx * (split.x0 + 0.5) + m_split_ny * (split.y0 + 0.5);
+        m_split_power = 1.0 / split.distance - 1.0 / camera.focus_distance;
+    }
 }
 
-double CircleOfConfusion::diameter(double z) const
+double CircleOfConfusion::depth_at(double c, int x, int y) const
 {
-    const double inv_z = std::isinf(z) ? 0.0 : 1.0 / z;
-    // Thin lens (the paper's eq. 1 with the image plane fixed):
-    //   c = f^2 / (N s) * W * (1/z_f - 1/z).
-    // Potmesil & Chakravarty: f^2 |z - z_f| / (N z (z_f - f)) * W/s, which
-    // is the same expression times z_f / (z_f - f), folded into m_scale.
-    const double c = m_scale * (m_inv_focus - inv_z);
-    return std::clamp(c, -m_max_diameter, m_max_diameter);
-}
-
-double CircleOfConfusion::depth_at(double c) const
-{
-    const double inv_z = m_inv_focus - c / m_scale;
+    const double inv_z = inverse_focus(x, y) - c / m_scale;
     return inv_z > 0.0 ? 1.0 / inv_z : INFINITY;
 }
 
@@ -59,9 +98,17 @@ void record_camera(OIIO::ImageSpec& spec, const Camera& c)
     spec.attribute("defocus:filmbackWidth", float(c.sensor_width_mm));
     spec.attribute("defocus:maxBlur", float(c.max_blur_px));
     spec.attribute("defocus:lens", lens_model_name(c.lens));
+    if (c.tilt_deg[0] != 0.0 || c.tilt_deg[1] != 0.0) {
+        const float tilt[2] = { float(c.tilt_deg[0]), float(c.tilt_deg[1]) };
+        spec.attribute("defocus:focusTilt", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, OIIO::TypeDesc::VEC2), tilt);
+    }
+    if (c.split.distance > 0.0)
+        spec.attribute("defocus:splitDiopter",
+                       OIIO::Strutil::fmt::format("{},{},{},{}:{}", c.split.x0, c.split.y0,
+                                                  c.split.x1, c.split.y1, c.split.distance));
 }
 
-bool check_camera(const Camera& c, std::string& error)
+bool check_camera(const Camera& c, const OIIO::ROI& display, std::string& error)
 {
     auto fail = [&](std::string why) {
         error = std::move(why);
@@ -83,6 +130,14 @@ bool check_camera(const Camera& c, std::string& error)
         return fail(OIIO::Strutil::fmt::format(
             "the optical lens cannot focus at {} (inside the focal length {} mm)",
             c.focus_distance, c.focal_length_mm));
+    // Seen nearly edge-on from the camera, a tilted plane's focus would
+    // swing from near to infinity within the frame around the focus point.
+    if (tilted_plane(c, display).focus_term < 0.1)
+        return fail(OIIO::Strutil::fmt::format(
+            "the focus tilt {},{} turns the plane of focus edge-on to the camera at the "
+            "focus point", c.tilt_deg[0], c.tilt_deg[1]));
+    if (c.split.distance > 0.0 && c.split.x0 == c.split.x1 && c.split.y0 == c.split.y1)
+        return fail("the split diopter's line needs two different points");
     return true;
 }
 

@@ -105,6 +105,34 @@ const std::vector<SettingRule>& rules()
                   -1e7, 1e7, &Shot::focus),
         number({ "focus-at-radius", "camera", "focus_at_radius", K::Number },
                [](auto& s) -> auto& { return s.focus_at_radius; }, 0, 50),
+        keyframes({ "focus-tilt", "camera", "focus_tilt", K::Point }, &Shot::focus_tilt, 2,
+                  -80, 80),
+        { { "split-diopter", "camera", "split_diopter", K::Text },
+          [](Shot& shot, const std::string& label, const std::string& value, std::string& error) {
+              // X0,Y0,X1,Y1:DIST, DIST a number or keyframes F:D,F:D...
+              const size_t colon = value.find(':');
+              const std::vector<std::string> line =
+                  OIIO::Strutil::splits(value.substr(0, colon), ",");
+              Shot::SplitDiopterSetting split;
+              if (colon == std::string::npos || line.size() != 4) {
+                  error = label + ": expected X0,Y0,X1,Y1:DIST, got '" + value + "'";
+                  return false;
+              }
+              for (int i = 0; i < 4; ++i)
+                  if (!parse_number(label, line[i], -1e7, 1e7, split.line[i], error))
+                      return false;
+              if (!Keyframes::parse(label, value.substr(colon + 1), 1, 1e-6, 1e30, split.focus,
+                                    error))
+                  return false;
+              shot.split_diopter = split;
+              return true;
+          },
+          [](const Shot& shot) {
+              const Shot::SplitDiopterSetting& s = shot.split_diopter;
+              return s.focus.empty() ? std::string()
+                                     : format("{},{},{},{}:{}", s.line[0], s.line[1], s.line[2],
+                                              s.line[3], s.focus.to_string());
+          } },
         keyframes({ "focal", "camera", "focal", K::Keyframes }, &Shot::focal_length_mm, 1,
                   1e-3, 1e5),
         keyframes({ "fstop", "camera", "fstop", K::Keyframes }, &Shot::fstop, 1, 0.1, 1e4),
@@ -260,7 +288,8 @@ bool check_shot(const Shot& shot, std::string& error)
 bool is_animated(const Shot& shot)
 {
     return shot.focus.animated() || shot.focus_at.animated()
-           || shot.focal_length_mm.animated() || shot.fstop.animated();
+           || shot.focal_length_mm.animated() || shot.fstop.animated()
+           || shot.focus_tilt.animated() || shot.split_diopter.focus.animated();
 }
 
 Camera camera_at(const Shot& shot, int frame)
@@ -271,6 +300,15 @@ Camera camera_at(const Shot& shot, int frame)
     camera.fstop           = shot.fstop.at(frame, Interpolation::Reciprocal)[0];
     if (!shot.focus.empty())
         camera.focus_distance = shot.focus.at(frame, Interpolation::Reciprocal)[0];
+    if (!shot.focus_tilt.empty()) {
+        const Keyframes::Value tilt = shot.focus_tilt.at(frame, Interpolation::Linear);
+        camera.tilt_deg[0] = tilt[0];
+        camera.tilt_deg[1] = tilt[1];
+    }
+    const Shot::SplitDiopterSetting& split = shot.split_diopter;
+    if (!split.focus.empty())
+        camera.split = { split.line[0], split.line[1], split.line[2], split.line[3],
+                         split.focus.at(frame, Interpolation::Reciprocal)[0] };
     return camera;
 }
 

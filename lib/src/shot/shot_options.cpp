@@ -19,6 +19,16 @@ const std::vector<ShotOption>& shot_options()
         { G::Camera, "--focus-at-radius R", "focus-at-radius",
           "--focus-at takes the median over (2R+1)x(2R+1) pixels: 0 = the pixel alone, "
           "larger for noisy depth (default: 2, 5x5)" },
+        { G::Camera, "--focus-tilt DEG,DEG", "focus-tilt",
+          "Tilt the plane of focus (Scheimpflug, the tilt-shift look) about the "
+          "horizontal and the vertical axis through the focus point: positive turns "
+          "its top, and its right side, away from the camera; -80..80; keyframes "
+          "F:A,B,F:A,B... (default: 0,0)" },
+        { G::Camera, "--split-diopter %s:X0,Y0,X1,Y1:DIST", "split-diopter",
+          "A split-field diopter: beyond the line through display-window pixels "
+          "X0,Y0 and X1,Y1 (on its right, walking from the first to the second), "
+          "focus at DIST, changing over 4 pixels across the line; DIST may be "
+          "keyframes F:D,F:D..." },
         { G::Camera, "--focal MM", "focal", "Focal length in mm (default: 50)" },
         { G::Camera, "--fstop N", "fstop", "Aperture f-number (default: 2.8)" },
         { G::Camera, "--sensor MM", "sensor",

@@ -1,6 +1,7 @@
 // The camera: which lens draws which circle of confusion.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -26,6 +27,15 @@ struct CameraBody {
     double max_blur_px     = 512.0;  ///< clamp on the CoC diameter
 };
 
+/// A split-field diopter: a half lens over part of the frame. Beyond the
+/// line from (x0, y0) to (x1, y1) (display-window pixels), on the right
+/// walking from the first point to the second as the image is seen, the
+/// focus is at `distance`; across the line it changes over a few pixels.
+struct SplitDiopter {
+    double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+    double distance = 0;  ///< 0: no diopter
+};
+
 /// Camera settings at one frame, in the units a cinematographer uses.
 /// Depths and the focus distance share the scene's unit (metres for most
 /// renderers).
@@ -33,31 +43,69 @@ struct Camera : CameraBody {
     double focal_length_mm = 50.0;
     double fstop           = 2.8;
     double focus_distance  = 1.0;
+    /// Where the focus distance is measured, in display-window pixels;
+    /// NaN: the display window's centre (the optical axis).
+    double focus_x = NAN, focus_y = NAN;
+    /// The plane of focus tilted (Scheimpflug) about the horizontal and
+    /// the vertical axis through the focus point, in degrees: positive
+    /// turns its top, and its right side, away from the camera.
+    double tilt_deg[2] = { 0.0, 0.0 };
+    SplitDiopter split;
 };
 
-/// The circle of confusion of one camera over an image `display_width`
-/// pixels wide, precomputed for per-pixel use.
+/// The circle of confusion of one camera over a display window, precomputed
+/// for per-pixel use. The lens focuses on a surface: a plane parallel to
+/// the sensor, tilted, or split by a diopter, so the blur of a depth
+/// depends on where in the frame it is seen.
 class CircleOfConfusion {
 public:
-    CircleOfConfusion(const Camera& camera, int display_width);
+    CircleOfConfusion(const Camera& camera, const OIIO::ROI& display);
 
     /// Signed CoC diameter in pixels of a point at planar camera-space depth
-    /// `z` (+inf is allowed and means infinitely far). Negative in front of
-    /// the focus plane; the magnitude never exceeds the camera's max blur.
-    double diameter(double z) const;
+    /// `z` (+inf is allowed and means infinitely far) seen at pixel (x, y).
+    /// Negative in front of the focus surface; the magnitude never exceeds
+    /// the camera's max blur.
+    double diameter(double z, int x, int y) const
+    {
+        const double inv_z = std::isinf(z) ? 0.0 : 1.0 / z;
+        // Thin lens (the paper's eq. 1 with the image plane fixed):
+        //   c = f^2 / (N s) * W * (1/z_f - 1/z).
+        // Potmesil & Chakravarty: f^2 |z - z_f| / (N z (z_f - f)) * W/s,
+        // the same expression times z_f / (z_f - f), folded into m_scale.
+        const double c = m_scale * (inverse_focus(x, y) - inv_z);
+        return std::clamp(c, -m_max_diameter, m_max_diameter);
+    }
 
     /// The unsigned radius |c|/2 that spreading uses.
-    double radius(double z) const { return 0.5 * std::abs(diameter(z)); }
+    double radius(double z, int x, int y) const { return 0.5 * std::abs(diameter(z, x, y)); }
 
-    /// The depth whose unclamped signed CoC diameter is `c` (+inf when c
-    /// is the CoC of infinity, or beyond it).
-    double depth_at(double c) const;
+    /// The depth at pixel (x, y) whose unclamped signed CoC diameter is `c`
+    /// (+inf when c is the CoC of infinity, or beyond it).
+    double depth_at(double c, int x, int y) const;
+
+    /// 1 / the distance the lens focuses at along the ray of pixel (x, y).
+    double inverse_focus(int x, int y) const
+    {
+        const double px = x + 0.5, py = y + 0.5;
+        double inverse = m_inv_focus + m_tilt_x * px + m_tilt_y * py;
+        if (m_split_power != 0.0) {
+            const double beyond = m_split_nx * px + m_split_ny * py - m_split_offset;
+            inverse += m_split_power * std::clamp(beyond / split_transition_px + 0.5, 0.0, 1.0);
+        }
+        return inverse;
+    }
+
+    /// Pixels over which a split diopter's focus changes across its line.
+    static constexpr double split_transition_px = 4.0;
 
 private:
-    LensModel m_lens;
     double m_scale;  ///< pixels per unit of |1/z_f - 1/z| (thin lens)
-    double m_focus;
-    double m_inv_focus;
+    /// 1/z_f is linear over the frame for a plane, tilted or not:
+    /// m_inv_focus + m_tilt_x x + m_tilt_y y.
+    double m_inv_focus, m_tilt_x = 0.0, m_tilt_y = 0.0;
+    /// A diopter adds m_split_power to 1/z_f beyond the line
+    /// n . (x, y) = m_split_offset (n a unit normal, pointing beyond).
+    double m_split_power = 0.0, m_split_nx = 0.0, m_split_ny = 0.0, m_split_offset = 0.0;
     double m_max_diameter;
 };
 
@@ -70,8 +118,8 @@ const char* lens_model_name(LensModel lens);
 /// defocus:lens.
 void record_camera(OIIO::ImageSpec& spec, const Camera& camera);
 
-/// True when the camera's settings are valid; else false with `error` the
-/// first problem.
-bool check_camera(const Camera& camera, std::string& error);
+/// True when the camera's settings are valid over the display window; else
+/// false with `error` the first problem.
+bool check_camera(const Camera& camera, const OIIO::ROI& display, std::string& error);
 
 }  // namespace defocus

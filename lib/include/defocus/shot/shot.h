@@ -2,6 +2,7 @@
 // what a .dof scene file holds and what the defocus command's options set.
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,15 @@ struct Shot {
     /// Focusing at a pixel takes the median depth over the square of
     /// 2 focus_at_radius + 1 pixels around it.
     int focus_at_radius = 2;
+    /// The plane of focus tilted about the horizontal and the vertical
+    /// axis, degrees (Camera::tilt_deg); empty: not tilted.
+    Keyframes focus_tilt;
+    /// A split diopter: its line (x0, y0, x1, y1 in display-window pixels,
+    /// see SplitDiopter) and the focus beyond it; empty focus: none.
+    struct SplitDiopterSetting {
+        std::array<double, 4> line {};
+        Keyframes focus;
+    } split_diopter;
     /// The camera's settings that may change over the shot, from Camera's
     /// defaults, and those that hold for all of it.
     Keyframes focal_length_mm { Camera().focal_length_mm }, fstop { Camera().fstop };
