@@ -352,10 +352,11 @@ TEST_CASE("focus-at: the median depth of the front-most opaque surface")
     REQUIRE(set_shot_setting(shot, "focus-at", "10,10", error));
     REQUIRE(set_shot_setting(shot, "focus-at-radius", "0", error));
     Camera camera;
-    REQUIRE(shot_camera(shot, scene, 1, camera, error));
+    CameraOrigins origins;
+    REQUIRE(shot_camera(shot, scene, 1, camera, origins, error));
     CHECK(camera.focus_distance == 8.0);
     REQUIRE(set_shot_setting(shot, "focus-at-radius", "2", error));
-    REQUIRE(shot_camera(shot, scene, 1, camera, error));
+    REQUIRE(shot_camera(shot, scene, 1, camera, origins, error));
     CHECK(camera.focus_distance == 2.0);
     REQUIRE(focus_distance_at(scene, 2, 3, distance, error));
     CHECK(distance == 8.0);
@@ -368,4 +369,59 @@ TEST_CASE("focus-at: the median depth of the front-most opaque surface")
     scene.layers.clear();
     CHECK_FALSE(focus_distance_at(scene, 2, 3, distance, error));
     CHECK(contains(error, "nothing opaque"));
+}
+
+TEST_CASE("the camera a render recorded: read from its header unless given, and said where from")
+{
+    OIIO::ImageSpec header(20, 20, 4, OIIO::TypeFloat);
+    // OpenEXR's standard attributes (OpenImageIO names `aperture` FNumber),
+    // Unreal's strings in cm and mm, Arnold's focal length.
+    header.attribute("focus", 3.5f);
+    header.attribute("FNumber", 2.0f);
+    header.attribute("unreal/camera/FinalImage/focalDistance", "250.0");
+    header.attribute("unreal/camera/FinalImage/sensorWidth", "24.89");
+    header.attribute("CameraFocalLength", 35.0f);
+    const HeaderCamera found = camera_from_header(header);
+    CHECK(found.focus_distance.value == Approx(3.5));
+    CHECK(found.focus_distance.attribute == "focus");
+    CHECK(found.fstop.value == Approx(2.0));
+    CHECK(found.focal_length_mm.value == Approx(35.0));
+    CHECK(found.sensor_width_mm.value == Approx(24.89));
+    CHECK(found.sensor_width_mm.attribute == "unreal/camera/FinalImage/sensorWidth");
+
+    // Unreal alone: any pass, centimetres to metres; nonsense is ignored.
+    OIIO::ImageSpec unreal(20, 20, 4, OIIO::TypeFloat);
+    unreal.attribute("unreal/camera/Beauty/focalDistance", "250.0");
+    unreal.attribute("unreal/camera/Beauty/fstop", "not a number");
+    unreal.attribute("unreal/camera/Beauty/focalLength", "-5");
+    const HeaderCamera from_unreal = camera_from_header(unreal);
+    CHECK(from_unreal.focus_distance.value == Approx(2.5));
+    CHECK_FALSE(from_unreal.fstop.found());
+    CHECK_FALSE(from_unreal.focal_length_mm.found());
+
+    Scene scene;
+    scene.spec = header;
+    Shot shot;
+    std::string error;
+    REQUIRE(set_shot_setting(shot, "fstop", "1.4", error, "--fstop"));
+    Camera camera;
+    CameraOrigins origins;
+    REQUIRE(shot_camera(shot, scene, 1, camera, origins, error));
+    CHECK(camera.focus_distance == Approx(3.5));
+    CHECK(camera.fstop == Approx(1.4));  // given: the flag wins
+    CHECK(camera.focal_length_mm == Approx(35.0));
+    CHECK(camera.sensor_width_mm == Approx(24.89));
+    CHECK(origins.focus == "file: focus");
+    CHECK(origins.fstop == "--fstop");
+    CHECK(origins.focal_length == "file: CameraFocalLength");
+
+    // Off: nothing is read, and without a focus the frame is an error.
+    REQUIRE(set_shot_setting(shot, "camera-from-file", "off", error));
+    CHECK_FALSE(shot_camera(shot, scene, 1, camera, origins, error));
+    CHECK(contains(error, "no focus distance"));
+    REQUIRE(set_shot_setting(shot, "focus", "2", error));
+    REQUIRE(shot_camera(shot, scene, 1, camera, origins, error));
+    CHECK(camera.focal_length_mm == Camera().focal_length_mm);
+    CHECK(origins.focal_length == "default");
+    CHECK(origins.focus == "--focus");
 }

@@ -93,7 +93,7 @@ bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, Layer
     lap("colour");
 
     stage("slice");
-    if (!shot_camera(shot, scene, frame, out.camera, error))
+    if (!shot_camera(shot, scene, frame, out.camera, out.camera_origins, error))
         return fail();
     const CircleOfConfusion coc(out.camera, scene.spec.roi_full());
     const bool to_slice = !scene.flat.empty() || !scene.deep.empty();

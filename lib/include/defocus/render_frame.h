@@ -18,6 +18,7 @@
 #include <defocus/io/shot_assets.h>
 #include <defocus/layers/layered_scene.h>
 #include <defocus/scene.h>
+#include <defocus/shot/camera_metadata.h>
 #include <defocus/shot/shot.h>
 
 namespace defocus {
@@ -25,6 +26,7 @@ namespace defocus {
 struct FrameResult {
     std::string source;  ///< the files read, for messages
     Camera camera;       ///< as used; the focus measured when focusing at a pixel
+    CameraOrigins camera_origins;  ///< where each camera value came from
     ColorPlan color;
     /// The result in the output colour space, with the input's metadata
     /// and the settings used (defocus:*, oiio:ColorSpace, compression).

@@ -80,9 +80,31 @@ bool focus_distance_at(const Scene& scene, double x, double y, double& distance,
 }
 
 bool shot_camera(const Shot& shot, const Scene& scene, int frame, Camera& camera,
-                 std::string& error)
+                 CameraOrigins& origins, std::string& error)
 {
     camera = camera_at(shot, frame);
+    origins = { setting_origin(shot, "focal"), setting_origin(shot, "fstop"),
+                setting_origin(shot, "focus"), setting_origin(shot, "sensor") };
+    bool has_focus = !shot.focus.empty();
+    if (shot.camera_from_file) {
+        // A sequence's frames are read one by one: each takes its own
+        // header's values, so a focus pull baked into the render is followed.
+        const HeaderCamera header = camera_from_header(scene.spec);
+        auto take = [&](const HeaderValue& found, const char* setting, double& value,
+                        std::string& origin) {
+            if (!found.found() || is_given(shot, setting))
+                return false;
+            value = found.value;
+            origin = "file: " + found.attribute;
+            return true;
+        };
+        take(header.focal_length_mm, "focal", camera.focal_length_mm, origins.focal_length);
+        take(header.fstop, "fstop", camera.fstop, origins.fstop);
+        take(header.sensor_width_mm, "sensor", camera.sensor_width_mm, origins.sensor_width);
+        if (shot.focus_at.empty())
+            has_focus |= take(header.focus_distance, "focus", camera.focus_distance,
+                              origins.focus);
+    }
     if (!shot.focus_at.empty()) {
         const Keyframes::Value at = shot.focus_at.at(frame, Interpolation::Linear);
         if (!focus_distance_at(scene, at[0], at[1], camera.focus_distance, error,
@@ -90,6 +112,13 @@ bool shot_camera(const Shot& shot, const Scene& scene, int frame, Camera& camera
             return false;
         camera.focus_x = at[0];
         camera.focus_y = at[1];
+        origins.focus = setting_origin(shot, "focus-at");
+        has_focus = true;
+    }
+    if (!has_focus) {
+        error = "no focus distance: give --focus DIST or --focus-at X,Y (the file's header "
+                "records none)";
+        return false;
     }
     return check_camera(camera, scene.spec.roi_full(), error);
 }

@@ -98,6 +98,10 @@ void record_camera(OIIO::ImageSpec& spec, const Camera& c)
     spec.attribute("defocus:filmbackWidth", float(c.sensor_width_mm));
     spec.attribute("defocus:maxBlur", float(c.max_blur_px));
     spec.attribute("defocus:lens", lens_model_name(c.lens));
+    // OpenEXR's standard `focus` and `aperture` (OpenImageIO's FNumber)
+    // describe the lens of the image: the one its blur was drawn with.
+    spec.attribute("focus", float(c.focus_distance));
+    spec.attribute("FNumber", float(c.fstop));
     if (c.tilt_deg[0] != 0.0 || c.tilt_deg[1] != 0.0) {
         const float tilt[2] = { float(c.tilt_deg[0]), float(c.tilt_deg[1]) };
         spec.attribute("defocus:focusTilt", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, OIIO::TypeDesc::VEC2), tilt);

@@ -85,6 +85,19 @@ SettingRule keyframes(ShotSetting s, Keyframes Shot::*member, int arity, double 
              [=](const Shot& shot) { return (shot.*member).to_string(); } };
 }
 
+bool parse_switch(const std::string& text, bool& on)
+{
+    if (text != "on" && text != "off")
+        return false;
+    on = text == "on";
+    return true;
+}
+
+const char* switch_name(bool on)
+{
+    return on ? "on" : "off";
+}
+
 const std::vector<SettingRule>& rules()
 {
     using K = ShotValueKind;
@@ -136,6 +149,9 @@ const std::vector<SettingRule>& rules()
         keyframes({ "focal", "camera", "focal", K::Keyframes }, &Shot::focal_length_mm, 1,
                   1e-3, 1e5),
         keyframes({ "fstop", "camera", "fstop", K::Keyframes }, &Shot::fstop, 1, 0.1, 1e4),
+        choice({ "camera-from-file", "camera", "from_file", K::Text },
+               [](auto& s) -> auto& { return s.camera_from_file; }, parse_switch, switch_name,
+               "value", "on or off"),
         number({ "sensor", "camera", "sensor", K::Number },
                [](auto& s) -> auto& { return s.camera.sensor_width_mm; }, 1e-3, 1e4),
         choice({ "lens", "camera", "lens", K::Text },
@@ -260,7 +276,26 @@ bool set_shot_setting(Shot& shot, const std::string& name, const std::string& va
         error = format("unknown setting '{}'", name);
         return false;
     }
-    return rule->set(shot, label.empty() ? "--" + name : label, value, error);
+    const std::string where = label.empty() ? "--" + name : label;
+    if (!rule->set(shot, where, value, error))
+        return false;
+    shot.given[name] = where;
+    return true;
+}
+
+bool is_given(const Shot& shot, const std::string& name)
+{
+    const std::string value = shot_setting(shot, name);
+    // Focus and focus-at clear each other: a cleared one is not given.
+    return !value.empty() && (shot.given.count(name) || value != shot_setting(Shot(), name));
+}
+
+std::string setting_origin(const Shot& shot, const std::string& name)
+{
+    if (!is_given(shot, name))
+        return "default";
+    const auto at = shot.given.find(name);
+    return at != shot.given.end() ? at->second : "set";
 }
 
 std::string shot_setting(const Shot& shot, const std::string& name)
@@ -277,7 +312,7 @@ bool check_shot(const Shot& shot, std::string& error)
     };
     if (shot.inputs.empty())
         return fail("no input file");
-    if (shot.focus.empty() && shot.focus_at.empty())
+    if (shot.focus.empty() && shot.focus_at.empty() && !shot.camera_from_file)
         return fail("--focus DIST or --focus-at X,Y is required: where the focus is");
     const Aperture& aperture = shot.spread.aperture;
     if (aperture.shape == ApertureShape::Mask && aperture.mask_file.empty())

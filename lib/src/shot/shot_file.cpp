@@ -305,10 +305,12 @@ std::string shot_to_json(const Shot& shot, const std::string& directory)
     for (const std::string& input : shot.inputs)
         inputs.push_back(relative_to(input, directory));
     doc["inputs"] = inputs;
+    // Only what was given: a default left out stays a default, so that a
+    // render's own camera (camera_from_file) still applies when it is loaded.
     for (const ShotSetting& s : shot_settings()) {
-        std::string text = shot_setting(shot, s.name);
-        if (text.empty())
+        if (!is_given(shot, s.name))
             continue;
+        std::string text = shot_setting(shot, s.name);
         if (s.kind == ShotValueKind::Path
             || (s.kind == ShotValueKind::FileOrName && OIIO::Filesystem::exists(text)))
             text = relative_to(text, directory);

@@ -11,7 +11,8 @@ const std::vector<ShotOption>& shot_options()
           "(default: the frames the input pattern finds on disk)" },
 
         { G::Camera, "--focus DIST", "focus",
-          "Focus distance in metres, e.g. 3 or 1001:3,1040:1.2 (required, or --focus-at)" },
+          "Focus distance in metres, e.g. 3 or 1001:3,1040:1.2 (required, or --focus-at, "
+          "unless the render's header records it)" },
         { G::Camera, "--focus-at X,Y", "focus-at",
           "Focus on what is seen at display-window pixel X,Y: the median depth of the "
           "front-most opaque surface over 5x5 pixels (--focus-at-radius); keyframes "
@@ -33,6 +34,11 @@ const std::vector<ShotOption>& shot_options()
         { G::Camera, "--fstop N", "fstop", "Aperture f-number (default: 2.8)" },
         { G::Camera, "--sensor MM", "sensor",
           "Horizontal filmback width in mm, spanning the display window (default: 36)" },
+        { G::Camera, "--camera-from-file on|off", "camera-from-file",
+          "Take the focus, f-number, focal length and filmback a render recorded in "
+          "its header (OpenEXR focus/aperture, Unreal, Arnold) where no option or "
+          ".dof gives them, frame by frame; -v says where each value came from "
+          "(default: on)" },
         { G::Camera, "--lens MODEL", "lens",
           "thin: render cameras, no breathing (default); optical: Potmesil & Chakravarty" },
         { G::Camera, "--max-blur PX", "max-blur",

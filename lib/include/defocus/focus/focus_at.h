@@ -6,6 +6,7 @@
 
 #include <defocus/scene.h>
 #include <defocus/shot/camera.h>
+#include <defocus/shot/camera_metadata.h>
 #include <defocus/shot/shot.h>
 
 namespace defocus {
@@ -20,10 +21,12 @@ namespace defocus {
 bool focus_distance_at(const Scene& scene, double x, double y, double& distance,
                        std::string& error, int window = 5);
 
-/// The camera of a shot at `frame` over a read scene: camera_at(), with the
-/// focus measured by focus_distance_at() when the shot focuses at a pixel,
-/// then validated. False with `error` the problem.
+/// The camera of a shot at `frame` over a read scene: camera_at(); with
+/// camera_from_file, the values the scene's header records in place of
+/// those the shot does not give; the focus measured by focus_distance_at()
+/// when the shot focuses at a pixel; then validated. `origins` says where
+/// each value came from. False with `error` the problem.
 bool shot_camera(const Shot& shot, const Scene& scene, int frame, Camera& camera,
-                 std::string& error);
+                 CameraOrigins& origins, std::string& error);
 
 }  // namespace defocus

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -49,6 +50,9 @@ struct Shot {
     /// defaults, and those that hold for all of it.
     Keyframes focal_length_mm { Camera().focal_length_mm }, fstop { Camera().fstop };
     CameraBody camera;
+    /// Camera values the input's header records (camera_from_header) take
+    /// the place of the defaults, frame by frame; given settings win.
+    bool camera_from_file = true;
 
     SpreadOptions spread;
 
@@ -61,6 +65,10 @@ struct Shot {
     std::string compression;                        ///< "" = the input's
     OutputWindow window = OutputWindow::Input;
     EdgeMode edge = EdgeMode::Auto;  ///< beyond the data window, when the blur reaches it
+
+    /// The settings given by set_shot_setting(), each with where (its
+    /// label: "--fstop", "camera.fstop", ...).
+    std::map<std::string, std::string> given;
 };
 
 /// How a setting's value is written in a .dof file.
@@ -97,6 +105,14 @@ bool set_shot_setting(Shot& shot, const std::string& name, const std::string& va
 /// The text set_shot_setting() reads back to the same value ("" when
 /// unset).
 std::string shot_setting(const Shot& shot, const std::string& name);
+
+/// True when a setting has a value that was given (by set_shot_setting, or
+/// set in the struct to other than its default) rather than defaulted.
+bool is_given(const Shot& shot, const std::string& name);
+
+/// Where a setting's value comes from: its label when given, "set" when
+/// set in the struct, else "default".
+std::string setting_origin(const Shot& shot, const std::string& name);
 
 /// True when the shot can be rendered; else false with `error` the first
 /// reason it cannot. Reads no file.
