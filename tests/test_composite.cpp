@@ -202,3 +202,82 @@ TEST_CASE("antialiased edges without a depth take their covered neighbours' dept
     CHECK(z(4) == 1e10f);   // no neighbour has a depth: the sky stays the sky
     CHECK(z(5) == 1e10f);   // fully covered: a depth of its own
 }
+
+namespace {
+
+/// One layer over `roi`: `color` everywhere (or only at `point`), at depth z.
+Scene one_layer(const ROI& roi, float z, const float* color, const int* point = nullptr)
+{
+    Scene scene;
+    scene.source = "synthetic";
+    scene.spec = OIIO::ImageSpec(roi.width(), roi.height(), 4, OIIO::TypeFloat);
+    Layer layer { "layer", zero_image(roi, 4), zero_image(roi, 1) };
+    if (point)
+        layer.color.setpixel(point[0], point[1], color);
+    else
+        OIIO::ImageBufAlgo::fill(layer.color, { color[0], color[1], color[2], color[3] });
+    OIIO::ImageBufAlgo::fill(layer.depth, { z });
+    layer.color.specmod().alpha_channel = 3;
+    scene.layers.push_back(std::move(layer));
+    return scene;
+}
+
+/// Pixels lit in channel c of an impulse's spread, weighted by coverage.
+double lit_area(const ImageBuf& image, int c)
+{
+    double peak = 0.0, sum = 0.0;
+    for (ImageBuf::ConstIterator<float> it(image); !it.done(); ++it) {
+        peak = std::max(peak, double(it[c]));
+        sum += it[c];
+    }
+    return sum / peak;
+}
+
+}  // namespace
+
+TEST_CASE("axial chromatic aberration: red and blue bokeh of the predicted size, light kept, "
+          "nothing in focus fringed")
+{
+    const ROI roi(0, 101, 0, 101);
+    const float white[4] = { 1, 1, 1, 1 };
+    const int centre[2] = { 50, 50 };
+    Camera camera = synthetic_camera(1.0);
+    camera.axial_ca = 0.2;
+    SpreadOptions exact;
+    exact.exact_shape = true;
+    // c = f^2 / (N s) W (1/z_f - 1/z) = 28.06 px per dioptre over 101 px.
+    const double k = 0.1 * (100.0 / 36.0) * 101.0;
+    // Behind the focus (z = 10), red and blue blur 0.8 times green's; in
+    // front (z = 0.5), 1.2 times.
+    for (const auto& [z, c] : { std::pair { 10.0f, k * 0.9 }, { 0.5f, -k } }) {
+        const double scale = c > 0 ? 0.8 : 1.2;
+        ImageBuf out;
+        REQUIRE(defocus_layers(out, layered_scene(one_layer(roi, z, white, centre), camera),
+                               camera, exact));
+        INFO("depth " << z);
+        const double r = 0.5 * std::abs(c);
+        CHECK(lit_area(out, 1) == Approx(M_PI * r * r).epsilon(0.02));
+        CHECK(lit_area(out, 3) == Approx(M_PI * r * r).epsilon(0.02));  // alpha is green's
+        for (int ch : { 0, 2 })
+            CHECK(lit_area(out, ch) == Approx(M_PI * r * r * scale * scale).epsilon(0.02));
+        for (int ch = 0; ch < 4; ++ch)
+            CHECK(channel_sum(out, ch) == Approx(1.0).epsilon(1e-6));
+    }
+
+    // A grey edge: in focus no fringe at all; out of focus, red and blue
+    // differ from green across it.
+    Scene edge = one_layer(roi, 1.0f, white);
+    OIIO::ImageBufAlgo::fill(edge.layers[0].color, { 0.2f, 0.2f, 0.2f, 1.0f }, ROI(50, 101, 0, 101));
+    ImageBuf sharp, blurred;
+    REQUIRE(defocus_layers(sharp, layered_scene(edge, camera), camera));
+    float worst = 0.0f;
+    for (ImageBuf::ConstIterator<float> it(sharp); !it.done(); ++it)
+        worst = std::max({ worst, std::abs(it[0] - it[1]), std::abs(it[2] - it[1]) });
+    CHECK(worst == 0.0f);
+    OIIO::ImageBufAlgo::fill(edge.layers[0].depth, { 0.5f });
+    REQUIRE(defocus_layers(blurred, layered_scene(edge, camera), camera));
+    float p[4];
+    blurred.getpixel(40, 50, p);  // on the bright side: red and blue, wider, lose more
+    CHECK(p[0] < p[1] - 0.01f);
+    CHECK(p[2] == p[0]);
+}

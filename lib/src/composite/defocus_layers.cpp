@@ -23,7 +23,7 @@ namespace defocus {
 using namespace OIIO;
 
 bool coc_radius(ImageBuf& dst, const ImageBuf& depth,
-                const CircleOfConfusion& coc, ROI roi, int nthreads)
+                const CircleOfConfusion& coc, ROI roi, int nthreads, CocChannel channel)
 {
     if (!roi.defined())
         roi = depth.roi();
@@ -38,37 +38,56 @@ bool coc_radius(ImageBuf& dst, const ImageBuf& depth,
         const float* in = z(roi.xbegin, y);
         float* out = static_cast<float*>(dst.pixeladdr(roi.xbegin, y));
         for (int x = 0; x < roi.width(); ++x, in += z.nchannels())
-            out[x] = float(coc.radius(*in, roi.xbegin + x, y));
+            out[x] = float(0.5 * std::abs(coc.diameter(*in, roi.xbegin + x, y, channel)));
     }, by_rows(nthreads));
     return true;
 }
 
 namespace {
 
+/// The channels one spread of a layer composites. Under axial chromatic
+/// aberration a layer is spread twice, green with its CoC and red and blue
+/// with theirs (CocChannel), each pass composited on its own spread alpha,
+/// so that each colour is occluded as its own blur says; the frame's alpha
+/// is green's.
+struct ChannelPass {
+    CocChannel coc;
+    bool colour[3];
+    bool alpha;
+};
+
+constexpr ChannelPass all_channels { CocChannel::Green, { true, true, true }, true };
+constexpr ChannelPass green_and_alpha { CocChannel::Green, { false, true, false }, true };
+constexpr ChannelPass red_and_blue { CocChannel::RedBlue, { true, false, true }, false };
+
 /// Composites spread rows over the frame, back to front ("over" on the
-/// spread alpha). Within one layer, pixels of different blur overlap
-/// additively, so where their coverage adds up past 1 the layer is scaled
-/// back to full coverage there (the overlapping parts average instead of
-/// adding), keeping alpha within [0, 1]; rounding residue of the prefix
-/// sums below 0 is cleared.
+/// spread alpha), in the channels of one pass. Within one layer, pixels of
+/// different blur overlap additively, so where their coverage adds up past
+/// 1 the layer is scaled back to full coverage there (the overlapping
+/// parts average instead of adding), keeping alpha within [0, 1]; rounding
+/// residue of the prefix sums below 0 is cleared.
 class Over final : public RowSink {
 public:
-    explicit Over(ImageBuf& frame) : m_frame(frame) {}
+    Over(ImageBuf& frame, const ChannelPass& pass) : m_frame(frame), m_pass(pass) {}
     void row(int y, int x_begin, int x_end, const double* rgba) override
     {
         float* out = static_cast<float*>(m_frame.pixeladdr(x_begin, y));
+        const ChannelPass pass = m_pass;
         for (int x = x_begin; x < x_end; ++x, rgba += 4, out += 4) {
             const double a = rgba[3];
             const double scale = a > 1.0 ? 1.0 / a : 1.0;
             const double alpha = a > 1.0 ? 1.0 : std::max(0.0, a);
             for (int c = 0; c < 3; ++c)
-                out[c] = float(rgba[c] * scale + (1.0 - alpha) * out[c]);
-            out[3] = float(alpha + (1.0 - alpha) * out[3]);
+                if (pass.colour[c])
+                    out[c] = float(rgba[c] * scale + (1.0 - alpha) * out[c]);
+            if (pass.alpha)
+                out[3] = float(alpha + (1.0 - alpha) * out[3]);
         }
     }
 
 private:
     ImageBuf& m_frame;
+    const ChannelPass m_pass;
 };
 
 /// A layer spread on its own, as an image: the hybrid method (highlights
@@ -123,11 +142,13 @@ bool spread_apart(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
     return ImageBufAlgo::add(dst, fast_spread, slow_spread, {}, nthreads);
 }
 
-/// Composites a layer spread apart over the frame, within the frame's window.
-void composite_image(ImageBuf& frame, const ImageBuf& layer, int nthreads)
+/// Composites a layer spread apart over the frame, within the frame's
+/// window, in the channels of `pass`.
+void composite_image(ImageBuf& frame, const ImageBuf& layer, const ChannelPass& pass,
+                     int nthreads)
 {
     const ROI both = roi_intersection(frame.roi(), layer.roi());
-    Over over(frame);
+    Over over(frame, pass);
     parallel_for(both.ybegin, both.yend, [&](int y) {
         std::vector<double> row(size_t(std::max(0, both.width())) * 4);
         for (int x = both.xbegin; x < both.xend; ++x)
@@ -147,13 +168,22 @@ bool spread_in_engine(const SpreadOptions& spread, const ApertureImages& images)
            && spread.aperture.shape != ApertureShape::Smooth;
 }
 
-/// One layer ready for the engine: its radii, float pixels and
-/// highlights, which the engine reads while it lives.
-struct EngineLayer {
+/// One spread of a layer, in the channels of a pass: set up in the engine
+/// (its radii, float radii and highlights, which the engine reads while it
+/// lives), or done apart.
+struct LayerPass {
+    ChannelPass channels;
     ImageBuf radius;
-    FloatPixels color_pixels, radius_pixels;
+    FloatPixels radius_pixels;
     std::vector<uint8_t> highlights;
     std::unique_ptr<SpreadEngine> engine;
+    ImageBuf apart;
+};
+
+/// A layer ready to composite: its float pixels and its passes.
+struct LayerSpreads {
+    FloatPixels color_pixels;
+    std::vector<LayerPass> passes;
 };
 
 bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
@@ -192,43 +222,53 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
     const ROI display(scene.spec.full_x, scene.spec.full_x + scene.spec.full_width,
                       scene.spec.full_y, scene.spec.full_y + scene.spec.full_height, 0, 1, 0, 4);
     ROI grown = display;
-    std::vector<EngineLayer> engines(scene.layers.size());
-    std::vector<ImageBuf> apart(scene.layers.size());
+    const std::vector<ChannelPass> passes = coc.per_channel()
+                                                ? std::vector { green_and_alpha, red_and_blue }
+                                                : std::vector { all_channels };
+    std::vector<LayerSpreads> layers(scene.layers.size());
     for (size_t i = 0; i < scene.layers.size(); ++i) {
         const Layer& layer = scene.layers[i];
         if (depths[i].pixels == 0)
             continue;
-        EngineLayer& e = engines[i];
-        if (!coc_radius(e.radius, layer.depth, coc, {}, nthreads)) {
-            dst.errorfmt("layer '{}': {}", layer.name, e.radius.geterror());
-            return false;
-        }
-        if (!spread_in_engine(spread, images)) {
-            if (!spread_apart(apart[i], layer.color, e.radius, spread, images, profile.get(),
-                              scene.luma, depths[i].psf_pixels, nthreads)) {
-                dst.errorfmt("layer '{}': {}", layer.name, apart[i].geterror());
+        const ROI roi = layer.color.roi();
+        LayerSpreads& l = layers[i];
+        if (spread_in_engine(spread, images))
+            l.color_pixels = FloatPixels(layer.color, roi);
+        for (const ChannelPass& channels : passes) {
+            LayerPass& p = l.passes.emplace_back();
+            p.channels = channels;
+            if (!coc_radius(p.radius, layer.depth, coc, {}, nthreads, channels.coc)) {
+                dst.errorfmt("layer '{}': {}", layer.name, p.radius.geterror());
                 return false;
             }
-            e.radius.reset();
-            grown = roi_union(grown, apart[i].roi());
-            continue;
+            if (!spread_in_engine(spread, images)) {
+                int64_t psf_pixels = 0;
+                if (!spread_apart(p.apart, layer.color, p.radius, spread, images, profile.get(),
+                                  scene.luma, psf_pixels, nthreads)) {
+                    dst.errorfmt("layer '{}': {}", layer.name, p.apart.geterror());
+                    return false;
+                }
+                if (channels.alpha)
+                    depths[i].psf_pixels = psf_pixels;
+                p.radius.reset();
+                grown = roi_union(grown, p.apart.roi());
+                continue;
+            }
+            p.radius_pixels = FloatPixels(p.radius, roi);
+            SpreadSource source;
+            source.roi = roi;
+            source.color = l.color_pixels(roi.xbegin, roi.ybegin);
+            source.radius = p.radius_pixels(roi.xbegin, roi.ybegin);
+            const double layer_radius
+                = 0.5 * std::max(std::abs(depths[i].coc_min), std::abs(depths[i].coc_max));
+            if (method == SpreadMethod::Bounded && layer_radius >= smallest_merged_radius()) {
+                p.highlights = visible_bokeh(layer.color, p.radius,
+                                             { exact_highlight_threshold, scene.luma }, nthreads);
+                source.keep_exact = p.highlights.data();
+            }
+            p.engine = std::make_unique<SpreadEngine>(source, method, programs.get(), nthreads);
+            grown = roi_union(grown, p.engine->extent());
         }
-        const ROI roi = layer.color.roi();
-        e.color_pixels = FloatPixels(layer.color, roi);
-        e.radius_pixels = FloatPixels(e.radius, roi);
-        SpreadSource source;
-        source.roi = roi;
-        source.color = e.color_pixels(roi.xbegin, roi.ybegin);
-        source.radius = e.radius_pixels(roi.xbegin, roi.ybegin);
-        const double layer_radius
-            = 0.5 * std::max(std::abs(depths[i].coc_min), std::abs(depths[i].coc_max));
-        if (method == SpreadMethod::Bounded && layer_radius >= smallest_merged_radius()) {
-            e.highlights = visible_bokeh(layer.color, e.radius,
-                                         { exact_highlight_threshold, scene.luma }, nthreads);
-            source.keep_exact = e.highlights.data();
-        }
-        e.engine = std::make_unique<SpreadEngine>(source, method, programs.get(), nthreads);
-        grown = roi_union(grown, e.engine->extent());
     }
 
     ROI window = output_window == OutputWindow::Display ? display
@@ -239,15 +279,20 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
     ImageBuf frame;
     reset_zeroed(frame, result_spec(scene.spec, window, TypeFloat), nthreads);
 
-    Over over(frame);
     for (size_t i = 0; i < scene.layers.size(); ++i) {
         if (report)
             report->push_back(depths[i]);
-        if (engines[i].engine)
-            engines[i].engine->run(window, over, nthreads);
-        else if (apart[i].initialized())
-            composite_image(frame, apart[i], nthreads);
-        engines[i] = EngineLayer();
+        // A layer's passes write different channels of the frame, so their
+        // order does not matter.
+        for (const LayerPass& p : layers[i].passes) {
+            if (p.engine) {
+                Over over(frame, p.channels);
+                p.engine->run(window, over, nthreads);
+            } else if (p.apart.initialized()) {
+                composite_image(frame, p.apart, p.channels, nthreads);
+            }
+        }
+        layers[i] = LayerSpreads();
     }
     timings.spread += spread_timer();
     dst = std::move(frame);

@@ -46,6 +46,11 @@ LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc, int
             const double c = coc.diameter(z, roi.xbegin + x, y);
             r.cmin = std::min(r.cmin, c);
             r.cmax = std::max(r.cmax, c);
+            if (coc.per_channel()) {  // red and blue reach further on one side
+                const double rb = coc.diameter(z, roi.xbegin + x, y, CocChannel::RedBlue);
+                r.cmin = std::min(r.cmin, rb);
+                r.cmax = std::max(r.cmax, rb);
+            }
             r.weight += a;
             r.weighted_inverse += a * (std::isinf(z) ? 0.0 : 1.0 / z);
         }

@@ -41,6 +41,7 @@ TiltedPlane tilted_plane(const Camera& camera, const OIIO::ROI& display)
 
 CircleOfConfusion::CircleOfConfusion(const Camera& camera, const OIIO::ROI& display)
     : m_max_diameter(camera.max_blur_px)
+    , m_axial_ca(camera.axial_ca)
 {
     // f and s only appear as f/s and f (in scene units): focal length in
     // mm, converted to metres, the unit of depth.
@@ -106,6 +107,8 @@ void record_camera(OIIO::ImageSpec& spec, const Camera& c)
         const float tilt[2] = { float(c.tilt_deg[0]), float(c.tilt_deg[1]) };
         spec.attribute("defocus:focusTilt", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, OIIO::TypeDesc::VEC2), tilt);
     }
+    if (c.axial_ca != 0.0)
+        spec.attribute("defocus:axialCA", float(c.axial_ca));
     if (c.split.distance > 0.0)
         spec.attribute("defocus:splitDiopter",
                        OIIO::Strutil::fmt::format("{},{},{},{}:{}", c.split.x0, c.split.y0,

@@ -159,6 +159,8 @@ const std::vector<SettingRule>& rules()
                lens_model_name, "model", "thin or optical"),
         number({ "max-blur", "camera", "max_blur", K::Number },
                [](auto& s) -> auto& { return s.camera.max_blur_px; }, 0.0, 1e5),
+        number({ "axial-ca", "camera", "axial_ca", K::Number },
+               [](auto& s) -> auto& { return s.camera.axial_ca; }, -0.5, 0.5),
 
         { { "aperture", "aperture", "shape", K::Text },
           [](Shot& shot, const std::string& label, const std::string& value, std::string& error) {

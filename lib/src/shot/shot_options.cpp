@@ -44,6 +44,11 @@ const std::vector<ShotOption>& shot_options()
         { G::Camera, "--max-blur PX", "max-blur",
           "Largest CoC diameter in pixels; larger blur is clamped (default: 512)" },
 
+        { G::Camera, "--axial-ca AMOUNT", "axial-ca",
+          "Axial chromatic aberration: red and blue blur 1+AMOUNT times green's in "
+          "front of the focus and 1-AMOUNT times behind it (purple and green bokeh "
+          "rims as a fast lens; nothing in focus fringes), -0.5..0.5 (default: 0)" },
+
         { G::Aperture, "--aperture SHAPE", "aperture",
           "Bokeh shape: disc (default); polygon (an iris of --blades blades, its "
           "vertices on the CoC circle, as render cameras draw it); mask:FILE (the "

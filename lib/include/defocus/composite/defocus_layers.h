@@ -16,10 +16,10 @@
 namespace defocus {
 
 /// The CoC radius |c|/2 in pixels of every pixel of `depth` (one float
-/// channel) over `roi`.
+/// channel) over `roi`, for green (the camera's CoC) or for red and blue.
 bool coc_radius(OIIO::ImageBuf& dst, const OIIO::ImageBuf& depth,
                 const CircleOfConfusion& coc, OIIO::ROI roi = {},
-                int nthreads = 0);
+                int nthreads = 0, CocChannel channel = CocChannel::Green);
 
 /// The spec of a defocused result over `window`: R, G, B, A of type
 /// `format`, in the display window of `scene` (a scene's spec). Its

@@ -25,7 +25,20 @@ struct CameraBody {
     double sensor_width_mm = 36.0;   ///< horizontal filmback
     LensModel lens         = LensModel::ThinLens;
     double max_blur_px     = 512.0;  ///< clamp on the CoC diameter
+    /// Axial (longitudinal) chromatic aberration: the CoC of red and blue
+    /// is green's scaled by 1 + axial_ca in front of the focus and by
+    /// 1 - axial_ca behind it (see CocChannel); 0 = none.
+    double axial_ca        = 0.0;
 };
+
+/// Which colour's circle of confusion. Under axial chromatic aberration
+/// (CameraBody::axial_ca = a) red and blue focus alike and green apart: of
+/// a point whose green CoC diameter is c (signed, negative in front of the
+/// focus), red and blue have c - a |c|, that is c (1 + a) in front and
+/// c (1 - a) behind. With a > 0, bokeh in front of the focus has purple
+/// rims and behind it green ones, as a fast lens shows, and nothing in
+/// focus is fringed.
+enum class CocChannel { Green, RedBlue };
 
 /// A split-field diopter: a half lens over part of the frame. Beyond the
 /// line from (x0, y0) to (x1, y1) (display-window pixels), on the right
@@ -67,17 +80,24 @@ public:
     /// the camera's max blur.
     double diameter(double z, int x, int y) const
     {
-        const double inv_z = std::isinf(z) ? 0.0 : 1.0 / z;
-        // Thin lens (the paper's eq. 1 with the image plane fixed):
-        //   c = f^2 / (N s) * W * (1/z_f - 1/z).
-        // Potmesil & Chakravarty: f^2 |z - z_f| / (N z (z_f - f)) * W/s,
-        // the same expression times z_f / (z_f - f), folded into m_scale.
-        const double c = m_scale * (inverse_focus(x, y) - inv_z);
+        return std::clamp(unclamped(z, x, y), -m_max_diameter, m_max_diameter);
+    }
+
+    /// The same for one colour (see CocChannel).
+    double diameter(double z, int x, int y, CocChannel channel) const
+    {
+        double c = unclamped(z, x, y);
+        if (channel == CocChannel::RedBlue)
+            c -= m_axial_ca * std::abs(c);
         return std::clamp(c, -m_max_diameter, m_max_diameter);
     }
 
     /// The unsigned radius |c|/2 that spreading uses.
     double radius(double z, int x, int y) const { return 0.5 * std::abs(diameter(z, x, y)); }
+
+    /// True when red and blue have a CoC of their own (axial chromatic
+    /// aberration).
+    bool per_channel() const { return m_axial_ca != 0.0; }
 
     /// The depth at pixel (x, y) whose unclamped signed CoC diameter is `c`
     /// (+inf when c is the CoC of infinity, or beyond it).
@@ -99,6 +119,16 @@ public:
     static constexpr double split_transition_px = 4.0;
 
 private:
+    double unclamped(double z, int x, int y) const
+    {
+        const double inv_z = std::isinf(z) ? 0.0 : 1.0 / z;
+        // Thin lens (the paper's eq. 1 with the image plane fixed):
+        //   c = f^2 / (N s) * W * (1/z_f - 1/z).
+        // Potmesil & Chakravarty: f^2 |z - z_f| / (N z (z_f - f)) * W/s,
+        // the same expression times z_f / (z_f - f), folded into m_scale.
+        return m_scale * (inverse_focus(x, y) - inv_z);
+    }
+
     double m_scale;  ///< pixels per unit of |1/z_f - 1/z| (thin lens)
     /// 1/z_f is linear over the frame for a plane, tilted or not:
     /// m_inv_focus + m_tilt_x x + m_tilt_y y.
@@ -107,6 +137,7 @@ private:
     /// n . (x, y) = m_split_offset (n a unit normal, pointing beyond).
     double m_split_power = 0.0, m_split_nx = 0.0, m_split_ny = 0.0, m_split_offset = 0.0;
     double m_max_diameter;
+    double m_axial_ca;
 };
 
 /// "thin" or "optical"; false when the name is neither.
