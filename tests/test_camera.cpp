@@ -102,7 +102,8 @@ TEST_CASE("a tilted plane of focus is in focus where the ray of each pixel meets
     const auto p0 = ray(700, 100);
     const double n_dot_p0 = 4.0 * (nx * p0[0] + ny * p0[1] + 1.0);
     CHECK(coc.diameter(4.0, 700, 100) == Approx(0.0).margin(1e-9));
-    for (auto [x, y] : { std::pair { 0, 0 }, { 959, 0 }, { 0, 539 }, { 959, 539 }, { 300, 400 } }) {
+    for (auto [x, y] :
+         { std::pair { 0, 0 }, { 959, 0 }, { 0, 539 }, { 959, 539 }, { 300, 400 } }) {
         const auto r = ray(x, y);
         const double z_focus = n_dot_p0 / (nx * r[0] + ny * r[1] + 1.0);
         INFO("pixel " << x << "," << y << " focus " << z_focus);

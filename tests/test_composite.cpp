@@ -2,6 +2,7 @@
 // intensity leakage, where the gather baseline shows both artifacts.
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cmath>
 
 #include <OpenImageIO/imagebufalgo.h>
@@ -267,7 +268,8 @@ TEST_CASE("axial chromatic aberration: red and blue bokeh of the predicted size,
     // A grey edge: in focus no fringe at all; out of focus, red and blue
     // differ from green across it.
     Scene edge = one_layer(roi, 1.0f, white);
-    OIIO::ImageBufAlgo::fill(edge.layers[0].color, { 0.2f, 0.2f, 0.2f, 1.0f }, ROI(50, 101, 0, 101));
+    OIIO::ImageBufAlgo::fill(edge.layers[0].color, { 0.2f, 0.2f, 0.2f, 1.0f },
+                             ROI(50, 101, 0, 101));
     ImageBuf sharp, blurred;
     REQUIRE(defocus_layers(sharp, layered_scene(edge, camera), camera));
     float worst = 0.0f;
@@ -280,4 +282,58 @@ TEST_CASE("axial chromatic aberration: red and blue bokeh of the predicted size,
     blurred.getpixel(40, 50, p);  // on the bright side: red and blue, wider, lose more
     CHECK(p[0] < p[1] - 0.01f);
     CHECK(p[2] == p[0]);
+}
+
+TEST_CASE("lateral chromatic aberration: red and blue land magnified about the optical centre, "
+          "light kept")
+{
+    const ROI roi(0, 101, 0, 101);
+    const float white[4] = { 1, 1, 1, 1 };
+    const int light[2] = { 80, 30 };
+    Camera camera = synthetic_camera(1.0);
+    camera.lateral_ca = 0.02;
+    camera.optical_x = 40;  // the axis off the frame's centre
+    camera.optical_y = 60;
+    const double ox = 40.5, oy = 60.5;
+    auto centroid = [](const ImageBuf& image, int c) {
+        double sum = 0.0, sx = 0.0, sy = 0.0;
+        for (ImageBuf::ConstIterator<float> it(image); !it.done(); ++it) {
+            sum += it[c];
+            sx += it[c] * (it.x() + 0.5);
+            sy += it[c] * (it.y() + 0.5);
+        }
+        return std::array<double, 3> { sx / sum, sy / sum, sum };
+    };
+    // In focus, and out of focus behind it.
+    for (const float z : { 1.0f, 3.0f }) {
+        ImageBuf out;
+        REQUIRE(defocus_layers(out, layered_scene(one_layer(roi, z, white, light), camera),
+                               camera));
+        INFO("depth " << z);
+        const auto green = centroid(out, 1);
+        CHECK(green[0] == Approx(80.5).margin(1e-6));
+        CHECK(green[1] == Approx(30.5).margin(1e-6));
+        for (const auto& [c, m] : { std::pair { 0, 1.02 }, { 2, 0.98 } }) {
+            const auto at = centroid(out, c);
+            CHECK(at[0] == Approx(ox + (80.5 - ox) * m).margin(1e-6));
+            CHECK(at[1] == Approx(oy + (30.5 - oy) * m).margin(1e-6));
+            CHECK(at[2] == Approx(1.0).epsilon(1e-6));
+        }
+        CHECK(centroid(out, 3)[2] == Approx(1.0).epsilon(1e-6));
+    }
+    // The optical centre itself does not move, in any colour; an opaque
+    // in-focus layer stays opaque and keeps its colour within the frame.
+    const int axis[2] = { 40, 60 };
+    ImageBuf out;
+    REQUIRE(defocus_layers(out, layered_scene(one_layer(roi, 1.0f, white, axis), camera), camera));
+    float p[4];
+    out.getpixel(40, 60, p);
+    CHECK(p[0] == Approx(1.0f).epsilon(1e-6));
+    CHECK(p[2] == Approx(1.0f).epsilon(1e-6));
+    const float grey[4] = { 0.5f, 0.5f, 0.5f, 1.0f };
+    REQUIRE(defocus_layers(out, layered_scene(one_layer(roi, 1.0f, grey), camera), camera));
+    out.getpixel(45, 55, p);
+    CHECK(p[3] == Approx(1.0f).epsilon(1e-6));
+    CHECK(p[0] == Approx(0.5f / (1.02f * 1.02f)).epsilon(1e-3));  // the same light, spread wider
+    CHECK(p[2] == Approx(0.5f / (0.98f * 0.98f)).epsilon(1e-3));
 }

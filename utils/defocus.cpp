@@ -217,10 +217,11 @@ std::string verbose_report(const FrameResult& frame, const CommandLine& cl,
                 lens_model_name(c.lens), aperture_shape_name(cl.shot.spread.aperture.shape),
                 c.max_blur_px);
     const CameraOrigins& o = frame.camera_origins;
-    r += format("  camera values from: focal {}, f-number {}, focus {}, sensor {}\n", o.focal_length,
-                o.fstop, o.focus, o.sensor_width);
+    r += format("  camera values from: focal {}, f-number {}, focus {}, sensor {}\n",
+                o.focal_length, o.fstop, o.focus, o.sensor_width);
     if (c.tilt_deg[0] != 0.0 || c.tilt_deg[1] != 0.0)
-        r += format("  plane of focus tilted {:.4g},{:.4g} degrees\n", c.tilt_deg[0], c.tilt_deg[1]);
+        r += format("  plane of focus tilted {:.4g},{:.4g} degrees\n", c.tilt_deg[0],
+                    c.tilt_deg[1]);
     if (c.split.distance > 0.0)
         r += format("  split diopter beyond {:.6g},{:.6g} -> {:.6g},{:.6g}: focus {:.4g}\n",
                     c.split.x0, c.split.y0, c.split.x1, c.split.y1, c.split.distance);

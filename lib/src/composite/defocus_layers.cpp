@@ -45,20 +45,32 @@ bool coc_radius(ImageBuf& dst, const ImageBuf& depth,
 
 namespace {
 
-/// The channels one spread of a layer composites. Under axial chromatic
+/// The channels one spread of a layer composites. Under chromatic
 /// aberration a layer is spread twice, green with its CoC and red and blue
-/// with theirs (CocChannel), each pass composited on its own spread alpha,
-/// so that each colour is occluded as its own blur says; the frame's alpha
-/// is green's.
+/// with theirs (CocChannel, axial), each pass composited on its own spread
+/// alpha, so that each colour is occluded as its own blur says; the
+/// frame's alpha is green's. A magnified pass (lateral) is kept whole and
+/// composited magnified, red and blue each by their own factor.
 struct ChannelPass {
     CocChannel coc;
     bool colour[3];
     bool alpha;
+    bool magnified = false;
 };
 
 constexpr ChannelPass all_channels { CocChannel::Green, { true, true, true }, true };
 constexpr ChannelPass green_and_alpha { CocChannel::Green, { false, true, false }, true };
-constexpr ChannelPass red_and_blue { CocChannel::RedBlue, { true, false, true }, false };
+
+/// The passes a camera spreads each layer in.
+std::vector<ChannelPass> channel_passes(const Camera& camera)
+{
+    if (camera.axial_ca == 0.0 && camera.lateral_ca == 0.0)
+        return { all_channels };
+    const ChannelPass red_and_blue { camera.axial_ca != 0.0 ? CocChannel::RedBlue
+                                                            : CocChannel::Green,
+                                     { true, false, true }, false, camera.lateral_ca != 0.0 };
+    return { green_and_alpha, red_and_blue };
+}
 
 /// Composites spread rows over the frame, back to front ("over" on the
 /// spread alpha), in the channels of one pass. Within one layer, pixels of
@@ -142,6 +154,75 @@ bool spread_apart(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
     return ImageBufAlgo::add(dst, fast_spread, slow_spread, {}, nthreads);
 }
 
+/// Keeps spread rows as an image, for a pass composited later.
+class Keep final : public RowSink {
+public:
+    explicit Keep(ImageBuf& image) : m_image(image) {}
+    void row(int y, int x_begin, int x_end, const double* rgba) override
+    {
+        float* out = static_cast<float*>(m_image.pixeladdr(x_begin, y));
+        for (size_t i = 0; i < size_t(x_end - x_begin) * 4; ++i)
+            out[i] = float(rgba[i]);
+    }
+
+private:
+    ImageBuf& m_image;
+};
+
+/// Composites colour channel `c` of a layer's spread (RGBA) over the frame
+/// magnified by `m` about `centre` (lateral chromatic aberration): the
+/// light of each spread pixel lands m times as far from the centre, split
+/// bilinearly over the four pixels around where it lands, so that the
+/// channel keeps its light and its centroid exactly. Alpha is coverage, not
+/// light: the frame samples it bilinearly where each pixel came from.
+void composite_magnified(ImageBuf& frame, const ImageBuf& spread, int c, double m,
+                         const Imath::V2d& centre, int nthreads)
+{
+    ChannelPass pass { CocChannel::Green, { false, false, false }, false };
+    pass.colour[c] = true;
+    Over over(frame, pass);
+    const ROI out = frame.roi(), in = spread.roi();
+    const FloatPixels pixels(spread, in);
+    auto at = [&](int x, int y, int ch) {
+        return x < in.xbegin || y < in.ybegin || x >= in.xend || y >= in.yend
+                   ? 0.0 : double(pixels(x, y)[ch]);
+    };
+    // Pixel indices, centres at i + 1/2: where source pixel i lands, and
+    // where output pixel i comes from, along one axis.
+    auto lands = [&](double i, double o) { return o + (i + 0.5 - o) * m - 0.5; };
+    auto comes = [&](double i, double o) { return o + (i + 0.5 - o) / m - 0.5; };
+    parallel_for(out.ybegin, out.yend, [&](int y) {
+        std::vector<double> row(size_t(out.width()) * 4, 0.0);
+        const double sy = comes(y, centre.y);
+        const int y0 = int(std::floor(sy));
+        const double fy = sy - y0;
+        // The source rows whose light lands within a pixel of row y.
+        const int py_first = int(std::ceil(comes(y - 1, centre.y))),
+                  py_last = int(std::floor(comes(y + 1, centre.y)));
+        for (int x = out.xbegin; x < out.xend; ++x) {
+            const double sx = comes(x, centre.x);
+            const int x0 = int(std::floor(sx));
+            const double fx = sx - x0;
+            double* p = &row[size_t(x - out.xbegin) * 4];
+            p[3] = (1 - fy) * ((1 - fx) * at(x0, y0, 3) + fx * at(x0 + 1, y0, 3))
+                   + fy * ((1 - fx) * at(x0, y0 + 1, 3) + fx * at(x0 + 1, y0 + 1, 3));
+            const int px_first = int(std::ceil(comes(x - 1, centre.x))),
+                      px_last = int(std::floor(comes(x + 1, centre.x)));
+            double light = 0.0;
+            for (int py = py_first; py <= py_last; ++py) {
+                const double wy = 1.0 - std::abs(lands(py, centre.y) - y);
+                for (int px = px_first; px <= px_last && wy > 0.0; ++px) {
+                    const double wx = 1.0 - std::abs(lands(px, centre.x) - x);
+                    if (wx > 0.0)
+                        light += wx * wy * at(px, py, c);
+                }
+            }
+            p[c] = light;
+        }
+        over.row(y, out.xbegin, out.xend, row.data());
+    }, by_rows(nthreads));
+}
+
 /// Composites a layer spread apart over the frame, within the frame's
 /// window, in the channels of `pass`.
 void composite_image(ImageBuf& frame, const ImageBuf& layer, const ChannelPass& pass,
@@ -222,9 +303,7 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
     const ROI display(scene.spec.full_x, scene.spec.full_x + scene.spec.full_width,
                       scene.spec.full_y, scene.spec.full_y + scene.spec.full_height, 0, 1, 0, 4);
     ROI grown = display;
-    const std::vector<ChannelPass> passes = coc.per_channel()
-                                                ? std::vector { green_and_alpha, red_and_blue }
-                                                : std::vector { all_channels };
+    const std::vector<ChannelPass> passes = channel_passes(camera);
     std::vector<LayerSpreads> layers(scene.layers.size());
     for (size_t i = 0; i < scene.layers.size(); ++i) {
         const Layer& layer = scene.layers[i];
@@ -278,14 +357,43 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
     window.chend = 4;
     ImageBuf frame;
     reset_zeroed(frame, result_spec(scene.spec, window, TypeFloat), nthreads);
+    const Imath::V2d optical_centre(std::isnan(camera.optical_x)
+                                        ? display.xbegin + 0.5 * display.width()
+                                        : camera.optical_x + 0.5,
+                                    std::isnan(camera.optical_y)
+                                        ? display.ybegin + 0.5 * display.height()
+                                        : camera.optical_y + 0.5);
+    // Where a magnified pass's light can come from: the window, grown by
+    // the largest displacement lateral aberration gives within it.
+    const double farthest = std::max({ std::abs(window.xbegin - optical_centre.x),
+                                       std::abs(window.xend - optical_centre.x),
+                                       std::abs(window.ybegin - optical_centre.y),
+                                       std::abs(window.yend - optical_centre.y) });
+    const double lateral = std::abs(camera.lateral_ca);
+    const int margin = int(std::ceil(lateral * farthest / (1.0 - lateral))) + 2;
+    ROI magnified_reach(window.xbegin - margin, window.xend + margin, window.ybegin - margin,
+                        window.yend + margin, 0, 1, 0, 4);
+    magnified_reach = roi_intersection(magnified_reach, roi_union(grown, window));
 
     for (size_t i = 0; i < scene.layers.size(); ++i) {
         if (report)
             report->push_back(depths[i]);
         // A layer's passes write different channels of the frame, so their
         // order does not matter.
-        for (const LayerPass& p : layers[i].passes) {
-            if (p.engine) {
+        for (LayerPass& p : layers[i].passes) {
+            if (p.channels.magnified) {
+                if (p.engine) {
+                    // Light from just outside the window lands inside it.
+                    reset_zeroed(p.apart, result_spec(scene.spec, magnified_reach, TypeFloat),
+                                 nthreads);
+                    Keep keep(p.apart);
+                    p.engine->run(magnified_reach, keep, nthreads);
+                }
+                composite_magnified(frame, p.apart, 0, 1.0 + camera.lateral_ca, optical_centre,
+                                    nthreads);
+                composite_magnified(frame, p.apart, 2, 1.0 - camera.lateral_ca, optical_centre,
+                                    nthreads);
+            } else if (p.engine) {
                 Over over(frame, p.channels);
                 p.engine->run(window, over, nthreads);
             } else if (p.apart.initialized()) {

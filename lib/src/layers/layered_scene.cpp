@@ -19,7 +19,8 @@ namespace {
 struct RowDepth {
     int64_t pixels = 0;
     double zmin = INFINITY, zmax = -INFINITY;
-    double cmin = INFINITY, cmax = -INFINITY;  ///< where the lens focuses varies over the frame
+    /// CoC range: where the lens focuses varies over the frame
+    double cmin = INFINITY, cmax = -INFINITY;
     double weight = 0, weighted_inverse = 0;
 };
 

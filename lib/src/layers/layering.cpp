@@ -316,7 +316,8 @@ void for_each_coc(const Scene& scene, const CircleOfConfusion& coc, Fn&& fn)
             for (int x = roi.xbegin; x < roi.xend; ++x) {
                 const float a = static_cast<const float*>(flat.color.pixeladdr(x, y))[3];
                 if (a > 0.0f)
-                    fn(y, coc.diameter(*static_cast<const float*>(flat.depth.pixeladdr(x, y)), x, y),
+                    fn(y, coc.diameter(*static_cast<const float*>(flat.depth.pixeladdr(x, y)),
+                                       x, y),
                        a);
             }
         }, by_rows(0));

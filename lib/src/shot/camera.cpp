@@ -105,10 +105,13 @@ void record_camera(OIIO::ImageSpec& spec, const Camera& c)
     spec.attribute("FNumber", float(c.fstop));
     if (c.tilt_deg[0] != 0.0 || c.tilt_deg[1] != 0.0) {
         const float tilt[2] = { float(c.tilt_deg[0]), float(c.tilt_deg[1]) };
-        spec.attribute("defocus:focusTilt", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, OIIO::TypeDesc::VEC2), tilt);
+        spec.attribute("defocus:focusTilt",
+                       OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, OIIO::TypeDesc::VEC2), tilt);
     }
     if (c.axial_ca != 0.0)
         spec.attribute("defocus:axialCA", float(c.axial_ca));
+    if (c.lateral_ca != 0.0)
+        spec.attribute("defocus:lateralCA", float(c.lateral_ca));
     if (c.split.distance > 0.0)
         spec.attribute("defocus:splitDiopter",
                        OIIO::Strutil::fmt::format("{},{},{},{}:{}", c.split.x0, c.split.y0,

@@ -120,6 +120,8 @@ const std::vector<SettingRule>& rules()
                [](auto& s) -> auto& { return s.focus_at_radius; }, 0, 50),
         keyframes({ "focus-tilt", "camera", "focus_tilt", K::Point }, &Shot::focus_tilt, 2,
                   -80, 80),
+        keyframes({ "optical-centre", "camera", "optical_centre", K::Point },
+                  &Shot::optical_centre, 2, -1e7, 1e7),
         { { "split-diopter", "camera", "split_diopter", K::Text },
           [](Shot& shot, const std::string& label, const std::string& value, std::string& error) {
               // X0,Y0,X1,Y1:DIST, DIST a number or keyframes F:D,F:D...
@@ -161,6 +163,8 @@ const std::vector<SettingRule>& rules()
                [](auto& s) -> auto& { return s.camera.max_blur_px; }, 0.0, 1e5),
         number({ "axial-ca", "camera", "axial_ca", K::Number },
                [](auto& s) -> auto& { return s.camera.axial_ca; }, -0.5, 0.5),
+        number({ "lateral-ca", "camera", "lateral_ca", K::Number },
+               [](auto& s) -> auto& { return s.camera.lateral_ca; }, -0.05, 0.05),
 
         { { "aperture", "aperture", "shape", K::Text },
           [](Shot& shot, const std::string& label, const std::string& value, std::string& error) {
@@ -326,7 +330,8 @@ bool is_animated(const Shot& shot)
 {
     return shot.focus.animated() || shot.focus_at.animated()
            || shot.focal_length_mm.animated() || shot.fstop.animated()
-           || shot.focus_tilt.animated() || shot.split_diopter.focus.animated();
+           || shot.focus_tilt.animated() || shot.split_diopter.focus.animated()
+           || shot.optical_centre.animated();
 }
 
 Camera camera_at(const Shot& shot, int frame)
@@ -341,6 +346,11 @@ Camera camera_at(const Shot& shot, int frame)
         const Keyframes::Value tilt = shot.focus_tilt.at(frame, Interpolation::Linear);
         camera.tilt_deg[0] = tilt[0];
         camera.tilt_deg[1] = tilt[1];
+    }
+    if (!shot.optical_centre.empty()) {
+        const Keyframes::Value centre = shot.optical_centre.at(frame, Interpolation::Linear);
+        camera.optical_x = centre[0];
+        camera.optical_y = centre[1];
     }
     const Shot::SplitDiopterSetting& split = shot.split_diopter;
     if (!split.focus.empty())

@@ -48,6 +48,12 @@ const std::vector<ShotOption>& shot_options()
           "Axial chromatic aberration: red and blue blur 1+AMOUNT times green's in "
           "front of the focus and 1-AMOUNT times behind it (purple and green bokeh "
           "rims as a fast lens; nothing in focus fringes), -0.5..0.5 (default: 0)" },
+        { G::Camera, "--lateral-ca AMOUNT", "lateral-ca",
+          "Lateral chromatic aberration: red magnified by 1+AMOUNT and blue by "
+          "1-AMOUNT about the optical centre, in the spread, -0.05..0.05 (default: 0)" },
+        { G::Camera, "--optical-centre X,Y", "optical-centre",
+          "Where the lens's axis meets the image, display-window pixels, for "
+          "--lateral-ca (default: the display window's centre)" },
 
         { G::Aperture, "--aperture SHAPE", "aperture",
           "Bokeh shape: disc (default); polygon (an iris of --blades blades, its "

@@ -17,7 +17,9 @@ enum class ApertureShape {
 struct Aperture {
     ApertureShape shape = ApertureShape::Disc;
     int blades = 6;             ///< polygon: 3..16
-    double rotation_deg = 0.0;  ///< polygon: clockwise in the image, as renderers turn blades; 0 = a vertex pointing right
+    /// polygon: clockwise in the image, as renderers turn blades; 0 = a
+    /// vertex pointing right
+    double rotation_deg = 0.0;
     double roundness = 0.0;     ///< polygon: 0 = straight edges, 1 = a disc
     double aspect = 1.0;        ///< anamorphic squeeze: < 1 narrows the bokeh horizontally
     std::string mask_file;      ///< mask: the image of the shape

@@ -29,6 +29,9 @@ struct CameraBody {
     /// is green's scaled by 1 + axial_ca in front of the focus and by
     /// 1 - axial_ca behind it (see CocChannel); 0 = none.
     double axial_ca        = 0.0;
+    /// Lateral chromatic aberration: red is magnified by 1 + lateral_ca and
+    /// blue by 1 - lateral_ca about the optical centre, relative to green.
+    double lateral_ca      = 0.0;
 };
 
 /// Which colour's circle of confusion. Under axial chromatic aberration
@@ -64,6 +67,9 @@ struct Camera : CameraBody {
     /// turns its top, and its right side, away from the camera.
     double tilt_deg[2] = { 0.0, 0.0 };
     SplitDiopter split;
+    /// Where the lens's axis meets the image, in display-window pixels,
+    /// for lateral chromatic aberration; NaN: the display window's centre.
+    double optical_x = NAN, optical_y = NAN;
 };
 
 /// The circle of confusion of one camera over a display window, precomputed
