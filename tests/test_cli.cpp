@@ -959,3 +959,36 @@ TEST_CASE("the camera a render recorded in its header is used frame by frame, fl
     CHECK(one_line_naming(log, "--focus DIST or --focus-at X,Y is required"));
     CHECK_FALSE(Filesystem::exists(dir + "/none.0002.exr"));
 }
+
+TEST_CASE("the cat's eye option clips bokeh towards the edges and keeps the light")
+{
+    const std::string dir = scratch_dir("cli_cateye");
+    ImageSpec spec(240, 136, 5, TypeFloat);
+    spec.channelnames = { "R", "G", "B", "A", "Z" };
+    ImageBuf field(spec);
+    ImageBufAlgo::fill(field, { 0.0f, 0.0f, 0.0f, 0.0f, 1000.0f });
+    const float light[5] = { 50, 50, 50, 1, 1000 };
+    field.setpixel(120, 68, light);  // at the centre
+    field.setpixel(12, 68, light);   // near the left edge
+    REQUIRE(field.write(dir + "/field.exr"));
+    // A CoC of about 24 px: 0.05 m x 50/36 / 1.4 x 240 px x (1 - 1/1000).
+    const std::string common = dir + "/field.exr --focal 50 --fstop 1.4 --focus 0.5 -d float -o ";
+    std::string log;
+    REQUIRE(run_defocus(common + dir + "/plain.exr --edge black", log) == 0);
+    REQUIRE(run_defocus(common + dir + "/cateye.exr --edge black --cateye 1 --grow", log)
+            == 0);
+    CHECK(attribute(dir + "/cateye.exr", "defocus:catEye") == 1.0f);
+    const ImageBuf plain = read_image(dir + "/plain.exr"), cut = read_image(dir + "/cateye.exr");
+    // The same light; the side of the edge light away from the centre is
+    // cut, the centre light is not.
+    CHECK(channel_sum(cut, 0) == Approx(100.0).epsilon(1e-5));
+    float p[4], q[4];
+    plain.getpixel(12 - 9, 68, p);
+    cut.getpixel(12 - 9, 68, q);
+    CHECK(p[0] > 0.05f);
+    CHECK(q[0] == 0.0f);
+    plain.getpixel(120 - 9, 68, p);
+    cut.getpixel(120 - 9, 68, q);
+    CHECK(p[0] > 0.05f);
+    CHECK(q[0] == Approx(p[0]).epsilon(0.05));
+}

@@ -8,6 +8,7 @@
 
 #include <defocus/io/aperture_files.h>
 #include <defocus/color/color.h>
+#include <defocus/spread/cateye.h>
 #include <defocus/spread/spread.h>
 
 #include "test_support.h"
@@ -259,4 +260,81 @@ TEST_CASE("a mask rewritten larger under the same name is read as it is now")
     float centre[4];
     out.getpixel(0, 0, centre);
     CHECK(centre[0] > 1e-4f);  // a disc: no hole
+}
+
+TEST_CASE("cat's eye: clipped scanline spreading equals its direct reference, keeps light, "
+          "and cuts the predicted lens shape")
+{
+    const ROI roi(-5, 45, 2, 40);
+    CatEye cateye;
+    cateye.amount = 1.0;
+    cateye.centre = Imath::V2d(60.0, 50.0);  // off the layer: every pixel is clipped
+    cateye.corner_distance = 80.0;
+    for (const Aperture& shape : { Aperture(), polygon(6, 10.0), polygon(5, 17.0, 0.3, 0.6) }) {
+        const ApertureProfile profile(shape);
+        ImageBuf color, radius;
+        random_layer(roi, 0.0, 11.5, 7u + unsigned(shape.blades), color, radius);
+        ImageBuf fast;
+        REQUIRE(spread_cateye(fast, color, radius, profile, cateye));
+        // The direct reference: every pixel adds its own footprint table.
+        ImageBuf direct(fast.spec());
+        OIIO::ImageBufAlgo::zero(direct);
+        for (int y = roi.ybegin; y < roi.yend; ++y)
+            for (int x = roi.xbegin; x < roi.xend; ++x) {
+                float v[4], r;
+                color.getpixel(x, y, v);
+                radius.getpixel(x, y, &r);
+                const Footprint fp = cateye_footprint(profile, cateye, { x + 0.5, y + 0.5 }, r);
+                for (int j = 0; j < fp.height; ++j)
+                    for (int i = 0; i < fp.width; ++i) {
+                        float out[4];
+                        direct.getpixel(x + fp.x0 + i, y + fp.y0 + j, out);
+                        for (int c = 0; c < 4; ++c)
+                            out[c] += float(fp.at(i, j) * v[c]);
+                        direct.setpixel(x + fp.x0 + i, y + fp.y0 + j, out);
+                    }
+            }
+        INFO(aperture_shape_name(shape.shape) << " " << shape.blades);
+        CHECK(worst_relative_error(fast, direct, 1e-4, 1e-6) <= 1.0);
+        for (int c = 0; c < 4; ++c)
+            CHECK(channel_sum(fast, c) == Approx(channel_sum(color, c)).epsilon(1e-6));
+    }
+
+    // At the farthest corner with amount 1 the clip disc's edge passes the
+    // bokeh's centre: a disc cut by an equal disc a radius away, the lens
+    // of area (2π/3 - √3/2) r². Nearer the centre less is cut.
+    const double r = 30.0;
+    const ApertureProfile disc{Aperture()};
+    auto lit = [](const Footprint& fp) {
+        double peak = 0.0, sum = 0.0;
+        for (double w : fp.weights) {
+            peak = std::max(peak, w);
+            sum += w;
+        }
+        CHECK(sum == Approx(1.0).epsilon(1e-9));
+        return sum / peak;
+    };
+    const Imath::V2d corner = cateye.centre - Imath::V2d(80.0, 0.0);
+    CHECK(lit(cateye_footprint(disc, cateye, corner, r))
+          == Approx((2.0 * M_PI / 3.0 - std::sqrt(3.0) / 2.0) * r * r).epsilon(0.02));
+    CHECK(lit(cateye_footprint(disc, cateye, cateye.centre, r))
+          == Approx(M_PI * r * r).epsilon(0.01));
+    // The cut is on the side away from the centre: the corner's bokeh
+    // reaches r towards the centre (+x) and only to its own centre away.
+    const Footprint cut = cateye_footprint(disc, cateye, corner, r);
+    CHECK(cut.x0 >= -1);
+    CHECK(cut.x0 + cut.width >= int(r) - 1);
+
+    // Soft PSFs lose what lies outside the clip disc and keep their light.
+    ImageBuf one = impulse(), tent;
+    const Psf psf = [](double radius) { return smooth_footprint(2, radius); };
+    CatEye far = cateye;
+    far.centre = Imath::V2d(80.5, 0.5);
+    REQUIRE(spread_cateye(tent, one, constant_radius(one.roi(), float(r)), psf, far));
+    CHECK(channel_sum(tent, 0) == Approx(1.0).epsilon(1e-6));
+    float p[4];
+    tent.getpixel(-int(r / 2), 0, p);  // away from the centre, beyond the clip
+    CHECK(p[0] == 0.0f);
+    tent.getpixel(int(r / 2), 0, p);
+    CHECK(p[0] > 0.0f);
 }

@@ -10,6 +10,7 @@
 #include <OpenImageIO/timer.h>
 
 #include <defocus/layers/edges.h>
+#include <defocus/spread/cateye.h>
 #include <defocus/spread/spread.h>
 
 #include "spread/spread_engine.h"
@@ -103,14 +104,28 @@ private:
 };
 
 /// A layer spread on its own, as an image: the hybrid method (highlights
-/// with the PSF image, the rest with the aperture's filter) or the smooth
-/// filters.
+/// with the PSF image, the rest with the aperture's filter), the smooth
+/// filters, or any aperture clipped by a cat's eye.
 bool spread_apart(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
                   const SpreadOptions& spread, const ApertureImages& images,
-                  const RowProfile* profile, const Imath::V3d& luma,
+                  const RowProfile* profile, const CatEye& cateye, const Imath::V3d& luma,
                   int64_t& psf_pixels, int nthreads)
 {
+    const bool clipped = cateye.amount > 0.0;
     auto fast = [&](ImageBuf& out, const ImageBuf& in) {
+        if (clipped) {
+            switch (spread.aperture.shape) {
+            case ApertureShape::Box:
+                return spread_cateye(out, in, radius, BoxProfile(), cateye, {}, nthreads);
+            case ApertureShape::Tent:
+            case ApertureShape::Smooth: {
+                const int order = spread.aperture.shape == ApertureShape::Tent ? 2 : 3;
+                const Psf psf = [order](double r) { return smooth_footprint(order, r); };
+                return spread_cateye(out, in, radius, psf, cateye, {}, nthreads);
+            }
+            default: return spread_cateye(out, in, radius, *profile, cateye, {}, nthreads);
+            }
+        }
         switch (spread.aperture.shape) {
         case ApertureShape::Box: return spread_box(out, in, radius, {}, nthreads);
         case ApertureShape::Tent: return spread_smooth(out, in, radius, 2, {}, nthreads);
@@ -143,11 +158,12 @@ bool spread_apart(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
             }
         }
     }, by_rows(nthreads));
-    const std::shared_ptr<const PsfImage> psf = images.psf;
+    const std::shared_ptr<const PsfImage> image = images.psf;
+    const Psf psf = [image](double r) { return image->footprint(r); };
     ImageBuf fast_spread, slow_spread;
     if (!fast(fast_spread, fast_part)
-        || !spread_direct(slow_spread, slow_part, radius,
-                          [psf](double r) { return psf->footprint(r); }, {}, nthreads)) {
+        || !(clipped ? spread_cateye(slow_spread, slow_part, radius, psf, cateye, {}, nthreads)
+                     : spread_direct(slow_spread, slow_part, radius, psf, {}, nthreads))) {
         dst.errorfmt("{}{}", fast_spread.geterror(), slow_spread.geterror());
         return false;
     }
@@ -242,11 +258,13 @@ void composite_image(ImageBuf& frame, const ImageBuf& layer, const ChannelPass& 
 }
 
 /// Whether a layer goes through the spreading engine, composited as it is
-/// spread, rather than spread apart.
-bool spread_in_engine(const SpreadOptions& spread, const ApertureImages& images)
+/// spread, rather than spread apart. The engine's footprints depend on the
+/// radius alone; a cat's eye's change over the frame.
+bool spread_in_engine(const SpreadOptions& spread, const ApertureImages& images,
+                      const CatEye& cateye)
 {
     return !images.psf && spread.aperture.shape != ApertureShape::Tent
-           && spread.aperture.shape != ApertureShape::Smooth;
+           && spread.aperture.shape != ApertureShape::Smooth && cateye.amount == 0.0;
 }
 
 /// One spread of a layer, in the channels of a pass: set up in the engine
@@ -303,6 +321,19 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
     const ROI display(scene.spec.full_x, scene.spec.full_x + scene.spec.full_width,
                       scene.spec.full_y, scene.spec.full_y + scene.spec.full_height, 0, 1, 0, 4);
     ROI grown = display;
+    const Imath::V2d optical_centre(std::isnan(camera.optical_x)
+                                        ? display.xbegin + 0.5 * display.width()
+                                        : camera.optical_x + 0.5,
+                                    std::isnan(camera.optical_y)
+                                        ? display.ybegin + 0.5 * display.height()
+                                        : camera.optical_y + 0.5);
+    CatEye cateye;
+    cateye.amount = camera.cateye;
+    cateye.centre = optical_centre;
+    for (const int x : { display.xbegin, display.xend })
+        for (const int y : { display.ybegin, display.yend })
+            cateye.corner_distance = std::max(cateye.corner_distance,
+                                              (Imath::V2d(x, y) - optical_centre).length());
     const std::vector<ChannelPass> passes = channel_passes(camera);
     std::vector<LayerSpreads> layers(scene.layers.size());
     for (size_t i = 0; i < scene.layers.size(); ++i) {
@@ -311,7 +342,7 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
             continue;
         const ROI roi = layer.color.roi();
         LayerSpreads& l = layers[i];
-        if (spread_in_engine(spread, images))
+        if (spread_in_engine(spread, images, cateye))
             l.color_pixels = FloatPixels(layer.color, roi);
         for (const ChannelPass& channels : passes) {
             LayerPass& p = l.passes.emplace_back();
@@ -320,10 +351,10 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
                 dst.errorfmt("layer '{}': {}", layer.name, p.radius.geterror());
                 return false;
             }
-            if (!spread_in_engine(spread, images)) {
+            if (!spread_in_engine(spread, images, cateye)) {
                 int64_t psf_pixels = 0;
                 if (!spread_apart(p.apart, layer.color, p.radius, spread, images, profile.get(),
-                                  scene.luma, psf_pixels, nthreads)) {
+                                  cateye, scene.luma, psf_pixels, nthreads)) {
                     dst.errorfmt("layer '{}': {}", layer.name, p.apart.geterror());
                     return false;
                 }
@@ -357,12 +388,6 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
     window.chend = 4;
     ImageBuf frame;
     reset_zeroed(frame, result_spec(scene.spec, window, TypeFloat), nthreads);
-    const Imath::V2d optical_centre(std::isnan(camera.optical_x)
-                                        ? display.xbegin + 0.5 * display.width()
-                                        : camera.optical_x + 0.5,
-                                    std::isnan(camera.optical_y)
-                                        ? display.ybegin + 0.5 * display.height()
-                                        : camera.optical_y + 0.5);
     // Where a magnified pass's light can come from: the window, grown by
     // the largest displacement lateral aberration gives within it.
     const double farthest = std::max({ std::abs(window.xbegin - optical_centre.x),
@@ -453,6 +478,7 @@ bool largest_grown_window(ROI& window, const ImageSpec& scene, const Camera& cam
     Camera plain = camera;
     plain.tilt_deg[0] = plain.tilt_deg[1] = 0.0;
     plain.split = SplitDiopter();
+    plain.cateye = 0.0;  // clipped bokeh lies within the unclipped
     const CircleOfConfusion coc(plain, scene.roi_full());
     const float depth = float(coc.depth_at(-4.0 * camera.max_blur_px - 4.0, 0, 0));
     window = data;

@@ -112,6 +112,8 @@ void record_camera(OIIO::ImageSpec& spec, const Camera& c)
         spec.attribute("defocus:axialCA", float(c.axial_ca));
     if (c.lateral_ca != 0.0)
         spec.attribute("defocus:lateralCA", float(c.lateral_ca));
+    if (c.cateye != 0.0)
+        spec.attribute("defocus:catEye", float(c.cateye));
     if (c.split.distance > 0.0)
         spec.attribute("defocus:splitDiopter",
                        OIIO::Strutil::fmt::format("{},{},{},{}:{}", c.split.x0, c.split.y0,

@@ -165,6 +165,8 @@ const std::vector<SettingRule>& rules()
                [](auto& s) -> auto& { return s.camera.axial_ca; }, -0.5, 0.5),
         number({ "lateral-ca", "camera", "lateral_ca", K::Number },
                [](auto& s) -> auto& { return s.camera.lateral_ca; }, -0.05, 0.05),
+        number({ "cateye", "camera", "cateye", K::Number },
+               [](auto& s) -> auto& { return s.camera.cateye; }, 0.0, 1.5),
 
         { { "aperture", "aperture", "shape", K::Text },
           [](Shot& shot, const std::string& label, const std::string& value, std::string& error) {

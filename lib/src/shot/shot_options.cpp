@@ -51,9 +51,14 @@ const std::vector<ShotOption>& shot_options()
         { G::Camera, "--lateral-ca AMOUNT", "lateral-ca",
           "Lateral chromatic aberration: red magnified by 1+AMOUNT and blue by "
           "1-AMOUNT about the optical centre, in the spread, -0.05..0.05 (default: 0)" },
+        { G::Camera, "--cateye AMOUNT", "cateye",
+          "Optical vignetting: towards the edges the bokeh is clipped by a disc offset "
+          "towards the optical centre; 1 = at the farthest corner the clip reaches the "
+          "bokeh's centre; 0..1.5. Spreads every pixel on its own: time grows with the "
+          "blur (default: 0)" },
         { G::Camera, "--optical-centre X,Y", "optical-centre",
           "Where the lens's axis meets the image, display-window pixels, for "
-          "--lateral-ca (default: the display window's centre)" },
+          "--lateral-ca and --cateye (default: the display window's centre)" },
 
         { G::Aperture, "--aperture SHAPE", "aperture",
           "Bokeh shape: disc (default); polygon (an iris of --blades blades, its "

@@ -160,6 +160,24 @@ double ApertureProfile::rows(double r, std::vector<RowSpan>& spans) const
     return area;
 }
 
+double BoxProfile::rows(double r, std::vector<RowSpan>& spans) const
+{
+    const double h = box_half_width(r);
+    spans.clear();
+    double area = 0.0;
+    for (int j = -int(std::ceil(h - 0.5)); j <= int(std::ceil(h - 0.5)); ++j) {
+        const double height = std::min(j + 0.5, h) - std::max(j - 0.5, -h);
+        spans.push_back({ j, -h, h, height });
+        area += 2.0 * h * height;
+    }
+    return area;
+}
+
+double BoxProfile::extent() const
+{
+    return 0.5 * std::sqrt(pi);
+}
+
 bool MaskProfile::set_shape(const OIIO::ImageBuf& image, double aspect, const Imath::V3d& luma,
                             std::string& error)
 {

@@ -32,6 +32,8 @@ struct CameraBody {
     /// Lateral chromatic aberration: red is magnified by 1 + lateral_ca and
     /// blue by 1 - lateral_ca about the optical centre, relative to green.
     double lateral_ca      = 0.0;
+    /// Optical vignetting, the cat's eye bokeh (see CatEye): 0 = none.
+    double cateye          = 0.0;
 };
 
 /// Which colour's circle of confusion. Under axial chromatic aberration

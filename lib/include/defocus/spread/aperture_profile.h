@@ -61,6 +61,14 @@ private:
     double m_extent = 1;
 };
 
+/// The box aperture as rows: the square of the CoC disc's area
+/// (box_footprint), for filters that cut shapes row by row.
+class BoxProfile final : public RowProfile {
+public:
+    double rows(double r, std::vector<RowSpan>& spans) const override;
+    double extent() const override;
+};
+
 /// An aperture shape taken from an image (`--aperture mask:FILE`): its
 /// luminance thresholded at half its maximum, centred on its centroid,
 /// scaled to the area of the CoC disc and squeezed by `aspect`. Any shape,

@@ -1,0 +1,236 @@
+#include <defocus/spread/cateye.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "spread/row_bands.h"
+#include "spread/spread_common.h"
+
+namespace defocus {
+
+using Imath::V2d;
+using OIIO::ImageBuf;
+using OIIO::ROI;
+
+namespace {
+
+/// Sub-rows per footprint row: odd, so that sub-rows tile pixel rows.
+constexpr int sub_rows = 3;
+
+/// One interval of a clipped footprint: `row` offset from the pixel,
+/// [left, right] relative to its centre, `weight` per unit of length.
+struct Interval {
+    int row;
+    double left, right, weight;
+};
+
+/// The shape's sub-row spans at one radius, kept while neighbours share
+/// it (a layer's radius mostly changes slowly).
+struct SpanCache {
+    const RowProfile* profile = nullptr;
+    double radius = -1.0;
+    std::vector<RowSpan> spans;
+
+    const std::vector<RowSpan>& at(const RowProfile& p, double r)
+    {
+        if (&p != profile || r != radius) {
+            p.rows(sub_rows * r, spans);
+            profile = &p;
+            radius = r;
+        }
+        return spans;
+    }
+};
+
+/// The intervals of the shape of a pixel centred at `at` with CoC radius r,
+/// clipped by the cat's eye, normalised to total weight 1.
+void clipped_intervals(const RowProfile& profile, const CatEye& cateye, const V2d& at, double r,
+                       SpanCache& cache, std::vector<Interval>& out)
+{
+    const bool clip = cateye.amount > 0.0 && r >= cateye_min_radius;
+    const V2d d = clip ? cateye.offset(at, r) : V2d(0.0, 0.0);
+    const std::vector<RowSpan>& spans = cache.at(profile, r);
+    for (const bool clipping : { clip, false }) {  // unclipped if the clip left nothing
+        out.clear();
+        double total = 0.0;
+        for (const RowSpan& s : spans) {
+            const double y = double(s.row) / sub_rows;  // the sub-row's middle
+            double left = s.left / sub_rows, right = s.right / sub_rows;
+            if (clipping) {
+                const double dy = y - d.y;
+                if (std::abs(dy) >= r)
+                    continue;
+                const double h = std::sqrt(r * r - dy * dy);
+                left = std::max(left, d.x - h);
+                right = std::min(right, d.x + h);
+                if (right <= left)
+                    continue;
+            }
+            const double weight = s.weight / sub_rows;
+            out.push_back({ int(std::floor(y + 0.5)), left, right, weight });
+            total += (right - left) * weight;
+        }
+        if (total > 0.0) {
+            for (Interval& i : out)
+                i.weight /= total;
+            return;
+        }
+    }
+}
+
+/// Scatters every pixel of src that carries light into an accumulator over
+/// roi grown by `reach`, in bands of destination rows (one per thread, no
+/// races): scatter(x, y, value, radius, row) with row(oy) the accumulator
+/// row of destination row oy, or null outside the band. With `integrate`
+/// the rows hold deltas and are prefix-summed along x. The accumulator has
+/// one column more than dst on the right, for the deltas that end a row.
+template<typename Scatter>
+bool scatter_pixels(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, ROI roi,
+                    int nthreads, int (*reach_of)(double max_radius, const void*),
+                    const void* shape, bool integrate, Scatter&& scatter)
+{
+    const SpreadInputs in = prepare_spread(dst, src, radius, roi, nthreads);
+    if (!in.valid)
+        return false;
+    const int nc = in.nchannels;
+    roi = in.roi;
+    const int reach = reach_of(in.max_radius, shape);
+    const ROI ext(roi.xbegin - reach, roi.xend + reach, roi.ybegin - reach, roi.yend + reach, 0,
+                  1, 0, nc);
+    const size_t row_len = size_t(ext.width() + 1) * nc;
+    std::vector<double> acc(row_len * ext.height(), 0.0);
+    for_each_row_band(ext.ybegin, ext.yend, nthreads, [&](int y0, int y1) {
+        auto row = [&](int oy) -> double* {
+            return oy < y0 || oy >= y1 ? nullptr
+                                       : &acc[size_t(oy - ext.ybegin) * row_len]
+                                             - ptrdiff_t(ext.xbegin) * nc;
+        };
+        for (int y = std::max(roi.ybegin, y0 - reach); y < std::min(roi.yend, y1 + reach); ++y)
+            for (int x = roi.xbegin; x < roi.xend; ++x) {
+                const float* v = in.pixels(x, y);
+                if (!is_zero(v, nc))
+                    scatter(x, y, v, nc, double(*in.radii(x, y)), row);
+            }
+        if (integrate)
+            for (int y = y0; y < y1; ++y) {
+                double* r = &acc[size_t(y - ext.ybegin) * row_len];
+                for (size_t i = nc; i < row_len; ++i)
+                    r[i] += r[i - nc];
+            }
+    });
+    dst.reset(output_spec(src, ext), OIIO::InitializePixels::No);  // every pixel is written
+    float* out = static_cast<float*>(dst.localpixels());
+    for (int y = 0; y < ext.height(); ++y)
+        for (size_t i = 0; i < size_t(ext.width()) * nc; ++i)
+            *out++ = float(acc[size_t(y) * row_len + i]);
+    return true;
+}
+
+int profile_reach(double max_radius, const void* profile)
+{
+    return int(std::ceil(max_radius * static_cast<const RowProfile*>(profile)->extent())) + 2;
+}
+
+int psf_reach(double max_radius, const void* psf)
+{
+    const Footprint widest = (*static_cast<const Psf*>(psf))(max_radius);
+    return std::max({ -widest.x0, -widest.y0, widest.x0 + widest.width,
+                      widest.y0 + widest.height }) + 1;
+}
+
+/// Adds w times the coverage of [a, b] (pixel i covering [i, i + 1]) to a
+/// row of deltas: two taps at each end.
+void add_interval(double* row, int nc, double a, double b, const float* v, double w)
+{
+    const double fa = std::floor(a), fb = std::floor(b);
+    const int ia = int(fa), ib = int(fb);
+    const double taps[4] = { w * (1.0 - (a - fa)), w * (a - fa), -w * (1.0 - (b - fb)),
+                             -w * (b - fb) };
+    const int at[4] = { ia, ia + 1, ib, ib + 1 };
+    for (int t = 0; t < 4; ++t)
+        for (int c = 0; c < nc; ++c)
+            row[size_t(at[t]) * nc + c] += taps[t] * v[c];
+}
+
+}  // namespace
+
+bool spread_cateye(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
+                   const RowProfile& profile, const CatEye& cateye, ROI roi, int nthreads)
+{
+    return scatter_pixels(
+        dst, src, radius, roi, nthreads, profile_reach, &profile, true,
+        [&](int x, int y, const float* v, int nc, double r, auto&& row) {
+            thread_local SpanCache spans;
+            thread_local std::vector<Interval> intervals;
+            clipped_intervals(profile, cateye, V2d(x + 0.5, y + 0.5), r, spans, intervals);
+            for (const Interval& i : intervals)
+                if (double* out = row(y + i.row))
+                    add_interval(out, nc, x + 0.5 + i.left, x + 0.5 + i.right, v, i.weight);
+        });
+}
+
+bool spread_cateye(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, const Psf& psf,
+                   const CatEye& cateye, ROI roi, int nthreads)
+{
+    return scatter_pixels(
+        dst, src, radius, roi, nthreads, psf_reach, &psf, false,
+        [&](int x, int y, const float* v, int nc, double r, auto&& row) {
+            Footprint fp = psf(r);
+            if (cateye.amount > 0.0 && r >= cateye_min_radius) {
+                const V2d d = cateye.offset(V2d(x + 0.5, y + 0.5), r);
+                double kept = 0.0, all = 0.0;
+                for (int j = 0; j < fp.height; ++j)
+                    for (int i = 0; i < fp.width; ++i) {
+                        double& w = fp.weights[size_t(j) * fp.width + i];
+                        all += w;
+                        if ((V2d(fp.x0 + i, fp.y0 + j) - d).length2() > r * r)
+                            w = 0.0;
+                        kept += w;
+                    }
+                if (kept > 0.0)
+                    for (double& w : fp.weights)
+                        w *= all / kept;
+                else
+                    fp = psf(r);  // the clip missed every sample: unclipped
+            }
+            for (int j = 0; j < fp.height; ++j)
+                if (double* out = row(y + fp.y0 + j))
+                    for (int i = 0; i < fp.width; ++i)
+                        for (int c = 0; c < nc; ++c)
+                            out[size_t(x + fp.x0 + i) * nc + c] += fp.at(i, j) * v[c];
+        });
+}
+
+Footprint cateye_footprint(const RowProfile& profile, const CatEye& cateye, const V2d& at,
+                           double r)
+{
+    SpanCache spans;
+    std::vector<Interval> intervals;
+    clipped_intervals(profile, cateye, at, r, spans, intervals);
+    // Offsets from the pixel at `at`, whose own column spans [0, 1) here.
+    const double x = at.x - std::floor(at.x);
+    int first = 0, last = 0, left = 0, right = 0;
+    for (const Interval& i : intervals) {
+        first = std::min(first, i.row);
+        last = std::max(last, i.row);
+        left = std::min(left, int(std::floor(x + i.left)));
+        right = std::max(right, int(std::floor(x + i.right)));
+    }
+    Footprint fp;
+    fp.x0 = left;
+    fp.y0 = first;
+    fp.width = right - left + 1;
+    fp.height = last - first + 1;
+    fp.weights.assign(size_t(fp.width) * fp.height, 0.0);
+    for (const Interval& i : intervals)
+        for (int c = left; c <= right; ++c) {
+            const double overlap = std::min(double(c + 1), x + i.right)
+                                   - std::max(double(c), x + i.left);
+            if (overlap > 0.0)
+                fp.weights[size_t(i.row - first) * fp.width + (c - left)] += overlap * i.weight;
+        }
+    return fp;
+}
+
+}  // namespace defocus
