@@ -388,6 +388,37 @@ int main(int argc, const char* argv[])
             return t;
         });
 
+    // Lens effects, each a whole frame beside the plain disc's, on the
+    // garden (or a 1280x720 example scene without it).
+    std::string effects_scene = garden + "/layers.exr",
+                effects_camera = "--focal 85 --fstop 1.4 --focus 1.25";
+    if (!have_garden) {
+        effects_scene = scratch + "/scene720.exr";
+        double unused;
+        launcher.run(format("{} --width 1280 --height 720 {} > /dev/null", MAKE_EXAMPLE_SCENE_BIN,
+                            arg_quote(effects_scene)),
+                     unused);
+        effects_camera = "--focal 50 --fstop 1.8 --focus 4";
+    }
+    const std::vector<std::pair<std::string, std::string>> effects = {
+        { "plain disc", "" },
+        { "--focus-tilt 10,5", "--focus-tilt 10,5" },
+        { "--split-diopter", "--split-diopter 0,270,960,270:3" },
+        { "--axial-ca 0.2", "--axial-ca 0.2" },
+        { "--lateral-ca 0.002", "--lateral-ca 0.002" },
+        { "--axial-ca + --lateral-ca", "--axial-ca 0.2 --lateral-ca 0.002" },
+        { "--cateye 1", "--cateye 1" },
+        { "--aperture polygon", "--aperture polygon" },
+    };
+    for (const auto& [name, flags] : effects)
+        add(format("effect {}", name), [&, flags = flags] {
+            double unused = 0.0;
+            return launcher.run(format("{} {} -o {}/effect.exr {} {} -q", DEFOCUS_BIN,
+                                       arg_quote(effects_scene), arg_quote(scratch),
+                                       effects_camera, flags),
+                                unused);
+        });
+
     if (!only.empty())
         measures.erase(std::remove_if(measures.begin(), measures.end(),
                                       [&](const Measure& m) {
@@ -445,6 +476,12 @@ int main(int argc, const char* argv[])
         std::printf("  (garden skipped: no %s)\n", garden.c_str());
     std::printf("  4K frame's layers as float RGBA: %.0f MB (target: peak at most twice that)\n",
                 4.0 * 4096 * 2160 * 16 * 1e-6);
+    std::printf("\nlens effects, whole frames of %s (%s)\n",
+                have_garden ? "the garden" : "a 1280x720 example scene", effects_camera.c_str());
+    const double plain_disc = median["effect plain disc"];
+    for (const auto& [name, flags] : effects)
+        std::printf("  %-28s %8.3f s  %5.2fx the plain disc\n", name.c_str(),
+                    median["effect " + name], median["effect " + name] / plain_disc);
     Filesystem::remove_all(scratch);
     return 0;
 }
