@@ -4,6 +4,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <Imath/ImathMatrix.h>
+
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/strutil.h>
@@ -414,6 +416,29 @@ TEST_CASE("the camera a render recorded: read from its header unless given, and 
     CHECK(origins.focus == "file: focus");
     CHECK(origins.fstop == "--fstop");
     CHECK(origins.focal_length == "file: CameraFocalLength");
+
+    // A render's projection gives f/s: with its focal length, the filmback.
+    OIIO::ImageSpec projected(20, 20, 4, OIIO::TypeFloat);
+    projected.attribute("CameraFocalLength", 35.0f);
+    Imath::M44f world_to_camera;
+    world_to_camera.setTranslation(Imath::V3f(1.0f, 2.0f, 3.0f));
+    const float a = 35.0f / 24.89f;  // x_ndc = (f/s) x / z + 1/2
+    Imath::M44f camera_to_ndc(a, 0, 0, 0, 0, -a * 16.0f / 9.0f, 0, 0, 0.5f, 0.5f, 1, 1, 0, 0, 0, 0);
+    const Imath::M44f world_to_ndc = world_to_camera * camera_to_ndc;
+    projected.attribute("worldToCamera", OIIO::TypeMatrix44, &world_to_camera);
+    projected.attribute("worldToNDC", OIIO::TypeMatrix44, &world_to_ndc);
+    projected.attribute("focus", 2.0f);
+    scene.spec = projected;
+    Shot plain;
+    REQUIRE(shot_camera(plain, scene, 1, camera, origins, error));
+    CHECK(camera.sensor_width_mm == Approx(24.89).epsilon(1e-5));
+    CHECK(origins.sensor_width == "file: worldToNDC and the focal length");
+    // Without a focal length from the file, the ratio alone says nothing.
+    projected.erase_attribute("CameraFocalLength");
+    scene.spec = projected;
+    REQUIRE(shot_camera(plain, scene, 1, camera, origins, error));
+    CHECK(camera.sensor_width_mm == Camera().sensor_width_mm);
+    scene.spec = header;
 
     // Off: nothing is read, and without a focus the frame is an error.
     REQUIRE(set_shot_setting(shot, "camera-from-file", "off", error));

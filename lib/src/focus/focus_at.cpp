@@ -100,7 +100,13 @@ bool shot_camera(const Shot& shot, const Scene& scene, int frame, Camera& camera
         };
         take(header.focal_length_mm, "focal", camera.focal_length_mm, origins.focal_length);
         take(header.fstop, "fstop", camera.fstop, origins.fstop);
-        take(header.sensor_width_mm, "sensor", camera.sensor_width_mm, origins.sensor_width);
+        if (!take(header.sensor_width_mm, "sensor", camera.sensor_width_mm, origins.sensor_width)
+            && header.focal_over_filmback.found() && !is_given(shot, "sensor")
+            && origins.focal_length != "default") {
+            // The projection gives f/s; with a focal length known, the filmback.
+            camera.sensor_width_mm = camera.focal_length_mm / header.focal_over_filmback.value;
+            origins.sensor_width = "file: worldToNDC and the focal length";
+        }
         if (shot.focus_at.empty())
             has_focus |= take(header.focus_distance, "focus", camera.focus_distance,
                               origins.focus);

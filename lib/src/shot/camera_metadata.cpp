@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <initializer_list>
 
+#include <Imath/ImathMatrix.h>
 #include <OpenImageIO/strutil.h>
 
 namespace defocus {
@@ -64,6 +65,29 @@ HeaderValue lookup(const OIIO::ImageSpec& spec, std::initializer_list<Source> so
     return {};
 }
 
+/// f/s from the camera's projection: with row vectors (Imath's and
+/// OpenEXR's convention), camera space maps to NDC by
+/// worldToCamera⁻¹ · worldToNDC, and a perspective camera sends (x, y, z)
+/// to x_ndc = (f/s) x / z + 1/2, NDC spanning the display window's width.
+HeaderValue projection_ratio(const OIIO::ImageSpec& spec)
+{
+    const OIIO::ParamValue* to_camera = spec.find_attribute("worldToCamera", OIIO::TypeMatrix44);
+    const OIIO::ParamValue* to_ndc = spec.find_attribute("worldToNDC", OIIO::TypeMatrix44);
+    if (!to_camera || !to_ndc)
+        return {};
+    const Imath::M44f w2c = *static_cast<const Imath::M44f*>(to_camera->data());
+    const Imath::M44f w2n = *static_cast<const Imath::M44f*>(to_ndc->data());
+    if (std::abs(w2c.determinant()) < 1e-12f)
+        return {};
+    const Imath::M44f c2n = w2c.inverse() * w2n;
+    if (std::abs(c2n[2][3]) < 1e-6f)  // orthographic: no field of view
+        return {};
+    const double ratio = std::abs(double(c2n[0][0]) / double(c2n[2][3]));
+    if (!std::isfinite(ratio) || !(ratio > 0.0))
+        return {};
+    return { ratio, "worldToNDC" };
+}
+
 }  // namespace
 
 HeaderCamera camera_from_header(const OIIO::ImageSpec& spec)
@@ -80,11 +104,14 @@ HeaderCamera camera_from_header(const OIIO::ImageSpec& spec)
                              { "unreal/camera/FinalImage/fstop", 1.0 },
                              { "unreal/camera/*/fstop", 1.0 } });
     c.focal_length_mm = lookup(spec, { { "CameraFocalLength", 1.0 },
+                                       { "cameraFocalLength", 1.0 },
                                        { "unreal/camera/FinalImage/focalLength", 1.0 },
                                        { "unreal/camera/*/focalLength", 1.0 } });
     c.sensor_width_mm = lookup(spec, { { "CameraFilmApertureHorizontal", 1.0 },
+                                       { "cameraAperture", 1.0 },
                                        { "unreal/camera/FinalImage/sensorWidth", 1.0 },
                                        { "unreal/camera/*/sensorWidth", 1.0 } });
+    c.focal_over_filmback = projection_ratio(spec);
     return c;
 }
 

@@ -20,10 +20,15 @@ struct HeaderValue {
 /// The camera values of a header. Each is looked up in a table of the
 /// attributes renderers write (the README lists it): OpenEXR's standard
 /// `focus` and `aperture`, Unreal Movie Render Queue's `unreal/camera/...`,
-/// Arnold's `CameraFocalLength` and `CameraFilmApertureHorizontal`. Values
-/// that are not finite and positive are ignored.
+/// Arnold's `CameraFocalLength` and `CameraFilmApertureHorizontal`,
+/// V-Ray's `cameraFocalLength` and `cameraAperture`. Values that are not
+/// finite and positive are ignored.
 struct HeaderCamera {
     HeaderValue focus_distance, fstop, focal_length_mm, sensor_width_mm;
+    /// The focal length over the filmback width, from OpenEXR's
+    /// worldToCamera and worldToNDC matrices (a perspective camera's
+    /// projection): with a focal length, it gives the filmback.
+    HeaderValue focal_over_filmback;
 };
 
 HeaderCamera camera_from_header(const OIIO::ImageSpec& spec);
