@@ -55,9 +55,14 @@ private:
 
 bool DofInput::valid_file(const std::string& filename) const
 {
-    Shot shot;
-    std::string error;
-    return Strutil::iends_with(filename, ".dof") && defocus::load_shot(filename, shot, error);
+    // No exception may leave a plugin entry point: it would end the host.
+    try {
+        Shot shot;
+        std::string error;
+        return Strutil::iends_with(filename, ".dof") && defocus::load_shot(filename, shot, error);
+    } catch (const std::exception&) {
+        return false;
+    }
 }
 
 /// Configuration hints "dof:NAME" (or "dof:NAME_WITH_UNDERSCORES") override

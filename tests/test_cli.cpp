@@ -2,6 +2,8 @@
 // input ending in a one-line error, a non-zero exit and no output file.
 #include <catch2/catch.hpp>
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <cmath>
 #include <regex>
@@ -991,4 +993,27 @@ TEST_CASE("the cat's eye option clips bokeh towards the edges and keeps the ligh
     cut.getpixel(120 - 9, 68, q);
     CHECK(p[0] > 0.05f);
     CHECK(q[0] == Approx(p[0]).epsilon(0.05));
+}
+
+TEST_CASE("a frame list of billions, a device or a pipe as input: one-line errors, no hang")
+{
+    const std::string dir = scratch_dir("cli_hostile");
+    const std::string scene = two_depth_scene(dir);
+    std::string log;
+    // Enumerating 2e9 frames took gigabytes and ended in bad_alloc.
+    REQUIRE(run_defocus(scene + " -o " + dir + "/o.#.exr --focus 3 --frames 1-2000000000", log)
+            == 1);
+    CHECK(one_line_naming(log, "names 2000000000 frames; a shot renders at most 1000000"));
+    // The format probe read /dev/zero and a FIFO forever.
+    const std::string fifo = dir + "/pipe.exr";
+    REQUIRE(mkfifo(fifo.c_str(), 0600) == 0);
+    for (const std::string& input : { std::string("/dev/zero"), fifo }) {
+        REQUIRE(run_defocus(input + " -o " + dir + "/p.exr --focus 3", log) == 1);
+        CHECK(one_line_naming(log, input + ": not a regular file"));
+    }
+    REQUIRE(run_defocus(scene + " -o " + dir + "/p.exr --focus 3 --aperture mask:/dev/zero", log)
+            == 1);
+    CHECK(one_line_naming(log, "/dev/zero"));
+    CHECK(Strutil::contains(log, "not a regular file"));
+    CHECK_FALSE(Filesystem::exists(dir + "/p.exr"));
 }

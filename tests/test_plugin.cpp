@@ -230,8 +230,13 @@ TEST_CASE("a broken .dof is an error line from oiiotool, never a crash")
     Filesystem::write_text_file(dir + "/bad_space.dof",
                                 "{\"version\": 1, \"inputs\": [\"bad_json.dof\"], \"camera\": "
                                 "{\"focus\": 3}, \"color\": {\"input\": \"nospace\"}}");
+    // A number that overflows a double made nlohmann throw out_of_range,
+    // past the parser's catch, out of the plugin, ending oiiotool.
+    Filesystem::write_text_file(dir + "/overflow.dof",
+                                "{\"version\": 1, \"inputs\": [], \"camera\": {\"focus\": 96e379}}");
     const std::pair<const char*, const char*> cases[] = {
         { "bad_json.dof", "bad_json.dof: not valid JSON: parse error at line 1" },
+        { "overflow.dof", "overflow.dof: not valid JSON: number overflow" },
         { "missing.dof", "missing.dof: inputs: " },
         { "bad_space.dof", "bad_space.dof" },
     };

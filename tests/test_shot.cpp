@@ -316,6 +316,15 @@ TEST_CASE(".dof files: one-line errors for bad JSON, keys, types, values and fil
     CHECK(contains(dof_error(head + "\"aperture\": {\"blades\": 4.5}}", dir),
                    "aperture.blades: 4.5 is not a whole number"));
     CHECK(contains(dof_error(head + "\"output\": []}", dir), "output: expected an object"));
+    // Found by fuzzing-style probes: numbers out of a double's range, and
+    // a version that a narrower integer would wrap round to 1.
+    CHECK(contains(dof_error(head + "\"camera\": {\"focus\": 96e379}}", dir),
+                   "not valid JSON: number overflow"));
+    CHECK(contains(dof_error("99e999", dir), "not valid JSON: number overflow"));
+    CHECK(contains(dof_error("{\"version\": 4294967297, \"inputs\": [\"a.exr\"]}", dir),
+                   "version 4294967297 is newer"));
+    CHECK(contains(dof_error("{\"version\": -3, \"inputs\": [\"a.exr\"]}", dir),
+                   "version: expected a whole number from 1"));
 
     Shot shot;
     std::string error;

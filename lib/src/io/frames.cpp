@@ -1,5 +1,8 @@
 #include <defocus/io/frames.h>
 
+#include <cstdint>
+#include <cstdlib>
+
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/strutil.h>
 
@@ -9,6 +12,54 @@ using OIIO::Strutil::fmt::format;
 namespace Filesystem = OIIO::Filesystem;
 
 namespace {
+
+/// A shot renders at most this many frames: a day of 24 fps is 2 million,
+/// no sequence is longer than a few hundred thousand, and a typo such as
+/// 1-2000000000 would otherwise take gigabytes before the first frame.
+constexpr int64_t max_frames = 1000000;
+
+/// The number of frames a list such as "1-10x2,15,20-30" names, counted
+/// before OpenImageIO enumerates it; -1 when a part is not a plain
+/// "A", "A-B" or "A-BxN" (OpenImageIO then judges it).
+int64_t frame_count(const std::string& list)
+{
+    int64_t total = 0;
+    for (const std::string& part : OIIO::Strutil::splits(list, ",")) {
+        OIIO::string_view rest(part);
+        int a = 0, b = 0, step = 1;
+        if (!OIIO::Strutil::parse_int(rest, a))
+            return -1;
+        b = a;
+        if (OIIO::Strutil::parse_char(rest, '-') && !OIIO::Strutil::parse_int(rest, b))
+            return -1;
+        if ((OIIO::Strutil::parse_char(rest, 'x') || OIIO::Strutil::parse_char(rest, 'y'))
+            && !OIIO::Strutil::parse_int(rest, step))
+            return -1;
+        if (!rest.empty() || step == 0)
+            return -1;
+        total += std::abs(int64_t(b) - int64_t(a)) / std::abs(int64_t(step)) + 1;
+    }
+    return total;
+}
+
+/// OpenImageIO's enumerate_sequence, refusing lists of more than
+/// max_frames frames before enumerating them.
+bool enumerate_frames(const std::string& list, std::vector<int>& frames, std::string& error,
+                      const std::string& what)
+{
+    const int64_t count = frame_count(list);
+    if (count > max_frames) {
+        error = format("{}: '{}' names {} frames; a shot renders at most {}", what, list, count,
+                       max_frames);
+        return false;
+    }
+    if (!Filesystem::enumerate_sequence(list, frames) || frames.empty()) {
+        error = format("{}: '{}' is not a frame list (e.g. 1001-1100, 1-99x2, 1,5,9-12)", what,
+                       list);
+        return false;
+    }
+    return true;
+}
 
 /// oiiotool's parse: the printf pattern and any embedded frame range.
 bool parse_frame_pattern(const std::string& path, std::string& normalized,
@@ -64,26 +115,14 @@ bool is_sequence(const Shot& shot)
 bool shot_frames(const Shot& shot, std::vector<int>& frames, std::string& error)
 {
     frames.clear();
-    if (!shot.frames.empty()) {
-        if (!Filesystem::enumerate_sequence(shot.frames, frames) || frames.empty()) {
-            error = format("--frames: '{}' is not a frame list (e.g. 1001-1100, 1-99x2, "
-                           "1,5,9-12)",
-                           shot.frames);
-            return false;
-        }
-        return true;
-    }
+    if (!shot.frames.empty())
+        return enumerate_frames(shot.frames, frames, error, "--frames");
     for (const std::string& input : shot.inputs) {
         std::string normalized, range;
         if (!parse_frame_pattern(input, normalized, range))
             continue;
-        if (!range.empty()) {
-            if (!Filesystem::enumerate_sequence(range, frames) || frames.empty()) {
-                error = format("{}: '{}' is not a frame range", input, range);
-                return false;
-            }
-            return true;
-        }
+        if (!range.empty())
+            return enumerate_frames(range, frames, error, input);
         std::vector<std::string> names;
         if (!Filesystem::scan_for_matching_filenames(normalized, frames, names)
             || frames.empty()) {

@@ -1,5 +1,6 @@
 #include <defocus/io/image_input.h>
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 
@@ -15,6 +16,8 @@ bool read_image_file(const std::string& filename, const std::string& what, Image
                                      Strutil::replace(why, "\n", " ", true));
         return false;
     };
+    if (!Filesystem::is_regular(filename))  // a device or a pipe would be read forever
+        return fail(Filesystem::exists(filename) ? "not a regular file" : "no such file");
     auto in = ImageInput::open(filename);
     if (!in) {
         const std::string why = OIIO::geterror();  // geterror() clears it: read once

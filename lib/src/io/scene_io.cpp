@@ -347,6 +347,12 @@ std::unique_ptr<ImageInput> open_file(const std::string& filename, ExrInput* exr
         error = filename + ": is a directory, not an image";
         return nullptr;
     }
+    // A device or a pipe (/dev/zero, a FIFO) would keep the format probe
+    // reading forever.
+    if (!Filesystem::is_regular(filename)) {
+        error = filename + ": not a regular file";
+        return nullptr;
+    }
     ExrInput headers_only;
     if (is_openexr(filename) && !(exr ? exr : &headers_only)->open(filename, error))
         return nullptr;

@@ -203,14 +203,17 @@ bool read_document(const json& doc, const std::string& directory, Shot& shot,
         error = "no \"version\": a .dof file starts with \"version\": 1";
         return false;
     }
+    // Compared as the JSON number it is: a narrower integer would wrap
+    // 4294967297 round to 1.
     const json& version = doc["version"];
-    if (!version.is_number_integer() || version.get<int>() < 1) {
+    if (!version.is_number_integer()
+        || (!version.is_number_unsigned() && version.get<int64_t>() < 1)) {
         error = "version: expected a whole number from 1";
         return false;
     }
-    if (version.get<int>() > shot_file_version) {
-        error = format("version {} is newer than this defocus reads ({})",
-                       version.get<int>(), shot_file_version);
+    if (version.get<uint64_t>() > uint64_t(shot_file_version)) {
+        error = format("version {} is newer than this defocus reads ({})", version.dump(),
+                       shot_file_version);
         return false;
     }
     if (!doc.contains("inputs")) {
@@ -265,7 +268,7 @@ bool parse_shot(const std::string& text, const std::string& directory,
     json doc;
     try {
         doc = json::parse(text);
-    } catch (const json::parse_error& e) {
+    } catch (const json::exception& e) {  // syntax, and numbers out of range
         // e.what() is "[json.exception.parse_error.101] parse error at line
         // L, column C: ..."; the bracketed id means nothing to a user.
         std::string what = e.what();
