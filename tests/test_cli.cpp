@@ -2,7 +2,12 @@
 // input ending in a one-line error, a non-zero exit and no output file.
 #include <catch2/catch.hpp>
 
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -1016,4 +1021,105 @@ TEST_CASE("a frame list of billions, a device or a pipe as input: one-line error
     CHECK(one_line_naming(log, "/dev/zero"));
     CHECK(Strutil::contains(log, "not a regular file"));
     CHECK_FALSE(Filesystem::exists(dir + "/p.exr"));
+}
+
+namespace {
+
+/// Starts defocus with `args` (output to /dev/null); its process id.
+pid_t start_defocus(const std::vector<std::string>& args)
+{
+    std::vector<std::string> all = { defocus_bin };
+    all.insert(all.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (std::string& a : all)
+        argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
+    pid_t pid = -1;
+    const int failed = posix_spawn(&pid, defocus_bin.c_str(), &actions, nullptr, argv.data(),
+                                   environ);
+    posix_spawn_file_actions_destroy(&actions);
+    REQUIRE(failed == 0);
+    return pid;
+}
+
+/// The names of the files in a folder, sorted.
+std::vector<std::string> folder(const std::string& dir)
+{
+    std::vector<std::string> entries, names;
+    Filesystem::get_directory_entries(dir, entries);
+    for (const std::string& e : entries)
+        names.push_back(Filesystem::filename(e));
+    std::sort(names.begin(), names.end());
+    return names;
+}
+
+std::string this_host()
+{
+    char name[256] = {};
+    gethostname(name, sizeof name - 1);
+    return Strutil::replace(name, ".", "_", true);
+}
+
+}  // namespace
+
+TEST_CASE("an interrupted run leaves its targets as they were and no temporary file")
+{
+    const std::string dir = scratch_dir("cli_interrupt");
+    std::string log;
+    REQUIRE(run(std::string(MAKE_EXAMPLE_SCENE_BIN) + " " + dir + "/scene.exr --width 960 "
+                "--height 540", log) == 0);
+    const std::string scene = dir + "/scene.exr", target = dir + "/o.exr";
+    REQUIRE(run_defocus(scene + " -o " + target + " --focus 4", log) == 0);
+    std::string before;
+    REQUIRE(Filesystem::read_text_file(target, before));
+    // --cateye spreads pixel by pixel, here with blurs up to 200 px: some
+    // 2.5 s of work to interrupt at 0.4 s.
+    const std::vector<std::string> slow = { "--focus", "4", "--focal", "85", "--fstop", "1",
+                                            "--cateye", "1" };
+    auto slow_run = [&](std::vector<std::string> args) {
+        args.insert(args.end(), slow.begin(), slow.end());
+        return start_defocus(args);
+    };
+    for (const int signal_number : { SIGINT, SIGTERM }) {
+        INFO("signal " << signal_number);
+        const pid_t pid = slow_run({ scene, "-o", target });
+        usleep(400000);
+        REQUIRE(kill(pid, signal_number) == 0);
+        int status = 0;
+        REQUIRE(waitpid(pid, &status, 0) == pid);
+        CHECK(WIFSIGNALED(status));
+        CHECK(WTERMSIG(status) == signal_number);  // a shell sees 128 + it
+        CHECK(folder(dir) == std::vector<std::string> { "o.exr", "scene.exr" });
+        std::string after;
+        REQUIRE(Filesystem::read_text_file(target, after));
+        CHECK(after == before);
+    }
+    // In a sequence, the frames written before the signal stay.
+    const pid_t pid = slow_run({ scene, "-o", dir + "/s.#.exr", "--frames", "1-40" });
+    for (int wait = 0; wait < 600 && !Filesystem::exists(dir + "/s.0001.exr"); ++wait)
+        usleep(50000);
+    REQUIRE(kill(pid, SIGTERM) == 0);
+    int status = 0;
+    REQUIRE(waitpid(pid, &status, 0) == pid);
+    CHECK(WIFSIGNALED(status));
+    for (const std::string& name : folder(dir))
+        CHECK(name.find(".tmp") == std::string::npos);
+    CHECK(read_image(dir + "/s.0001.exr").spec().width == read_spec(scene).width);  // complete
+    // SIGKILL cannot be caught: what a killed process left is removed by
+    // the next write of the same target on this host, and only that.
+    const pid_t gone = fork();
+    if (gone == 0)
+        _exit(0);
+    waitpid(gone, &status, 0);
+    const std::string leftover = format("{}/.o.exr.{}.{}.tmp.exr", dir, this_host(), gone);
+    const std::string running = format("{}/.o.exr.{}.{}.tmp.exr", dir, this_host(), getpid());
+    Filesystem::write_text_file(leftover, "half a file");
+    Filesystem::write_text_file(running, "another process's file in progress");
+    REQUIRE(run_defocus(scene + " -o " + target + " --focus 4", log) == 0);
+    CHECK_FALSE(Filesystem::exists(leftover));
+    CHECK(Filesystem::exists(running));
 }

@@ -261,6 +261,7 @@ std::string verbose_report(const FrameResult& frame, const CommandLine& cl,
 
 int main(int argc, const char* argv[])
 {
+    remove_temporaries_on_interrupt();
     Filesystem::convert_native_arguments(argc, argv);
     CommandLine cl;
     bool help_only = false;

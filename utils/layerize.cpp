@@ -34,6 +34,7 @@ int fail(const char* fmt, const Args&... args)
 
 int main(int argc, const char* argv[])
 {
+    remove_temporaries_on_interrupt();
     Filesystem::convert_native_arguments(argc, argv);
     std::vector<std::string> inputs;
     std::string output;

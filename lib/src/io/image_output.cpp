@@ -12,32 +12,13 @@
 #include <OpenImageIO/strutil.h>
 
 #include "io/half_pixels.h"
+#include "io/temporary_files.h"
 
 namespace defocus {
 
 using namespace OIIO;
 
 namespace {
-
-std::string temporary_name(const std::string& filename)
-{
-    const std::string dir = Filesystem::parent_path(filename);
-    const std::string name = Strutil::fmt::format(
-        ".{}.{}.tmp{}", Filesystem::filename(filename), getpid(),
-        Filesystem::extension(filename));
-    return dir.empty() ? name : dir + "/" + name;
-}
-
-/// Renames the complete temporary file over `filename`, or removes it.
-bool commit(const std::string& tmp, const std::string& filename, std::string& error)
-{
-    std::string rename_error;
-    if (Filesystem::rename(tmp, filename, rename_error))
-        return true;
-    Filesystem::remove(tmp);
-    error = Strutil::fmt::format("{}: {}", filename, rename_error);
-    return false;
-}
 
 /// The compression names each format that takes one knows (an optional
 /// ":quality" may follow, e.g. dwaa:45).
@@ -95,7 +76,8 @@ bool write_atomic(const std::string& filename,
                   const std::function<bool(ImageOutput&, const std::string&)>& write,
                   std::string& error)
 {
-    const std::string tmp = temporary_name(filename);
+    TemporaryFile temporary(filename);
+    const std::string& tmp = temporary.path();
     // Errors name the user's file, never the temporary one.
     auto fail = [&](const std::string& why) {
         error = Strutil::fmt::format(
@@ -110,24 +92,21 @@ bool write_atomic(const std::string& filename,
     }
     if (!write(*out, tmp) || !out->close()) {
         const std::string why = out->geterror();
-        out.reset();
-        Filesystem::remove(tmp);
         return fail(why.empty() ? "cannot write" : why);
     }
     out.reset();
-    return commit(tmp, filename, error);
+    return temporary.commit(error);
 }
 
 bool write_text_atomic(const std::string& filename, const std::string& text,
                        std::string& error)
 {
-    const std::string tmp = temporary_name(filename);
-    if (!Filesystem::write_text_file(tmp, text)) {
-        Filesystem::remove(tmp);
+    TemporaryFile temporary(filename);
+    if (!Filesystem::write_text_file(temporary.path(), text)) {
         error = filename + ": cannot write";
         return false;
     }
-    return commit(tmp, filename, error);
+    return temporary.commit(error);
 }
 
 bool write_image_atomic(const ImageBuf& image, const std::string& filename,
