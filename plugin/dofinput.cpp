@@ -10,6 +10,7 @@
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/error_line.h>
 #include <defocus/io/frames.h>
 #include <defocus/render_frame.h>
 #include <defocus/shot/option_value.h>
@@ -94,7 +95,8 @@ bool DofInput::open(const std::string& name, ImageSpec& newspec, const ImageSpec
     m_filename = name;
     std::string error;
     auto fail = [&](const std::string& message) {
-        errorfmt("{}", Strutil::starts_with(message, name) ? message : name + ": " + message);
+        errorfmt("{}", defocus::error_line(Strutil::starts_with(message, name)
+                                                ? message : name + ": " + message));
         return false;
     };
     try {
@@ -163,7 +165,7 @@ bool DofInput::render_once()
             m_render_error = m_filename + ": cannot render";
     }
     if (!m_render_error.empty()) {
-        errorfmt("{}", m_render_error);
+        errorfmt("{}", defocus::error_line(m_render_error));
         return false;
     }
     return true;

@@ -1123,3 +1123,21 @@ TEST_CASE("an interrupted run leaves its targets as they were and no temporary f
     CHECK_FALSE(Filesystem::exists(leftover));
     CHECK(Filesystem::exists(running));
 }
+
+TEST_CASE("an error about a .dof key holding a newline or a megabyte stays one short line")
+{
+    const std::string dir = scratch_dir("cli_error_line");
+    const std::string scene = two_depth_scene(dir);
+    Filesystem::write_text_file(dir + "/newline.dof",
+                                "{\"version\": 1, \"inputs\": [\"two_depths.exr\"], "
+                                "\"camera\": {\"fo\\ncus\": 3}}");
+    Filesystem::write_text_file(dir + "/huge.dof",
+                                "{\"version\": 1, \"inputs\": [\"two_depths.exr\"], \"camera\": {\""
+                                    + std::string(1 << 20, 'k') + "\": 3}}");
+    std::string log;
+    REQUIRE(run_defocus(dir + "/newline.dof -o " + dir + "/o.exr", log) == 1);
+    CHECK(one_line_naming(log, "unknown key 'camera.fo\\ncus'"));
+    REQUIRE(run_defocus(dir + "/huge.dof -o " + dir + "/o.exr", log) == 1);
+    CHECK(one_line_naming(log, "huge.dof"));
+    CHECK(log.size() < 1100);
+}

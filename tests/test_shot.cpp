@@ -10,6 +10,7 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/error_line.h>
 #include <defocus/focus/focus_at.h>
 #include <defocus/io/aperture_files.h>
 #include <defocus/io/frames.h>
@@ -458,4 +459,17 @@ TEST_CASE("the camera a render recorded: read from its header unless given, and 
     CHECK(camera.focal_length_mm == Camera().focal_length_mm);
     CHECK(origins.focal_length == "default");
     CHECK(origins.focus == "--focus");
+}
+
+TEST_CASE("error lines: control characters escaped, overlong messages cut in the middle")
+{
+    CHECK(error_line("shot.dof: unknown key 'a\nb\tc\x01'")
+          == "shot.dof: unknown key 'a\\nb\\tc\\x01'");
+    const std::string huge = "shot.dof: unknown key '" + std::string(100000, 'k') + "'";
+    const std::string line = error_line(huge, 200);
+    CHECK(line.size() <= 200);
+    CHECK(OIIO::Strutil::starts_with(line, "shot.dof: unknown key 'kkk"));
+    CHECK(OIIO::Strutil::ends_with(line, "kkk'"));
+    CHECK(contains(line, " ... "));
+    CHECK(error_line("short") == "short");
 }

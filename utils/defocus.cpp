@@ -15,6 +15,7 @@
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/timer.h>
 
+#include <defocus/error_line.h>
 #include <defocus/io/frames.h>
 #include <defocus/io/image_output.h>
 #include <defocus/render_frame.h>
@@ -270,7 +271,7 @@ int main(int argc, const char* argv[])
     if (help_only)
         return EXIT_SUCCESS;
     auto fail = [](const std::string& message) {
-        Strutil::print(stderr, "defocus: {}\n", message);
+        Strutil::print(stderr, "defocus: {}\n", error_line(message));
         return EXIT_FAILURE;
     };
     if (!parsed)
@@ -377,7 +378,7 @@ int main(int argc, const char* argv[])
         if (run.run < int(frames.size()))
             summary += "; stopped at the first bad frame (--stop-on-error)";
         if (!failed.empty())
-            Strutil::print(stderr, "defocus: {}\n", summary);
+            Strutil::print(stderr, "defocus: {}\n", error_line(summary));
         else if (!cl.quiet)
             Strutil::print("defocus: {}\n", summary);
     }

@@ -12,6 +12,7 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/error_line.h>
 #include <defocus/io/image_output.h>
 #include <defocus/io/scene_io.h>
 #include <defocus/render_frame.h>
@@ -26,7 +27,7 @@ namespace {
 template<typename... Args>
 int fail(const char* fmt, const Args&... args)
 {
-    Strutil::print(stderr, "layerize: {}\n", Strutil::fmt::format(fmt, args...));
+    Strutil::print(stderr, "layerize: {}\n", error_line(Strutil::fmt::format(fmt, args...)));
     return EXIT_FAILURE;
 }
 

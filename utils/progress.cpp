@@ -6,6 +6,8 @@
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/sysutil.h>
 
+#include <defocus/error_line.h>
+
 namespace defocus {
 
 using OIIO::Strutil::fmt::format;
@@ -62,7 +64,7 @@ void Progress::error(const std::string& message)
 {
     std::lock_guard<std::mutex> lock(m_mutex);
     clear_bar();
-    OIIO::Strutil::print(stderr, "defocus: {}\n", message);
+    OIIO::Strutil::print(stderr, "defocus: {}\n", error_line(message));
     std::fflush(stderr);
     draw_bar();
 }

@@ -1,0 +1,15 @@
+// Error messages as the tools print them: one line, of bounded length.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+namespace defocus {
+
+/// `message` as one line of at most about `limit` characters: control
+/// characters (a newline in a JSON key, a file name) written as \n, \t,
+/// \xHH, and the middle of an overlong message (a 100 MB key) cut to
+/// " ... ", so that the start (the file) and the end (the problem) stay.
+std::string error_line(const std::string& message, size_t limit = 1000);
+
+}  // namespace defocus

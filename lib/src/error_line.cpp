@@ -1,0 +1,29 @@
+#include <defocus/error_line.h>
+
+#include <OpenImageIO/strutil.h>
+
+namespace defocus {
+
+std::string error_line(const std::string& message, size_t limit)
+{
+    std::string line;
+    line.reserve(std::min(message.size(), 2 * limit));
+    for (const char c : message) {
+        const unsigned char u = static_cast<unsigned char>(c);
+        if (c == '\n')
+            line += "\\n";
+        else if (c == '\t')
+            line += "\\t";
+        else if (u < 0x20 || u == 0x7f)
+            line += OIIO::Strutil::fmt::format("\\x{:02x}", unsigned(u));
+        else
+            line += c;
+    }
+    if (line.size() <= limit)
+        return line;
+    const std::string cut = " ... ";
+    const size_t keep = limit > cut.size() ? limit - cut.size() : 0;
+    return line.substr(0, keep / 2) + cut + line.substr(line.size() - (keep - keep / 2));
+}
+
+}  // namespace defocus
