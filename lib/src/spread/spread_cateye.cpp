@@ -4,8 +4,7 @@
 #include <cmath>
 #include <vector>
 
-#include "spread/row_bands.h"
-#include "spread/spread_common.h"
+#include "spread/scatter_pixels.h"
 
 namespace defocus {
 
@@ -79,66 +78,6 @@ void clipped_intervals(const RowProfile& profile, const CatEye& cateye, const V2
     }
 }
 
-/// Scatters every pixel of src that carries light into an accumulator over
-/// roi grown by `reach`, in bands of destination rows (one per thread, no
-/// races): scatter(x, y, value, radius, row) with row(oy) the accumulator
-/// row of destination row oy, or null outside the band. With `integrate`
-/// the rows hold deltas and are prefix-summed along x. The accumulator has
-/// one column more than dst on the right, for the deltas that end a row.
-template<typename Scatter>
-bool scatter_pixels(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, ROI roi,
-                    int nthreads, int (*reach_of)(double max_radius, const void*),
-                    const void* shape, bool integrate, Scatter&& scatter)
-{
-    const SpreadInputs in = prepare_spread(dst, src, radius, roi, nthreads);
-    if (!in.valid)
-        return false;
-    const int nc = in.nchannels;
-    roi = in.roi;
-    const int reach = reach_of(in.max_radius, shape);
-    const ROI ext(roi.xbegin - reach, roi.xend + reach, roi.ybegin - reach, roi.yend + reach, 0,
-                  1, 0, nc);
-    const size_t row_len = size_t(ext.width() + 1) * nc;
-    std::vector<double> acc(row_len * ext.height(), 0.0);
-    for_each_row_band(ext.ybegin, ext.yend, nthreads, [&](int y0, int y1) {
-        auto row = [&](int oy) -> double* {
-            return oy < y0 || oy >= y1 ? nullptr
-                                       : &acc[size_t(oy - ext.ybegin) * row_len]
-                                             - ptrdiff_t(ext.xbegin) * nc;
-        };
-        for (int y = std::max(roi.ybegin, y0 - reach); y < std::min(roi.yend, y1 + reach); ++y)
-            for (int x = roi.xbegin; x < roi.xend; ++x) {
-                const float* v = in.pixels(x, y);
-                if (!is_zero(v, nc))
-                    scatter(x, y, v, nc, double(*in.radii(x, y)), row);
-            }
-        if (integrate)
-            for (int y = y0; y < y1; ++y) {
-                double* r = &acc[size_t(y - ext.ybegin) * row_len];
-                for (size_t i = nc; i < row_len; ++i)
-                    r[i] += r[i - nc];
-            }
-    });
-    dst.reset(output_spec(src, ext), OIIO::InitializePixels::No);  // every pixel is written
-    float* out = static_cast<float*>(dst.localpixels());
-    for (int y = 0; y < ext.height(); ++y)
-        for (size_t i = 0; i < size_t(ext.width()) * nc; ++i)
-            *out++ = float(acc[size_t(y) * row_len + i]);
-    return true;
-}
-
-int profile_reach(double max_radius, const void* profile)
-{
-    return int(std::ceil(max_radius * static_cast<const RowProfile*>(profile)->extent())) + 2;
-}
-
-int psf_reach(double max_radius, const void* psf)
-{
-    const Footprint widest = (*static_cast<const Psf*>(psf))(max_radius);
-    return std::max({ -widest.x0, -widest.y0, widest.x0 + widest.width,
-                      widest.y0 + widest.height }) + 1;
-}
-
 /// Adds w times the coverage of [a, b] (pixel i covering [i, i + 1]) to a
 /// row of deltas: two taps at each end.
 void add_interval(double* row, int nc, double a, double b, const float* v, double w)
@@ -159,7 +98,12 @@ bool spread_cateye(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
                    const RowProfile& profile, const CatEye& cateye, ROI roi, int nthreads)
 {
     return scatter_pixels(
-        dst, src, radius, roi, nthreads, profile_reach, &profile, true,
+        dst, src, radius, roi, nthreads,
+        [&](double max_radius) {
+            const int reach = int(std::ceil(max_radius * profile.extent())) + 2;
+            return PixelReach { -reach, reach, -reach, reach };
+        },
+        true,
         [&](int x, int y, const float* v, int nc, double r, auto&& row) {
             thread_local SpanCache spans;
             thread_local std::vector<Interval> intervals;
@@ -173,8 +117,10 @@ bool spread_cateye(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
 bool spread_cateye(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, const Psf& psf,
                    const CatEye& cateye, ROI roi, int nthreads)
 {
+    // Clipping only drops weights: the unclipped footprints bound the reach.
     return scatter_pixels(
-        dst, src, radius, roi, nthreads, psf_reach, &psf, false,
+        dst, src, radius, roi, nthreads,
+        [&](double max_radius) { return footprint_reach(psf, max_radius); }, false,
         [&](int x, int y, const float* v, int nc, double r, auto&& row) {
             Footprint fp = psf(r);
             if (cateye.amount > 0.0 && r >= cateye_min_radius) {
@@ -194,11 +140,7 @@ bool spread_cateye(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, c
                 else
                     fp = psf(r);  // the clip missed every sample: unclipped
             }
-            for (int j = 0; j < fp.height; ++j)
-                if (double* out = row(y + fp.y0 + j))
-                    for (int i = 0; i < fp.width; ++i)
-                        for (int c = 0; c < nc; ++c)
-                            out[size_t(x + fp.x0 + i) * nc + c] += fp.at(i, j) * v[c];
+            add_footprint(fp, x, y, v, nc, row);
         });
 }
 
