@@ -269,7 +269,8 @@ bool spread_in_engine(const SpreadOptions& spread, const ApertureImages& images,
 
 /// One spread of a layer, in the channels of a pass: set up in the engine
 /// (its radii, float radii and highlights, which the engine reads while it
-/// lives), or done apart.
+/// lives), or done apart. `apart` also holds an engine's spread that is
+/// composited magnified.
 struct LayerPass {
     ChannelPass channels;
     ImageBuf radius;
@@ -321,20 +322,16 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
     const ROI display(scene.spec.full_x, scene.spec.full_x + scene.spec.full_width,
                       scene.spec.full_y, scene.spec.full_y + scene.spec.full_height, 0, 1, 0, 4);
     ROI grown = display;
-    const Imath::V2d optical_centre(std::isnan(camera.optical_x)
-                                        ? display.xbegin + 0.5 * display.width()
-                                        : camera.optical_x + 0.5,
-                                    std::isnan(camera.optical_y)
-                                        ? display.ybegin + 0.5 * display.height()
-                                        : camera.optical_y + 0.5);
+    const Imath::V2d centre = optical_centre(camera, display);
     CatEye cateye;
     cateye.amount = camera.cateye;
-    cateye.centre = optical_centre;
+    cateye.centre = centre;
     for (const int x : { display.xbegin, display.xend })
         for (const int y : { display.ybegin, display.yend })
             cateye.corner_distance = std::max(cateye.corner_distance,
-                                              (Imath::V2d(x, y) - optical_centre).length());
+                                              (Imath::V2d(x, y) - centre).length());
     const std::vector<ChannelPass> passes = channel_passes(camera);
+    const bool in_engine = spread_in_engine(spread, images, cateye);
     std::vector<LayerSpreads> layers(scene.layers.size());
     for (size_t i = 0; i < scene.layers.size(); ++i) {
         const Layer& layer = scene.layers[i];
@@ -342,7 +339,7 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
             continue;
         const ROI roi = layer.color.roi();
         LayerSpreads& l = layers[i];
-        if (spread_in_engine(spread, images, cateye))
+        if (in_engine)
             l.color_pixels = FloatPixels(layer.color, roi);
         for (const ChannelPass& channels : passes) {
             LayerPass& p = l.passes.emplace_back();
@@ -351,7 +348,7 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
                 dst.errorfmt("layer '{}': {}", layer.name, p.radius.geterror());
                 return false;
             }
-            if (!spread_in_engine(spread, images, cateye)) {
+            if (!in_engine) {
                 int64_t psf_pixels = 0;
                 if (!spread_apart(p.apart, layer.color, p.radius, spread, images, profile.get(),
                                   cateye, scene.luma, psf_pixels, nthreads)) {
@@ -390,10 +387,10 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
     reset_zeroed(frame, result_spec(scene.spec, window, TypeFloat), nthreads);
     // Where a magnified pass's light can come from: the window, grown by
     // the largest displacement lateral aberration gives within it.
-    const double farthest = std::max({ std::abs(window.xbegin - optical_centre.x),
-                                       std::abs(window.xend - optical_centre.x),
-                                       std::abs(window.ybegin - optical_centre.y),
-                                       std::abs(window.yend - optical_centre.y) });
+    const double farthest = std::max({ std::abs(window.xbegin - centre.x),
+                                       std::abs(window.xend - centre.x),
+                                       std::abs(window.ybegin - centre.y),
+                                       std::abs(window.yend - centre.y) });
     const double lateral = std::abs(camera.lateral_ca);
     const int margin = int(std::ceil(lateral * farthest / (1.0 - lateral))) + 2;
     ROI magnified_reach(window.xbegin - margin, window.xend + margin, window.ybegin - margin,
@@ -414,10 +411,8 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
                     Keep keep(p.apart);
                     p.engine->run(magnified_reach, keep, nthreads);
                 }
-                composite_magnified(frame, p.apart, 0, 1.0 + camera.lateral_ca, optical_centre,
-                                    nthreads);
-                composite_magnified(frame, p.apart, 2, 1.0 - camera.lateral_ca, optical_centre,
-                                    nthreads);
+                composite_magnified(frame, p.apart, 0, 1.0 + camera.lateral_ca, centre, nthreads);
+                composite_magnified(frame, p.apart, 2, 1.0 - camera.lateral_ca, centre, nthreads);
             } else if (p.engine) {
                 Over over(frame, p.channels);
                 p.engine->run(window, over, nthreads);

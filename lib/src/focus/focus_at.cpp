@@ -100,10 +100,12 @@ bool shot_camera(const Shot& shot, const Scene& scene, int frame, Camera& camera
         };
         take(header.focal_length_mm, "focal", camera.focal_length_mm, origins.focal_length);
         take(header.fstop, "fstop", camera.fstop, origins.fstop);
-        if (!take(header.sensor_width_mm, "sensor", camera.sensor_width_mm, origins.sensor_width)
-            && header.focal_over_filmback.found() && !is_given(shot, "sensor")
-            && origins.focal_length != "default") {
-            // The projection gives f/s; with a focal length known, the filmback.
+        // The projection gives f/s; with a focal length known, the filmback.
+        const bool focal_known = is_given(shot, "focal") || header.focal_length_mm.found();
+        if (!is_given(shot, "sensor")
+            && !take(header.sensor_width_mm, "sensor", camera.sensor_width_mm,
+                     origins.sensor_width)
+            && header.focal_over_filmback.found() && focal_known) {
             camera.sensor_width_mm = camera.focal_length_mm / header.focal_over_filmback.value;
             origins.sensor_width = "file: worldToNDC and the focal length";
         }

@@ -11,6 +11,14 @@ namespace defocus {
 
 namespace {
 
+/// A display-window pixel as a point (its centre, pixel i's at i + 1/2);
+/// NaN: the display window's centre.
+Imath::V2d pixel_point(double x, double y, const OIIO::ROI& display)
+{
+    return { std::isnan(x) ? display.xbegin + 0.5 * display.width() : x + 0.5,
+             std::isnan(y) ? display.ybegin + 0.5 * display.height() : y + 0.5 };
+}
+
 /// The focus point's share of the tilted plane's 1/z_f: 1/z_f along the
 /// ray through normalised image position (u, v) (v down) is
 /// (1 - tan(tilt_v) u + tan(tilt_h) v) / (this · focus distance), so this
@@ -30,14 +38,18 @@ TiltedPlane tilted_plane(const Camera& camera, const OIIO::ROI& display)
     p.centre_x = display.xbegin + 0.5 * display.width();
     p.centre_y = display.ybegin + 0.5 * display.height();
     p.focal_px = camera.focal_length_mm / camera.sensor_width_mm * display.width();
-    const double fx = std::isnan(camera.focus_x) ? p.centre_x : camera.focus_x + 0.5;
-    const double fy = std::isnan(camera.focus_y) ? p.centre_y : camera.focus_y + 0.5;
-    p.focus_term = 1.0 - p.tan_v * (fx - p.centre_x) / p.focal_px
-                   + p.tan_h * (fy - p.centre_y) / p.focal_px;
+    const Imath::V2d focus = pixel_point(camera.focus_x, camera.focus_y, display);
+    p.focus_term = 1.0 - p.tan_v * (focus.x - p.centre_x) / p.focal_px
+                   + p.tan_h * (focus.y - p.centre_y) / p.focal_px;
     return p;
 }
 
 }  // namespace
+
+Imath::V2d optical_centre(const Camera& camera, const OIIO::ROI& display)
+{
+    return pixel_point(camera.optical_x, camera.optical_y, display);
+}
 
 CircleOfConfusion::CircleOfConfusion(const Camera& camera, const OIIO::ROI& display)
     : m_max_diameter(camera.max_blur_px)

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 
+#include <Imath/ImathVec.h>
 #include <OpenImageIO/imageio.h>
 
 namespace defocus {
@@ -156,6 +157,10 @@ const char* lens_model_name(LensModel lens);
 /// defocus:focusDistance, defocus:filmbackWidth, defocus:maxBlur and
 /// defocus:lens.
 void record_camera(OIIO::ImageSpec& spec, const Camera& camera);
+
+/// Where the lens's axis meets the image (Camera::optical_x, optical_y,
+/// else the display window's centre), with pixel i's centre at i + 1/2.
+Imath::V2d optical_centre(const Camera& camera, const OIIO::ROI& display);
 
 /// True when the camera's settings are valid over the display window; else
 /// false with `error` the first problem.
