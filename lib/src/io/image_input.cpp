@@ -8,6 +8,17 @@ namespace defocus {
 
 using namespace OIIO;
 
+const char* not_a_file(const std::string& filename)
+{
+    if (!Filesystem::exists(filename))
+        return "no such file";
+    if (Filesystem::is_directory(filename))
+        return "is a directory, not an image";
+    if (!Filesystem::is_regular(filename))
+        return "not a regular file";
+    return nullptr;
+}
+
 bool read_image_file(const std::string& filename, const std::string& what, ImageBuf& dst,
                      std::string& error)
 {
@@ -16,8 +27,8 @@ bool read_image_file(const std::string& filename, const std::string& what, Image
                                      Strutil::replace(why, "\n", " ", true));
         return false;
     };
-    if (!Filesystem::is_regular(filename))  // a device or a pipe would be read forever
-        return fail(Filesystem::exists(filename) ? "not a regular file" : "no such file");
+    if (const char* why = not_a_file(filename))
+        return fail(why);
     auto in = ImageInput::open(filename);
     if (!in) {
         const std::string why = OIIO::geterror();  // geterror() clears it: read once

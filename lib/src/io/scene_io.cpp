@@ -11,6 +11,8 @@
 #include <OpenImageIO/parallel.h>
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/io/image_input.h>
+
 #include "io/exr_input.h"
 #include "util/prefault.h"
 #include "util/parallel_rows.h"
@@ -339,18 +341,8 @@ struct FileLayout {
 std::unique_ptr<ImageInput> open_file(const std::string& filename, ExrInput* exr,
                                       std::string& error)
 {
-    if (!Filesystem::exists(filename)) {
-        error = filename + ": no such file";
-        return nullptr;
-    }
-    if (Filesystem::is_directory(filename)) {
-        error = filename + ": is a directory, not an image";
-        return nullptr;
-    }
-    // A device or a pipe (/dev/zero, a FIFO) would keep the format probe
-    // reading forever.
-    if (!Filesystem::is_regular(filename)) {
-        error = filename + ": not a regular file";
+    if (const char* why = not_a_file(filename)) {
+        error = filename + ": " + why;
         return nullptr;
     }
     ExrInput headers_only;

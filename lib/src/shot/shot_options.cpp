@@ -36,7 +36,8 @@ const std::vector<ShotOption>& shot_options()
           "Horizontal filmback width in mm, spanning the display window (default: 36)" },
         { G::Camera, "--camera-from-file on|off", "camera-from-file",
           "Take the focus, f-number, focal length and filmback a render recorded in "
-          "its header (OpenEXR focus/aperture, Unreal, Arnold) where no option or "
+          "its header (OpenEXR focus/aperture/camera matrices, Unreal, Arnold, V-Ray) "
+          "where no option or "
           ".dof gives them, frame by frame; -v says where each value came from "
           "(default: on)" },
         { G::Camera, "--lens MODEL", "lens",
