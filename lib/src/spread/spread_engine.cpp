@@ -554,7 +554,7 @@ RunsInReach runs_in_reach(const ItemRow& items, int shift, const Reach& reach, c
     r.x_lo = tile.x_begin - reach.last_column;
     r.x_hi = tile.x_end - reach.first_column;
     r.first = std::lower_bound(items.runs.begin(), items.runs.end(),
-                               r.x_lo - ((items.longest - 1) << shift),
+                               r.x_lo - (items.longest - 1) * (1 << shift),
                                [](const ProgramRun& run, int x) { return run.x < x; });
     r.last = std::lower_bound(r.first, items.runs.end(), r.x_hi,
                               [](const ProgramRun& run, int x) { return run.x < x; });
