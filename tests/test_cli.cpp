@@ -168,6 +168,32 @@ TEST_CASE("bad pixels are handled, counted and never reach the output")
     CHECK(no_nan(result));
     const auto stats = ImageBufAlgo::computePixelStats(result);
     CHECK(stats.max[0] <= 0.5f + 1e-3f);  // the alpha-0 glow carried no light
+
+    // Finite colour near float's limit overflowed the spreading sums into
+    // NaN (disc, box, polygon): it is clamped to 1e30, and counted.
+    ImageBuf hot(ImageSpec(48, 48, 5, TypeFloat));
+    hot.specmod().channelnames = { "R", "G", "B", "A", "Z" };
+    ImageBufAlgo::fill(hot, { 0.0f, 0.0f, 0.0f, 1.0f, 2.0f });
+    for (int y = 0; y < 48; ++y)
+        for (int x = 0; x < 48; ++x)
+            if ((x * 7 + y * 3) % 5 < 3) {
+                const float v = (x + y) % 2 ? 3e38f : -3e38f;
+                const float pixel[5] = { v, 3e38f, 1e30f, (x + y) % 3 ? 1.0f : 1.5f, 1e30f };
+                hot.setpixel(x, y, pixel);
+            }
+    const float below_zero[5] = { 0.5f, 0.5f, 0.5f, -0.5f, 2.0f };
+    hot.setpixel(0, 0, below_zero);
+    REQUIRE(hot.write(dir + "/hot.exr"));
+    for (const char* aperture : { "disc", "box", "polygon", "tent" }) {
+        INFO(aperture);
+        REQUIRE(run_defocus(dir + "/hot.exr -o " + out
+                                + " --focal 100 --fstop 1 --focus 0.5 -v --aperture " + aperture,
+                            log)
+                == 0);
+        CHECK(Strutil::contains(log, "1382 with colour beyond 1e30 clamped"));
+        CHECK(Strutil::contains(log, "1 transparent with colour cleared"));
+        CHECK(no_nan(read_image(out)));
+    }
 }
 
 TEST_CASE("every bad input ends in a one-line error and no output")
@@ -1023,6 +1049,76 @@ TEST_CASE("a frame list of billions, a device or a pipe as input: one-line error
     CHECK_FALSE(Filesystem::exists(dir + "/p.exr"));
 }
 
+TEST_CASE("a header asking for more memory than the limit is refused before allocating")
+{
+    const std::string dir = scratch_dir("cli_memory_limit");
+    std::string log;
+    // 200000 x 200000 pixels: 745 GB as RGBA + Z floats, in a 100 KB file.
+    const std::string giant = dir + "/giant.exr";
+    write_exr_header_only(giant, 200000, 200000);
+    REQUIRE(run_defocus(giant + " -o " + dir + "/o.exr --focus 3", log) == 1);
+    CHECK(one_line_naming(log, "giant.exr: a data window of 200000x200000 needs 745 GB, more "
+                               "than the memory limit of"));
+    CHECK_FALSE(Filesystem::exists(dir + "/o.exr"));
+
+    // The limit is the user's: a 20x20 scene needs 8 KB as a layer.
+    const std::string scene = two_depth_scene(dir);
+    REQUIRE(run_defocus(scene + " -o " + dir + "/o.exr --focus 3 --memory-limit 1M", log) == 0);
+    write_exr_header_only(dir + "/big.exr", 4000, 3000);
+    REQUIRE(run_defocus(dir + "/big.exr -o " + dir + "/o.exr --focus 3 --memory-limit 100M", log)
+            == 1);
+    CHECK(one_line_naming(log, "big.exr: a data window of 4000x3000 needs 229 MB, more than the "
+                               "memory limit of 100 MB (--memory-limit)"));
+    // Spreading: a blur of 20000 px grows every layer by 10000 px a side.
+    REQUIRE(run_defocus(scene + " -o " + dir + "/o.exr --focus 0.01 --fstop 0.1 --focal 300 "
+                                "--max-blur 20000 --memory-limit 1G",
+                        log)
+            == 1);
+    CHECK(one_line_naming(log, "with blur up to 20000 px needs"));
+    for (const char* bad : { "12X", "0.5K", "-1G", "G", "2P" }) {
+        REQUIRE(run_defocus(scene + " -o " + dir + "/o.exr --focus 3 --memory-limit " + bad, log)
+                == 1);
+        CHECK(one_line_naming(log, "--memory-limit: expected a size such as 12G"));
+    }
+    // It is a scene setting: saved with the scene, and read back.
+    REQUIRE(run_defocus(scene + " --focus 3 --memory-limit 1536M --save-scene " + dir + "/m.dof",
+                        log)
+            == 0);
+    std::string dof;
+    REQUIRE(Filesystem::read_text_file(dir + "/m.dof", dof));
+    CHECK(Strutil::contains(dof, "\"memory_limit\": \"1536M\""));
+}
+
+TEST_CASE("cutting into more layers than the memory limit holds is refused")
+{
+    const std::string dir = scratch_dir("cli_memory_layers");
+    // Deep volume samples from 1 to 100 m: cut into 256 layers, each of
+    // the 90000 samples becomes 256 fragments (830 MB), from a 1 MB file.
+    ImageSpec spec(300, 300, 6, TypeFloat);
+    spec.channelnames = { "R", "G", "B", "A", "Z", "ZBack" };
+    spec.alpha_channel = 3;
+    spec.z_channel = 4;
+    ImageBuf flat(spec);
+    const float fog[] = { 0.1f, 0.1f, 0.1f, 0.5f, 1.0f, 100.0f };
+    ImageBufAlgo::fill(flat, fog);
+    ImageBuf deep;
+    REQUIRE(ImageBufAlgo::deepen(deep, flat));
+    REQUIRE(deep.write(dir + "/fog.exr"));
+    std::string log;
+    REQUIRE(run_defocus(dir + "/fog.exr -o " + dir + "/o.exr --focus 1 --layers 256 "
+                                              "--memory-limit 256M",
+                        log)
+            == 1);
+    CHECK(one_line_naming(log, "fog.exr: cutting 'deep0' into 256 layers needs"));
+    CHECK(Strutil::contains(log, "more than the memory limit of 256 MB"));
+    CHECK_FALSE(Filesystem::exists(dir + "/o.exr"));
+    // The same cut in 8 layers fits.
+    REQUIRE(run_defocus(dir + "/fog.exr -o " + dir + "/o.exr --focus 1 --layers 8 "
+                                              "--memory-limit 256M",
+                        log)
+            == 0);
+}
+
 namespace {
 
 /// Starts defocus with `args` (output to /dev/null); its process id.
@@ -1140,4 +1236,191 @@ TEST_CASE("an error about a .dof key holding a newline or a megabyte stays one s
     REQUIRE(run_defocus(dir + "/huge.dof -o " + dir + "/o.exr", log) == 1);
     CHECK(one_line_naming(log, "huge.dof"));
     CHECK(log.size() < 1100);
+}
+
+TEST_CASE("hostile .dof files: deep nesting, 100 MB, and inputs that are loops, folders or devices")
+{
+    const std::string dir = scratch_dir("cli_hostile_dof");
+    const std::string scene = two_depth_scene(dir);
+    auto dof = [&](const std::string& name, const std::string& inputs) {
+        Filesystem::write_text_file(dir + "/" + name, "{\"version\": 1, \"inputs\": [" + inputs
+                                                          + "], \"camera\": {\"focus\": 3}}");
+        return dir + "/" + name;
+    };
+    const std::string nested = dof("nested.dof", std::string(100000, '[') + std::string(100000, ']'));
+    std::string big_text = "{\"version\": 1, \"inputs\": [\"" + std::string(100 << 20, 'x') + "\"]}";
+    Filesystem::write_text_file(dir + "/big.dof", big_text);
+    big_text = std::string();
+    Filesystem::remove(dir + "/loop_a.exr");
+    Filesystem::remove(dir + "/loop_b.exr");
+    REQUIRE(symlink("loop_b.exr", (dir + "/loop_a.exr").c_str()) == 0);
+    REQUIRE(symlink("loop_a.exr", (dir + "/loop_b.exr").c_str()) == 0);
+    Filesystem::create_directory(dir + "/folder.exr");
+    const std::pair<std::string, std::string> cases[] = {
+        { nested, "nested.dof: inputs: expected file names, not array" },
+        { dir + "/big.dof", "big.dof: 100 MB is too large for a .dof scene file (at most 16 MB)" },
+        { dof("loop.dof", "\"loop_a.exr\""), "loop.dof: inputs:" },
+        { dof("folder.dof", "\"folder.exr\""), "folder.exr: is a directory, not an image" },
+        { dof("zero.dof", "\"/dev/zero\""), "/dev/zero: not a regular file" },
+    };
+    for (const auto& [file, message] : cases) {
+        INFO(file);
+        std::string log;
+        CHECK(run_defocus(file + " -o " + dir + "/o.exr", log) == 1);
+        CHECK(one_line_naming(log, message));
+        CHECK_FALSE(Filesystem::exists(dir + "/o.exr"));
+    }
+}
+
+TEST_CASE("a symbolic link loop among a pattern's frames fails that frame alone")
+{
+    const std::string dir = scratch_dir("cli_pattern_loop");
+    const std::string scene = two_depth_scene(dir);
+    for (const char* frame : { "/f.0001.exr", "/f.0002.exr", "/f.0004.exr" })
+        REQUIRE(Filesystem::copy(scene, dir + frame));
+    // A loop as frame 3, and another entry of the folder that loops.
+    REQUIRE(symlink("f.0003.exr", (dir + "/f.0003.exr").c_str()) == 0);
+    REQUIRE(symlink("a_loop", (dir + "/a_loop").c_str()) == 0);
+    std::string log;
+    CHECK(run_defocus(dir + "/f.#.exr -o " + dir + "/o.#.exr --focus 3", log) == 1);
+    CHECK(Strutil::contains(log, "3 of 4 frames written; failed: 3"));
+    CHECK(Strutil::contains(log, "f.0003.exr: no such file"));
+    for (const char* written : { "/o.0001.exr", "/o.0002.exr", "/o.0004.exr" })
+        CHECK(Filesystem::exists(dir + written));
+    CHECK_FALSE(Filesystem::exists(dir + "/o.0003.exr"));
+}
+
+TEST_CASE("a full disk: a one-line error, no partial file, the old output and other frames kept")
+{
+    const std::string dir = scratch_dir("cli_disk_full");
+    std::string log;
+    const std::string small = two_depth_scene(dir);
+    REQUIRE(run(std::string(MAKE_EXAMPLE_SCENE_BIN) + " " + dir + "/big.exr --width 960 "
+                    "--height 540", log) == 0);
+    // A 16 KB disk: the 20x20 frame fits, the 960x540 one (2 MB as EXR,
+    // 100s of KB as PNG or JPEG) does not. A tmpfs of that size is mounted
+    // in a user and mount namespace of the test's own, which needs no
+    // privilege; where those are not allowed, a file size limit of 16 KB
+    // (ulimit -f) fails the same writes.
+    const bool namespaces = run("unshare -rm true", log) == 0;
+    if (!namespaces)
+        WARN("no user namespaces here: a file size limit stands in for a full disk");
+    const std::string disk = dir + "/disk";
+    Filesystem::create_directory(disk);
+    const std::string script = Strutil::fmt::format(R"(
+        set -u
+        cd '{dir}'
+        {mount}
+        D='{defocus}'
+        $D small.exr -o disk/old.exr --focus 3 -q || echo "setup failed"
+        cp disk/old.exr old_copy.exr
+        trap '' XFSZ
+        {limit}
+        for out in old.exr new.png new.jpg; do
+            $D big.exr -o disk/$out --focus 3 -q 2>err.txt; echo "$out exit $?"; cat err.txt
+        done
+        $D big.exr -o disk/preview.exr --preview disk/preview.png --focus 3 -q 2>err.txt
+        echo "preview exit $?"; cat err.txt
+        cmp -s disk/old.exr old_copy.exr && echo "old output intact"
+        rm -f disk/preview.exr
+        $D 'f.#.exr' -o 'disk/seq.#.exr' --focus 3 -q 2>err.txt; echo "sequence exit $?"
+        cat err.txt
+        ls -a disk | tr '\n' ' '; echo
+    )",
+        fmt::arg("dir", dir), fmt::arg("defocus", defocus_bin),
+        fmt::arg("mount", namespaces ? "mount -t tmpfs -o size=16k tmpfs disk || exit 1" : ""),
+        fmt::arg("limit", namespaces ? "" : "ulimit -f 16"));
+    REQUIRE(Filesystem::copy(small, dir + "/small.exr"));
+    REQUIRE(Filesystem::copy(small, dir + "/f.0001.exr"));
+    REQUIRE(Filesystem::copy(dir + "/big.exr", dir + "/f.0002.exr"));
+    Filesystem::write_text_file(dir + "/full.sh", script);
+    REQUIRE(run((namespaces ? "unshare -rm bash " : "bash ") + dir + "/full.sh", log) == 0);
+    INFO(log);
+    CHECK_FALSE(Strutil::contains(log, "setup failed"));
+    for (const char* out : { "old.exr", "new.png", "new.jpg" }) {
+        CHECK(Strutil::contains(log, std::string(out) + " exit 1\ndefocus: disk/" + out
+                                         + ": cannot write"));
+    }
+    CHECK(Strutil::contains(log, "preview exit 1\ndefocus: disk/preview.png: cannot write"));
+    CHECK(Strutil::contains(log, "old output intact"));
+    CHECK(Strutil::contains(log, "sequence exit 1\n"));
+    CHECK(Strutil::contains(log, "1 of 2 frames written; failed: 2"));
+    // Nothing half-written: the old output, frame 1, and no temporary.
+    CHECK(Strutil::contains(log, ". .. old.exr seq.0001.exr \n"));
+}
+
+TEST_CASE("two processes writing one output leave one complete file, never a mix")
+{
+    const std::string dir = scratch_dir("cli_two_writers");
+    std::string log;
+    REQUIRE(run(std::string(MAKE_EXAMPLE_SCENE_BIN) + " " + dir + "/scene.exr --width 640 "
+                "--height 360", log) == 0);
+    const std::string scene = dir + "/scene.exr";
+    REQUIRE(run_defocus(scene + " -o " + dir + "/near.exr --focus 1 --compression none", log) == 0);
+    REQUIRE(run_defocus(scene + " -o " + dir + "/far.exr --focus 8 --compression none", log) == 0);
+    std::string near, far;
+    REQUIRE(Filesystem::read_text_file(dir + "/near.exr", near));
+    REQUIRE(Filesystem::read_text_file(dir + "/far.exr", far));
+    for (int round = 0; round < 3; ++round) {
+        const pid_t a = start_defocus({ scene, "-o", dir + "/both.exr", "--focus", "1",
+                                        "--compression", "none" });
+        const pid_t b = start_defocus({ scene, "-o", dir + "/both.exr", "--focus", "8",
+                                        "--compression", "none" });
+        int status_a = 0, status_b = 0;
+        REQUIRE(waitpid(a, &status_a, 0) == a);
+        REQUIRE(waitpid(b, &status_b, 0) == b);
+        CHECK((WIFEXITED(status_a) && WEXITSTATUS(status_a) == 0));
+        CHECK((WIFEXITED(status_b) && WEXITSTATUS(status_b) == 0));
+        std::string both;
+        REQUIRE(Filesystem::read_text_file(dir + "/both.exr", both));
+        // Byte for byte one of the two (the metadata is the same but for
+        // the focus).
+        CHECK((both == near || both == far));
+    }
+    for (const std::string& name : folder(dir))
+        CHECK(name.find(".tmp") == std::string::npos);
+}
+
+TEST_CASE("an input overwritten while it is read: a clean error or a correct result")
+{
+    const std::string dir = scratch_dir("cli_rewritten_input");
+    std::string log;
+    REQUIRE(run(std::string(MAKE_EXAMPLE_SCENE_BIN) + " " + dir + "/scene.exr --width 640 "
+                "--height 360", log) == 0);
+    REQUIRE(run_defocus(dir + "/scene.exr -o " + dir + "/expected.exr --focus 4", log) == 0);
+    const ImageBuf expected = read_image(dir + "/expected.exr");
+    // Another process rewrites the input in place (truncating it, then
+    // writing it again in pieces) as fast as it can, while defocus reads it.
+    const std::string script = Strutil::fmt::format(R"(
+        while [ ! -e '{dir}/stop' ]; do
+            head -c 20000 '{dir}/scene.exr' > '{dir}/live.exr'
+            cat '{dir}/scene.exr' > '{dir}/live.exr'
+        done)", fmt::arg("dir", dir));
+    Filesystem::write_text_file(dir + "/rewrite.sh", script);
+    const pid_t writer = fork();
+    if (writer == 0) {
+        execl("/bin/bash", "bash", (dir + "/rewrite.sh").c_str(), nullptr);
+        _exit(127);
+    }
+    int correct = 0, refused = 0;
+    for (int i = 0; i < 20; ++i) {
+        const std::string out = format("{}/out{}.exr", dir, i);
+        const int status = run_defocus(dir + "/live.exr -o " + out + " --focus 4", log);
+        INFO(log);
+        REQUIRE((status == 0 || status == 1));  // never a crash
+        if (status == 1) {
+            CHECK(one_line_naming(log, "live.exr"));
+            CHECK_FALSE(Filesystem::exists(out));
+            ++refused;
+        } else if (ImageBufAlgo::compare(read_image(out), expected, 0.0f, 0.0f).maxerror == 0.0) {
+            ++correct;
+        } else {
+            // Read between the rewrites' pieces, and whole: the same pixels.
+            FAIL_CHECK("a run read a mix and wrote it: " << log);
+        }
+    }
+    Filesystem::write_text_file(dir + "/stop", "");
+    int status = 0;
+    waitpid(writer, &status, 0);
+    CHECK(correct + refused == 20);
 }

@@ -41,7 +41,10 @@ ImageBuf render(Scene scene, double focus, const LayeringOptions& options = {})
 {
     const Camera camera = synthetic_camera(focus);
     LayeredScene layers;
-    decompose_layers(std::move(scene), CircleOfConfusion(camera, ROI(0, 120, 0, 120)), options, layers);
+    LayerBounds bounds;
+    std::string error;
+    REQUIRE(decompose_layers(std::move(scene), CircleOfConfusion(camera, ROI(0, 120, 0, 120)),
+                             options, layers, bounds, error));
     ImageBuf out;
     REQUIRE(defocus_layers(out, layers, camera));
     return out;
@@ -137,7 +140,9 @@ TEST_CASE("a deep volume sample split across layers composites back to itself")
     options.layers = 6;
     const CircleOfConfusion coc(synthetic_camera(1.0), ROI(0, 120, 0, 120));
     LayeredScene layers;
-    decompose_layers(std::move(scene), coc, options, layers);
+    LayerBounds bounds;
+    std::string error;
+    REQUIRE(decompose_layers(std::move(scene), coc, options, layers, bounds, error));
     REQUIRE(layers.layers.size() >= 3);
     // Back to front, each layer with its own report.
     REQUIRE(layers.reports.size() == layers.layers.size());
@@ -169,7 +174,11 @@ TEST_CASE("deep samples are ordered by Z, then ZBack")
                      { 0.5f, 0.0f, 0.0f, 0.5f, 2.0f, 2.0f } };  // red, point
     scene.deep.push_back(deep);
     LayeredScene layers;
-    decompose_layers(std::move(scene), CircleOfConfusion(synthetic_camera(1.0), ROI(0, 120, 0, 120)), {}, layers);
+    LayerBounds bounds;
+    std::string error;
+    REQUIRE(decompose_layers(std::move(scene),
+                             CircleOfConfusion(synthetic_camera(1.0), ROI(0, 120, 0, 120)), {},
+                             layers, bounds, error));
     float out[4];
     composite_pixel(layers.layers, 0, 0, out);
     CHECK(out[0] == Approx(0.5f));   // red in front

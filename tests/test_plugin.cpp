@@ -21,7 +21,14 @@ using Strutil::fmt::format;
 
 namespace {
 
-const std::string with_plugin = "OIIO_LIBRARY_PATH=" PLUGIN_DIR " ";
+/// oiiotool and python3 load the plugin; a sanitized plugin needs the
+/// sanitizer runtime loaded into them first.
+std::string plugin_environment()
+{
+    const std::string preload = SANITIZER_PRELOAD;
+    return (preload.empty() ? "" : "LD_PRELOAD=" + preload + " ") + "OIIO_LIBRARY_PATH=" PLUGIN_DIR " ";
+}
+const std::string with_plugin = plugin_environment();
 
 /// A .dof of the garden scene (85 mm f/1.4, focus 3 m) from ../shared, or
 /// of a generated scene when that is absent.
@@ -234,7 +241,21 @@ TEST_CASE("a broken .dof is an error line from oiiotool, never a crash")
     // past the parser's catch, out of the plugin, ending oiiotool.
     Filesystem::write_text_file(dir + "/overflow.dof",
                                 "{\"version\": 1, \"inputs\": [], \"camera\": {\"focus\": 96e379}}");
+    // Windows OpenImageIO cannot allocate crashed it: a grown window of
+    // 100052x100036 from a blur of 1e5 px, and a damaged input declaring
+    // 200000x200000. open() refuses a spec beyond the memory limit.
+    write_exr_header_only(dir + "/giant.exr", 200000, 200000);
+    write_exr_header_only(dir + "/small.exr", 64, 64);
+    Filesystem::write_text_file(dir + "/giant_input.dof",
+                                "{\"version\": 1, \"inputs\": [\"giant.exr\"], \"camera\": "
+                                "{\"focus\": 3}}");
+    Filesystem::write_text_file(dir + "/giant_blur.dof",
+                                "{\"version\": 1, \"inputs\": [\"small.exr\"], \"camera\": "
+                                "{\"focus\": 3, \"max_blur\": 100000}, \"output\": "
+                                "{\"window\": \"grown\"}}");
     const std::pair<const char*, const char*> cases[] = {
+        { "giant_input.dof", "a 200000x200000 result needs 596 GB, more than the memory limit" },
+        { "giant_blur.dof", "a window grown by blur up to 100000 px needs" },
         { "bad_json.dof", "bad_json.dof: not valid JSON: parse error at line 1" },
         { "overflow.dof", "overflow.dof: not valid JSON: number overflow" },
         { "missing.dof", "missing.dof: inputs: " },

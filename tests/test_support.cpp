@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <stdexcept>
 
 #include <unistd.h>
 
@@ -21,7 +22,10 @@ defocus::LayeredScene layered_scene(defocus::Scene scene, const defocus::Camera&
 {
     defocus::LayeredScene out;
     const defocus::CircleOfConfusion coc(camera, scene.spec.roi_full());
-    defocus::decompose_layers(std::move(scene), coc, {}, out);
+    defocus::LayerBounds bounds;
+    std::string error;
+    if (!defocus::decompose_layers(std::move(scene), coc, {}, out, bounds, error))
+        throw std::runtime_error(error);
     return out;
 }
 
@@ -221,6 +225,46 @@ std::string scratch_dir(const std::string& name)
     Filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     return dir;
+}
+
+void write_exr_header_only(const std::string& path, int width, int height)
+{
+    std::string file("\x76\x2f\x31\x01\x02\0\0\0", 8);  // magic, version 2, scanline
+    auto put = [&](const void* data, size_t size) {
+        file.append(static_cast<const char*>(data), size);
+    };
+    auto attribute = [&](const std::string& name, const std::string& type,
+                         const std::string& value) {
+        file += name + '\0' + type + '\0';
+        const int32_t size = int32_t(value.size());
+        put(&size, 4);
+        file += value;
+    };
+    auto bytes = [](std::initializer_list<int32_t> values) {
+        return std::string(reinterpret_cast<const char*>(values.begin()), values.size() * 4);
+    };
+    std::string channels;
+    for (const char* name : { "A", "B", "G", "R", "Z" })
+        channels += std::string(name) + '\0' + bytes({ 1 /* half */, 0, 1, 1 });
+    channels += '\0';
+    const std::string box = bytes({ 0, 0, width - 1, height - 1 });
+    const float one = 1.0f, centre[2] = { 0.0f, 0.0f };
+    attribute("channels", "chlist", channels);
+    attribute("compression", "compression", std::string(1, '\3'));  // zip: 16 rows a chunk
+    attribute("dataWindow", "box2i", box);
+    attribute("displayWindow", "box2i", box);
+    attribute("lineOrder", "lineOrder", std::string(1, '\0'));
+    attribute("pixelAspectRatio", "float", std::string(reinterpret_cast<const char*>(&one), 4));
+    attribute("screenWindowCenter", "v2f", std::string(reinterpret_cast<const char*>(centre), 8));
+    attribute("screenWindowWidth", "float", std::string(reinterpret_cast<const char*>(&one), 4));
+    file += '\0';
+    const uint64_t chunks = (uint64_t(height) + 15) / 16;
+    const uint64_t chunk_at = file.size() + chunks * 8;
+    for (uint64_t c = 0; c < chunks; ++c)
+        put(&chunk_at, 8);
+    file += bytes({ 0, 4 }) + std::string(4, '\0');  // one chunk: row 0, 4 bytes
+    if (!OIIO::Filesystem::write_binary_file(path, OIIO::cspan<char>(file.data(), file.size())))
+        throw std::runtime_error("cannot write " + path);
 }
 
 }  // namespace defocus_test

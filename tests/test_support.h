@@ -80,6 +80,12 @@ double garden_psnr(const ImageBuf& result, const ImageBuf& truth, int dx = 0, in
 /// Runs a shell command, returns its exit status; stdout+stderr into `output`.
 int run(const std::string& command, std::string& output);
 
+/// Writes a scanline OpenEXR (half R,G,B,A,Z, zip) whose header declares a
+/// `width` x `height` data window, with its chunk table but one tiny
+/// chunk: what a damaged or hostile header looks like to a reader that
+/// trusts it.
+void write_exr_header_only(const std::string& path, int width, int height);
+
 /// The shared data folder (../shared/data beside the source tree, or
 /// $DEFOCUS_SHARED_DATA), or "" when it is absent.
 std::string shared_data();

@@ -245,10 +245,10 @@ std::string verbose_report(const FrameResult& frame, const CommandLine& cl,
     if (!cl.shot.spread.psf_image.empty())
         r += format("  hybrid: {} of {} pixels ({:.2f}%) spread with the PSF image\n", slow,
                     covered, covered ? 100.0 * slow / covered : 0.0);
-    r += format("  pixels fixed: {} with NaN/inf colour dropped, {} with bad depth taken as "
-                "infinitely far, {} transparent with colour cleared, {} edge pixels without "
-                "depth given their neighbours'\n",
-                frame.fixed.nonfinite_color, frame.fixed.bad_depth,
+    r += format("  pixels fixed: {} with NaN/inf colour dropped, {} with colour beyond 1e30 "
+                "clamped, {} with bad depth taken as infinitely far, {} transparent with "
+                "colour cleared, {} edge pixels without depth given their neighbours'\n",
+                frame.fixed.nonfinite_color, frame.fixed.huge_color, frame.fixed.bad_depth,
                 frame.fixed.transparent_light, frame.fixed.edge_depth);
     for (const auto& [stage, seconds] : frame.timings)
         r += format("  {:<10} {:7.3f} s\n", stage, seconds);
@@ -364,7 +364,8 @@ int main(int argc, const char* argv[])
         progress.frame_over();
         return ok;
     };
-    const ScheduleResult run = run_frames(int(frames.size()), cl.threads, cl.stop_on_error,
+    const ScheduleResult run = run_frames(int(frames.size()), cl.threads,
+                                          shot.read.memory_limit.bytes(), cl.stop_on_error,
                                           render_one);
     progress.finish();
     if (sequence) {

@@ -22,7 +22,8 @@ size_t peak_resident_bytes()
 
 }  // namespace
 
-ScheduleResult run_frames(int count, int threads, bool stop_on_error, const FrameJob& job)
+ScheduleResult run_frames(int count, int threads, size_t memory_limit, bool stop_on_error,
+                          const FrameJob& job)
 {
     ScheduleResult result;
     if (count <= 0)
@@ -40,8 +41,7 @@ ScheduleResult run_frames(int count, int threads, bool stop_on_error, const Fram
         return result;
     const size_t peak      = peak_resident_bytes();
     const size_t per_frame = std::max(peak > before ? peak - before : 0, size_t(64) << 20);
-    const size_t budget    = OIIO::Sysutil::physical_memory() / 2;
-    const int workers = int(std::clamp<size_t>(budget / per_frame, 1,
+    const int workers = int(std::clamp<size_t>(memory_limit / per_frame, 1,
                                                size_t(std::min(cores, count - 1))));
 
     std::atomic<int> next { 1 };

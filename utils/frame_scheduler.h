@@ -1,6 +1,7 @@
-// Running the frames of a sequence on all cores within the machine's memory.
+// Running the frames of a sequence on all cores within the memory limit.
 #pragma once
 
+#include <cstddef>
 #include <functional>
 #include <vector>
 
@@ -16,11 +17,12 @@ struct ScheduleResult {
 
 /// Runs frames 0..count-1 in order of starting. The first runs alone; its
 /// peak memory then sets how many frames may run at once (up to one per
-/// core, within half the machine's memory in all). One frame alone rarely
+/// core, within `memory_limit` bytes in all). One frame alone rarely
 /// fills the cores (checking, reading and writing EXR are largely serial);
 /// frames side by side do. Every frame uses all of the shared thread pool,
 /// so that no core idles while the last frames finish. With
 /// `stop_on_error`, no frame starts after one has failed.
-ScheduleResult run_frames(int count, int threads, bool stop_on_error, const FrameJob& job);
+ScheduleResult run_frames(int count, int threads, size_t memory_limit, bool stop_on_error,
+                          const FrameJob& job);
 
 }  // namespace defocus

@@ -98,8 +98,10 @@ bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, Layer
     const CircleOfConfusion coc(out.camera, scene.spec.roi_full());
     const bool to_slice = !scene.flat.empty() || !scene.deep.empty();
     const size_t layers_given = scene.layers.size();
-    const LayerBounds bounds =
-        decompose_layers(std::move(scene), coc, shot.layering, layered, nthreads);
+    LayerBounds bounds;
+    if (!decompose_layers(std::move(scene), coc, shot.layering, layered, bounds, error,
+                          nthreads))
+        return fail();
     layered.luma = luma_weights(color.config.get());
     if (to_slice) {
         std::vector<std::string> edges;
@@ -117,6 +119,27 @@ bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, Layer
 }
 
 namespace {
+
+/// A bound on what spreading the layers holds at once: each layer grown by
+/// its blur's reach, the result and an accumulator over all of them.
+double spread_bytes(const LayeredScene& layered)
+{
+    double bytes = 0.0;
+    ROI all = layered.spec.roi();
+    for (size_t i = 0; i < layered.layers.size(); ++i) {
+        const LayerReport& r = layered.reports[i];
+        const int reach =
+            int(std::ceil(0.5 * std::max(std::abs(r.coc_min), std::abs(r.coc_max)))) + 1;
+        ROI grown = layered.layers[i].color.roi();
+        grown.xbegin -= reach;
+        grown.xend += reach;
+        grown.ybegin -= reach;
+        grown.yend += reach;
+        bytes += double(grown.npixels()) * 5 * sizeof(float);
+        all = roi_union(all, grown);
+    }
+    return bytes + 2.0 * double(all.npixels()) * 4 * sizeof(float);
+}
 
 /// A frame from its prepared layers to the image to write. Errors do not
 /// name the source: the caller does.
@@ -138,6 +161,14 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
         }
         lap("focus map");
     } else {
+        const double bytes = spread_bytes(layered);
+        if (!shot.read.memory_limit.allows(bytes)) {
+            error = shot.read.memory_limit.exceeded(
+                format("spreading {} layers with blur up to {:g} px", layered.layers.size(),
+                       out.camera.max_blur_px),
+                bytes);
+            return false;
+        }
         const int extended = extend_edges(layered, coc, shot.edge, nthreads);
         if (extended > 0)
             out.edges = format("edges: layers extended up to {} px past the data window ({}; "
@@ -183,9 +214,32 @@ bool frame_spec(const Shot& shot, int frame, const ShotAssets& assets, ImageSpec
     if (shot.output == OutputKind::Image && shot.window == OutputWindow::Input)
         window = input.roi();
     if (shot.output == OutputKind::Image && shot.window == OutputWindow::Grown) {
+        // Finding the window spreads a probe as far as the largest blur
+        // reaches: no further than half the largest blur past the data
+        // window, with a margin for block alignment and lateral CA.
+        const double reach = 0.5 * camera.max_blur_px + 64
+                             + std::abs(camera.lateral_ca) * (input.full_width + input.full_height);
+        const double probe_bytes = (window.width() + 2 * reach) * (window.height() + 2 * reach)
+                                   * 4 * sizeof(float);
+        if (!shot.read.memory_limit.allows(probe_bytes)) {
+            error = format("{}: {}", Strutil::join(frame_inputs(shot, frame), " "),
+                           shot.read.memory_limit.exceeded(
+                               format("a window grown by blur up to {:g} px", camera.max_blur_px),
+                               probe_bytes));
+            return false;
+        }
         if (!largest_grown_window(window, input, camera, shot.spread, assets.aperture, error))
             return false;
         window = roi_union(window, display);
+    }
+    // A host allocates what the spec says (OpenImageIO crashes on windows
+    // near 100000 pixels square), so a spec is a promise the frame fits.
+    const double bytes = double(std::max(window.npixels(), display.npixels())) * 4 * sizeof(float);
+    if (!shot.read.memory_limit.allows(bytes)) {
+        error = format("{}: {}", Strutil::join(frame_inputs(shot, frame), " "),
+                       shot.read.memory_limit.exceeded(
+                           format("a {}x{} result", window.width(), window.height()), bytes));
+        return false;
     }
     spec = result_spec(input, window, output_pixel_type(shot, input));
     describe_output(spec, input, shot, camera, color, frame);

@@ -74,6 +74,7 @@ void erase_part_attributes(OIIO::ImageSpec& spec);
 /// What sanitize() changed, so that -v can say it.
 struct PixelCounts {
     int64_t nonfinite_color = 0;    ///< NaN or inf in R,G,B or A: dropped
+    int64_t huge_color = 0;         ///< R, G or B beyond +-1e30: clamped there
     int64_t bad_depth       = 0;    ///< Z NaN, zero or negative: moved to infinity
     int64_t transparent_light = 0;  ///< alpha <= 0 with colour: dropped
     int64_t edge_depth = 0;  ///< partly covered, no depth: given its covered neighbours'
@@ -82,6 +83,7 @@ struct PixelCounts {
 /// Makes every pixel and deep sample safe to spread, and counts what it
 /// changed:
 ///  - a pixel with NaN or inf colour or alpha is dropped (made transparent);
+///  - colour beyond +-1e30 is clamped there (float sums of it overflow);
 ///  - a pixel with alpha <= 0 carries no light: it is cleared whatever its
 ///    colour and depth (renders write Z = 0 or 1e10 there);
 ///  - a covered pixel with depth NaN, -inf, zero or negative is taken as

@@ -53,10 +53,12 @@ std::string damaged(const std::string& filename, const std::string& why)
 
 }  // namespace
 
-size_t memory_budget()
+double deep_table_bytes(int64_t width, int64_t height)
 {
-    const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
-    return pages > 0 && page > 0 ? size_t(pages) * size_t(page) / 2 : size_t(1) << 32;
+    // A sample count, a pointer per channel to the pixel's first sample
+    // (up to six channels), and the pixel's offset in the image read.
+    return double(width) * double(height)
+           * (sizeof(unsigned) + 6 * sizeof(float*) + sizeof(size_t));
 }
 
 struct ExrInput::Context {
@@ -198,7 +200,7 @@ bool ExrInput::read(int part, const std::vector<ChannelTarget>& targets, std::st
 }
 
 bool read_deep_part(const std::string& filename, int part, const DeepChannels& channels,
-                    DeepImage& image, std::string& error)
+                    const MemoryLimit& limit, DeepImage& image, std::string& error)
 {
     try {
         Imf::MultiPartInputFile file(filename.c_str());
@@ -207,9 +209,14 @@ bool read_deep_part(const std::string& filename, int part, const DeepChannels& c
         const int64_t width = int64_t(dw.max.x) - dw.min.x + 1;
         const int64_t height = int64_t(dw.max.y) - dw.min.y + 1;
         const size_t npixels = size_t(width) * size_t(height);
-        if (width <= 0 || height <= 0
-            || npixels * (sizeof(unsigned) + 6 * sizeof(float*)) > memory_budget()) {
+        if (width <= 0 || height <= 0) {
             error = damaged(filename, format("deep data window of {}x{}", width, height));
+            return false;
+        }
+        if (!limit.allows(deep_table_bytes(width, height))) {
+            error = format("{}: {}", filename,
+                           limit.exceeded(format("a deep data window of {}x{}", width, height),
+                                          deep_table_bytes(width, height)));
             return false;
         }
         const bool tiled = header.type() == Imf::DEEPTILE;
@@ -247,10 +254,21 @@ bool read_deep_part(const std::string& filename, int part, const DeepChannels& c
             lines->readPixelSampleCounts(dw.min.y, dw.max.y);
         }
         size_t total = 0;
-        for (unsigned n : counts)
+        unsigned most = 0;
+        for (unsigned n : counts) {
             total += n;
-        if (total * nchannels * sizeof(float) > memory_budget()) {
-            error = damaged(filename, format("{} deep samples is more than memory holds", total));
+            most = std::max(most, n);
+        }
+        // Each sample is held twice for a moment: as OpenEXR decodes it,
+        // one array per channel, and as the image keeps it.
+        const double sample_bytes =
+            deep_table_bytes(width, height)
+            + double(total) * (nchannels * sizeof(float) + sizeof(DeepSample));
+        if (!limit.allows(sample_bytes)) {
+            error = format("{}: {}", filename,
+                           limit.exceeded(format("{} deep samples (up to {} in one pixel)",
+                                                 total, most),
+                                          sample_bytes));
             return false;
         }
         std::vector<std::vector<float>> values(nchannels, std::vector<float>(total));

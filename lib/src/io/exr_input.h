@@ -14,13 +14,9 @@
 #include <vector>
 
 #include <defocus/scene.h>
+#include <defocus/shot/memory_limit.h>
 
 namespace defocus {
-
-/// Bytes one input may make the reader allocate: half the machine's
-/// memory. A damaged header or sample count table must not take the
-/// machine down.
-size_t memory_budget();
 
 /// Where one channel of a part is decoded to, as float: the address of the
 /// part's data window origin, and the steps to the next pixel and row.
@@ -58,10 +54,16 @@ struct DeepChannels {
     std::string color[4], depth, depth_back;
 };
 
+/// Bytes of a deep part's per-pixel tables over a data window of
+/// `width` x `height`, before its samples.
+double deep_table_bytes(int64_t width, int64_t height);
+
 /// Reads deep part `part` (scanline or tiled) of an OpenEXR file, with
 /// every sample's RGBA, Z and ZBack (ZBack = Z without one). False with
-/// `error` when the file is damaged or needs more memory than is sane.
+/// `error` when the file is damaged, or would need more memory than
+/// `limit` (checked on the data window, then on the sample counts, before
+/// either is allocated).
 bool read_deep_part(const std::string& filename, int part, const DeepChannels& channels,
-                    DeepImage& image, std::string& error);
+                    const MemoryLimit& limit, DeepImage& image, std::string& error);
 
 }  // namespace defocus

@@ -1,7 +1,10 @@
 #include <defocus/io/frames.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdlib>
+#include <filesystem>
+#include <regex>
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/strutil.h>
@@ -68,6 +71,43 @@ bool parse_frame_pattern(const std::string& path, std::string& normalized,
     return Filesystem::parse_pattern(path.c_str(), 0, normalized, range);
 }
 
+/// The frames of a printf pattern ("shot.%04d.exr", as parse_pattern
+/// gives it) that name entries of its folder, in order. What an entry is
+/// does not matter here: a symbolic link loop or a folder among the frames
+/// is that frame's error when it is read. (OpenImageIO's scan stops at the
+/// first entry it cannot examine, dropping the frames after it.)
+std::vector<int> scan_frames(const std::string& pattern)
+{
+    const std::string folder = Filesystem::parent_path(pattern);
+    const std::string name = Filesystem::filename(pattern);
+    const std::regex number("%0?([0-9]*)d");
+    std::smatch found;
+    if (!std::regex_search(name, found, number))
+        return {};
+    auto literal = [](const std::string& text) {
+        return std::regex_replace(text, std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)");
+    };
+    // The digits the pattern writes: padded to the width, with no leading
+    // zero past it.
+    const std::string width = found[1].str();
+    const std::string digits = width.empty() || width == "0"
+                                   ? "(0|[1-9][0-9]*)"
+                                   : "([0-9]{" + width + "}|[1-9][0-9]{" + width + ",})";
+    const std::regex frame_name(literal(found.prefix()) + digits + literal(found.suffix()));
+    std::vector<int> frames;
+    std::error_code ec;
+    for (std::filesystem::directory_iterator it(folder.empty() ? "." : folder, ec), end;
+         !ec && it != end; it.increment(ec)) {
+        const std::string entry = it->path().filename().string();
+        std::smatch frame;
+        if (std::regex_match(entry, frame, frame_name) && frame[1].length() <= 9)
+            frames.push_back(std::stoi(frame[1]));
+    }
+    std::sort(frames.begin(), frames.end());
+    frames.erase(std::unique(frames.begin(), frames.end()), frames.end());
+    return frames;
+}
+
 }  // namespace
 
 bool is_frame_pattern(const std::string& path)
@@ -123,9 +163,8 @@ bool shot_frames(const Shot& shot, std::vector<int>& frames, std::string& error)
             continue;
         if (!range.empty())
             return enumerate_frames(range, frames, error, input);
-        std::vector<std::string> names;
-        if (!Filesystem::scan_for_matching_filenames(normalized, frames, names)
-            || frames.empty()) {
+        frames = scan_frames(normalized);
+        if (frames.empty()) {
             error = format("{}: no files match (give --frames to name them)", input);
             return false;
         }

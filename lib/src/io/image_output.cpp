@@ -1,8 +1,11 @@
 #include <defocus/io/image_output.h>
 
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <map>
 #include <vector>
 
@@ -32,6 +35,34 @@ const std::map<std::string, std::vector<std::string>>& compressions()
         { "jpeg", { "jpeg" } },
     };
     return names;
+}
+
+/// Writes `bytes` to `path`, every write checked; false with `error` the
+/// system's reason (a full disk, a file size limit).
+bool write_bytes(const std::string& path, const std::vector<unsigned char>& bytes,
+                 std::string& error)
+{
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    if (fd < 0) {
+        error = std::strerror(errno);
+        return false;
+    }
+    for (size_t done = 0; done < bytes.size();) {
+        const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n <= 0) {
+            error = std::strerror(n < 0 ? errno : ENOSPC);
+            ::close(fd);
+            return false;
+        }
+        done += size_t(n);
+    }
+    if (::close(fd) != 0) {
+        error = std::strerror(errno);
+        return false;
+    }
+    return true;
 }
 
 }  // namespace
@@ -90,11 +121,23 @@ bool write_atomic(const std::string& filename,
         const std::string why = OIIO::geterror();  // geterror() clears it: read once
         return fail(why.empty() ? "no format writes this file type" : why);
     }
+    // OpenEXR and TIFF report a write that fails. OpenImageIO's other
+    // writers do not: on a full disk PNG left a truncated file and said
+    // nothing, and libjpeg ended the process. Those files (small, 8 or 16
+    // bits) are encoded in memory and written here, every write checked.
+    const std::string format = out->format_name();
+    Filesystem::IOVecOutput memory;
+    const bool in_memory =
+        format != "openexr" && format != "tiff" && out->supports("ioproxy")
+        && out->set_ioproxy(&memory);
     if (!write(*out, tmp) || !out->close()) {
         const std::string why = out->geterror();
         return fail(why.empty() ? "cannot write" : why);
     }
     out.reset();
+    std::string why;
+    if (in_memory && !write_bytes(tmp, memory.buffer(), why))
+        return fail("cannot write: " + why);
     return temporary.commit(error);
 }
 

@@ -1,5 +1,6 @@
 #include <defocus/scene.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -17,6 +18,11 @@ namespace {
 const float infinity = std::numeric_limits<float>::infinity();
 /// Depths from here on are a renderer's "no surface" (1e10 in most).
 const float empty_depth = 1e9f;
+
+/// Colour beyond this is clamped to it. Spreading sums light in float,
+/// whose limit is 3.4e38: colour near that (finite, but no render's) made
+/// the sums overflow into NaN. 1e30 leaves room for a sum of 3e8 pixels.
+const float largest_color = 1e30f;
 
 /// Applies the rules of sanitize() to one pixel or sample; counts into n.
 /// Returns false when the pixel carries no light (and has been cleared).
@@ -36,14 +42,21 @@ bool sanitize_one(float& r, float& g, float& b, float& a, float& z, PixelCounts&
         ++n.bad_depth;
         z = infinity;
     }
+    if (std::max({ std::abs(r), std::abs(g), std::abs(b) }) > largest_color) {
+        ++n.huge_color;
+        for (float* c : { &r, &g, &b })
+            *c = std::clamp(*c, -largest_color, largest_color);
+    }
     return true;
 }
 
 struct AtomicCounts {
-    std::atomic<int64_t> nonfinite { 0 }, depth { 0 }, transparent { 0 }, edge { 0 };
+    std::atomic<int64_t> nonfinite { 0 }, huge { 0 }, depth { 0 }, transparent { 0 },
+        edge { 0 };
     void add(const PixelCounts& n)
     {
         nonfinite += n.nonfinite_color;
+        huge += n.huge_color;
         depth += n.bad_depth;
         transparent += n.transparent_light;
         edge += n.edge_depth;
@@ -136,7 +149,7 @@ PixelCounts sanitize(Scene& scene, int nthreads)
             sanitize_deep(image, counts, nthreads);
             return true;
         });
-    return { counts.nonfinite, counts.depth, counts.transparent, counts.edge };
+    return { counts.nonfinite, counts.huge, counts.depth, counts.transparent, counts.edge };
 }
 
 }  // namespace defocus

@@ -164,10 +164,8 @@ bool read_pixels(ImageInput& in, const Part& part, ImageBuf& pixels,
 bool allocate_layer(const std::string& name, const ROI& window, const ImageSpec& from,
                     Layer& layer, const std::string& filename, std::string& error)
 {
-    const size_t bytes = size_t(window.npixels()) * 5 * sizeof(float);
-    if (window.npixels() <= 0 || bytes > memory_budget()) {
-        error = format("{}: a data window of {}x{} does not fit in memory", filename,
-                       window.width(), window.height());
+    if (window.npixels() <= 0) {
+        error = format("{}: an empty data window", filename);
         return false;
     }
     auto layer_spec = [&](int nchannels) {
@@ -474,6 +472,41 @@ bool choose_parts(ImageInput& in, const std::string& filename, const ReadOptions
     return true;
 }
 
+/// Bytes of float pixels over a part's data window, `channels` a pixel.
+double window_bytes(const ImageSpec& spec, int channels)
+{
+    return double(spec.width) * double(spec.height) * channels * sizeof(float);
+}
+
+/// What reading a file's chosen parts will allocate, from their headers
+/// (a deep part's samples are counted once its sample counts are read):
+/// checked against the memory limit before anything is allocated.
+bool fits_memory_limit(const FileLayout& layout, bool openexr, const std::string& filename,
+                       const MemoryLimit& limit, std::string& error)
+{
+    double bytes = 0.0;
+    auto flat = [&](const Part& part) {
+        bytes += window_bytes(part.spec, 5);  // the layer: RGBA + Z
+        if (!openexr)                          // and the file's channels, read first
+            bytes += window_bytes(part.spec, part.spec.nchannels);
+    };
+    for (size_t i : layout.complete)
+        if (layout.parts[i].spec.deep)
+            bytes += deep_table_bytes(layout.parts[i].spec.width, layout.parts[i].spec.height);
+        else
+            flat(layout.parts[i]);
+    if (layout.joined_color >= 0)
+        flat(layout.parts[layout.joined_color]);
+    if (layout.joined_depth >= 0)
+        bytes += window_bytes(layout.parts[layout.joined_depth].spec, openexr ? 1 : 4);
+    if (limit.allows(bytes))
+        return true;
+    const ROI& w = layout.data_window;
+    error = format("{}: {}", filename,
+                   limit.exceeded(format("a data window of {}x{}", w.width(), w.height()), bytes));
+    return false;
+}
+
 /// Checks that a file shares the display window of the scene's first.
 bool same_display_window(const ImageSpec& first, const ImageSpec& scene,
                          const std::string& filename, std::string& error)
@@ -490,8 +523,8 @@ bool same_display_window(const ImageSpec& first, const ImageSpec& scene,
 /// Lays a flat render's depth from its own file (--depth FILE) into `layer`:
 /// the Z channel of the file's first part, or its only channel. The file
 /// must share the render's display window (`render`).
-bool read_depth_file(const std::string& filename, const ImageSpec& render, Layer& layer,
-                     std::string& error)
+bool read_depth_file(const std::string& filename, const ImageSpec& render,
+                     const MemoryLimit& limit, Layer& layer, std::string& error)
 {
     ExrInput exr;
     auto in = open_file(filename, &exr, error);
@@ -512,6 +545,13 @@ bool read_depth_file(const std::string& filename, const ImageSpec& render, Layer
     }
     if (!same_display_window(spec, render, filename, error))
         return false;
+    const double bytes = window_bytes(spec, is_openexr(filename) ? 1 : spec.nchannels);
+    if (!limit.allows(bytes)) {
+        error = format("{}: {}", filename,
+                       limit.exceeded(format("a depth image of {}x{}", spec.width, spec.height),
+                                      bytes));
+        return false;
+    }
     ImageBuf depth;
     if (is_openexr(filename)) {
         depth = depth_image(spec.roi(), spec);
@@ -534,7 +574,8 @@ bool read_file(const std::string& filename, const ReadOptions& options,
     ExrInput exr;
     auto in = open_file(filename, &exr, error);
     FileLayout layout;
-    if (!in || !choose_parts(*in, filename, options, layout, error))
+    if (!in || !choose_parts(*in, filename, options, layout, error)
+        || !fits_memory_limit(layout, is_openexr(filename), filename, options.memory_limit, error))
         return false;
     auto layer_name = [](const Part& part, const char* fallback) -> std::string {
         return part.spec.get_string_attribute("name", format("{}{}", fallback, part.subimage));
@@ -554,7 +595,8 @@ bool read_file(const std::string& filename, const ReadOptions& options,
                 names.depth_back = part.spec.channelnames[zback];
             DeepImage image;
             image.name = layer_name(part, "deep");
-            if (!read_deep_part(filename, part.subimage, names, image, error))
+            if (!read_deep_part(filename, part.subimage, names, options.memory_limit, image,
+                                error))
                 return false;
             scene.deep.push_back(std::move(image));
             continue;
@@ -573,7 +615,8 @@ bool read_file(const std::string& filename, const ReadOptions& options,
         if (!read_layer(exr, *in, filename, name, color_part, depth_part, layer, error))
             return false;
         if (!layout.depth_file.empty()) {
-            if (!read_depth_file(layout.depth_file, color_part.spec, layer, error))
+            if (!read_depth_file(layout.depth_file, color_part.spec, options.memory_limit, layer,
+                                 error))
                 return false;
             scene.notes.push_back("depth from " + layout.depth_file);
         }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <new>
 
 #include <OpenImageIO/parallel.h>
 
@@ -23,6 +24,8 @@ ImageBuf clamped_copy(const ImageBuf& image, const ROI& grown, int nthreads)
     ImageSpec spec = image.spec();
     spec.set_roi(grown);
     ImageBuf out(spec, InitializePixels::No);
+    if (!out.localpixels())
+        throw std::bad_alloc();  // callers check sizes first: this is the last guard
     const size_t pixel_bytes = spec.pixel_bytes();
     parallel_for(grown.ybegin, grown.yend, [&](int y) {
         const int sy = std::clamp(y, inside.ybegin, inside.yend - 1);

@@ -268,12 +268,51 @@ std::vector<bool> hidden_under_nearer(const Fragments& frags, const Layer& layer
     return holes;
 }
 
-void slice(const Fragments& frags, const std::string& base, const LayerBounds& bounds,
-           std::vector<Layer>& layers, int nthreads)
+/// Bytes of a layer's RGBA and Z over `roi`.
+double layer_bytes(const ROI& roi)
 {
+    return double(roi.npixels()) * 5 * sizeof(float);
+}
+
+/// A bound on the bytes of a deep image's fragments: volume samples are
+/// split at every layer plane they cross, and the fragments are held twice
+/// for a moment (per row, then together).
+double deep_fragment_bytes(const DeepImage& deep, const LayerBounds& bounds)
+{
+    double fragments = 0.0;
+    for (const DeepSample& s : deep.samples)
+        fragments += s.zback > s.z && std::isfinite(s.zback) ? bounds.count() : 1;
+    return 2.0 * (fragments + double(deep.roi.npixels())) * sizeof(Fragment)
+           + double(deep.roi.npixels()) * sizeof(uint64_t);
+}
+
+/// "cutting NAME into N layers needs X, more than the memory limit"
+std::string cutting_exceeds(const MemoryLimit& limit, const std::string& name,
+                            const LayerBounds& bounds, double bytes)
+{
+    return limit.exceeded(Strutil::fmt::format("cutting '{}' into {} layers", name,
+                                               bounds.count()),
+                          bytes);
+}
+
+/// Cuts one flat render's or deep image's fragments into layers, appended
+/// to `layers`. `held` counts the bytes the layers cut so far hold; false
+/// with `error` when the next layer would take them past `limit`.
+bool slice(const Fragments& frags, const std::string& base, const LayerBounds& bounds,
+           const MemoryLimit& limit, double& held, std::vector<Layer>& layers,
+           std::string& error, int nthreads)
+{
+    const double fragment_bytes =
+        double(frags.items.size()) * sizeof(Fragment) + double(frags.offsets.size()) * 8;
     // ImageBuf's move may throw, so a vector that grows copies its layers.
     layers.reserve(layers.size() + bounds.count());
     for (int k = 0; k < bounds.count(); ++k) {
+        // A layer is made over all of the fragments' window, then cropped.
+        const double need = held + fragment_bytes + layer_bytes(frags.roi);
+        if (!limit.allows(need)) {
+            error = cutting_exceeds(limit, base, bounds, need);
+            return false;
+        }
         Layer layer;
         layer.name = Strutil::fmt::format("{}.{:02d}", base, k);
         if (!extract_layer(frags, k, layer, nthreads))
@@ -288,8 +327,10 @@ void slice(const Fragments& frags, const std::string& base, const LayerBounds& b
                                    box_half_width(0.5 * c) + 1.0, nthreads);
         }
         crop_to_content(layer, nthreads);
+        held += layer_bytes(layer.color.roi());
         layers.push_back(std::move(layer));
     }
+    return true;
 }
 
 }  // namespace
@@ -387,23 +428,34 @@ LayerBounds choose_layer_bounds(const Scene& scene, const CircleOfConfusion& coc
     return LayerBounds(std::move(bounds), options.soft_band);
 }
 
-LayerBounds decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
-                             const LayeringOptions& options, LayeredScene& layered,
-                             int nthreads)
+bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
+                      const LayeringOptions& options, LayeredScene& layered,
+                      LayerBounds& bounds, std::string& error, int nthreads)
 {
-    const LayerBounds bounds = choose_layer_bounds(scene, coc, options);
+    bounds = choose_layer_bounds(scene, coc, options);
+    double held = 0.0;
+    for (const Layer& layer : scene.layers)
+        held += layer_bytes(layer.color.roi());
     for (const Layer& flat : scene.flat)
-        slice(flat_fragments(flat, coc, bounds, nthreads), flat.name, bounds,
-              scene.layers, nthreads);
-    for (const DeepImage& deep : scene.deep)
-        slice(deep_fragments(deep, coc, bounds, nthreads), deep.name, bounds,
-              scene.layers, nthreads);
+        if (!slice(flat_fragments(flat, coc, bounds, nthreads), flat.name, bounds,
+                   options.memory_limit, held, scene.layers, error, nthreads))
+            return false;
+    for (const DeepImage& deep : scene.deep) {
+        const double fragments = held + deep_fragment_bytes(deep, bounds);
+        if (!options.memory_limit.allows(fragments)) {
+            error = cutting_exceeds(options.memory_limit, deep.name, bounds, fragments);
+            return false;
+        }
+        if (!slice(deep_fragments(deep, coc, bounds, nthreads), deep.name, bounds,
+                   options.memory_limit, held, scene.layers, error, nthreads))
+            return false;
+    }
     layered.source = std::move(scene.source);
     layered.spec = std::move(scene.spec);
     layered.layers = std::move(scene.layers);
     order_layers(layered, coc, nthreads);
     scene = Scene();
-    return bounds;
+    return true;
 }
 
 }  // namespace defocus

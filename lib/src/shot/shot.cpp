@@ -111,6 +111,15 @@ const std::vector<SettingRule>& rules()
              [](auto& s) -> auto& { return s.read.depth; }),
         number({ "depth-scale", "scene", "depth_scale", K::Number },
                [](auto& s) -> auto& { return s.read.depth_scale; }, 1e-9, 1e9),
+        // One limit, held by both stages that allocate what files ask for.
+        { { "memory-limit", "scene", "memory_limit", K::Text },
+          [](Shot& shot, const std::string& label, const std::string& value, std::string& error) {
+              if (!MemoryLimit::parse(label, value, shot.read.memory_limit, error))
+                  return false;
+              shot.layering.memory_limit = shot.read.memory_limit;
+              return true;
+          },
+          [](const Shot& shot) { return shot.read.memory_limit.to_string(); } },
 
         keyframes({ "focus", "camera", "focus", K::Keyframes }, &Shot::focus, 1, 1e-6,
                   1e30, &Shot::focus_at),

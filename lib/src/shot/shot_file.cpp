@@ -293,6 +293,15 @@ bool load_shot(const std::string& filename, Shot& shot, std::string& error)
         error = filename + ": no such file";
         return false;
     }
+    // A scene file is a few KB; parsing 100 MB of JSON takes seconds and
+    // gigabytes before it can say what is wrong.
+    constexpr uint64_t largest = uint64_t(16) << 20;
+    if (const uint64_t size = OIIO::Filesystem::file_size(filename); size > largest) {
+        error = OIIO::Strutil::fmt::format("{}: {} MB is too large for a .dof scene file "
+                                           "(at most 16 MB)",
+                                           filename, size >> 20);
+        return false;
+    }
     if (!OIIO::Filesystem::read_text_file(filename, text)) {
         error = filename + ": cannot read";
         return false;

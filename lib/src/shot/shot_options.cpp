@@ -104,6 +104,11 @@ const std::vector<ShotOption>& shot_options()
           "Depth layers to cut deep and flat inputs into, spaced evenly in CoC (default: "
           "0 = automatic: boundaries in the gaps between objects, at most 24 px of CoC "
           "per layer)" },
+        { G::Scene, "--memory-limit SIZE", "memory-limit",
+          "The most memory a frame's images may take, e.g. 12G or 512M. A file whose "
+          "header asks for more (a giant data window, a deep file with billions of "
+          "samples) is refused before anything is allocated (default: half the "
+          "machine's memory)" },
 
         { G::InputColor, "--colorconfig FILE", "colorconfig",
           "OCIO config (default: $OCIO, else the config shipped with defocus)" },

@@ -65,10 +65,11 @@ SplitWeights split_weights(float front_weight, float a);
 /// composited front to back with an alpha-weighted Z. A flat render's
 /// hidden background, the part of a layer behind nearer layers that one
 /// render cannot see, is filled from the layer's visible surroundings (see
-/// fill_hidden_background). Returns the bounds used.
-LayerBounds decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
-                             const LayeringOptions& options, LayeredScene& layered,
-                             int nthreads = 0);
+/// fill_hidden_background). Sets `bounds` to the bounds used. False with
+/// `error` when the layers would take more than options.memory_limit.
+bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
+                      const LayeringOptions& options, LayeredScene& layered,
+                      LayerBounds& bounds, std::string& error, int nthreads = 0);
 
 /// Push-pull hole filling (Gortler et al. 1996): the pixels of `layer`
 /// flagged in `holes` (hidden behind nearer layers) take the average of

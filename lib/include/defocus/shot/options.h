@@ -5,6 +5,7 @@
 #include <string>
 
 #include <defocus/shot/aperture.h>
+#include <defocus/shot/memory_limit.h>
 
 namespace defocus {
 
@@ -38,6 +39,8 @@ struct ReadOptions {
     /// (its Z channel, or its only channel) over the same display window
     /// ("" = the input's Z).
     std::string depth;
+    /// What a file may ask to allocate (the shot's --memory-limit).
+    MemoryLimit memory_limit;
 };
 
 /// How flat renders and deep images are cut into depth layers.
@@ -49,6 +52,8 @@ struct LayeringOptions {
     /// Width in pixels of CoC of the band around each boundary in which
     /// content belongs to both neighbouring layers (0: hard slicing).
     double soft_band = 1.5;
+    /// What the layers cut may take (the shot's --memory-limit).
+    MemoryLimit memory_limit;
 };
 
 /// What lies beyond the frame's data window when a blur reaches past it.

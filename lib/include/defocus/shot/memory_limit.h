@@ -1,0 +1,35 @@
+// The memory one frame's images may take (--memory-limit). Files declare
+// their own sizes, and a damaged or hostile header can declare terabytes:
+// the reader and the layering check each allocation a file asks for
+// against the limit before making it.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+namespace defocus {
+
+class MemoryLimit {
+public:
+    /// The default: half the machine's physical memory.
+    MemoryLimit() = default;
+    explicit MemoryLimit(size_t bytes) : m_bytes(bytes) {}
+
+    /// Parses a size such as "12G", "512M", "1.5T" or a number of bytes.
+    /// On failure sets `error` naming `option` and returns false.
+    static bool parse(const std::string& option, const std::string& text, MemoryLimit& limit,
+                      std::string& error);
+    /// The text parse() reads back to the same limit; "" for the default.
+    std::string to_string() const;
+
+    size_t bytes() const;
+    bool allows(double bytes) const { return bytes <= double(this->bytes()); }
+    /// "<what> needs 800 GB, more than the memory limit of 12 GB
+    /// (--memory-limit)".
+    std::string exceeded(const std::string& what, double bytes) const;
+
+private:
+    size_t m_bytes = 0;  ///< 0: the default
+};
+
+}  // namespace defocus
