@@ -15,6 +15,7 @@
 #include <set>
 
 #include <OpenColorIO/OpenColorIO.h>
+#include <OpenImageIO/deepdata.h>
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
@@ -1089,6 +1090,37 @@ TEST_CASE("a header asking for more memory than the limit is refused before allo
     CHECK(Strutil::contains(dof, "\"memory_limit\": \"1536M\""));
 }
 
+TEST_CASE("a deep pixel of two million samples renders, or is refused by the memory limit")
+{
+    const std::string dir = scratch_dir("cli_deep_samples");
+    ImageSpec spec(2, 1, 5, TypeFloat);
+    spec.channelnames = { "R", "G", "B", "A", "Z" };
+    spec.alpha_channel = 3;
+    spec.z_channel = 4;
+    spec.deep = true;
+    spec.attribute("compression", "zips");
+    ImageBuf image(spec);
+    DeepData& deep = *image.deepdata();
+    const int samples = 2000000;
+    deep.set_samples(0, samples);
+    deep.set_samples(1, 1);
+    for (int s = 0; s < samples; ++s) {
+        deep.set_deep_value(0, 3, s, 1e-4f);
+        deep.set_deep_value(0, 4, s, 1.0f + s * 1e-5f);
+    }
+    deep.set_deep_value(1, 3, 0, 1.0f);
+    deep.set_deep_value(1, 4, 0, 2.0f);
+    REQUIRE(image.write(dir + "/dense.exr"));
+    std::string log;
+    REQUIRE(run_defocus(dir + "/dense.exr -o " + dir + "/o.exr --focus 2", log) == 0);
+    CHECK(no_nan(read_image(dir + "/o.exr")));
+    REQUIRE(run_defocus(dir + "/dense.exr -o " + dir + "/p.exr --focus 2 --memory-limit 32M", log)
+            == 1);
+    CHECK(one_line_naming(log, "dense.exr: 2000001 deep samples (up to 2000000 in one pixel) "
+                               "needs"));
+    CHECK_FALSE(Filesystem::exists(dir + "/p.exr"));
+}
+
 TEST_CASE("cutting into more layers than the memory limit holds is refused")
 {
     const std::string dir = scratch_dir("cli_memory_layers");
@@ -1196,7 +1228,8 @@ TEST_CASE("an interrupted run leaves its targets as they were and no temporary f
     }
     // In a sequence, the frames written before the signal stay.
     const pid_t pid = slow_run({ scene, "-o", dir + "/s.#.exr", "--frames", "1-40" });
-    for (int wait = 0; wait < 600 && !Filesystem::exists(dir + "/s.0001.exr"); ++wait)
+    // Up to 2 minutes: a sanitized build is many times slower.
+    for (int wait = 0; wait < 2400 && !Filesystem::exists(dir + "/s.0001.exr"); ++wait)
         usleep(50000);
     REQUIRE(kill(pid, SIGTERM) == 0);
     int status = 0;
@@ -1257,7 +1290,7 @@ TEST_CASE("hostile .dof files: deep nesting, 100 MB, and inputs that are loops, 
     REQUIRE(symlink("loop_a.exr", (dir + "/loop_b.exr").c_str()) == 0);
     Filesystem::create_directory(dir + "/folder.exr");
     const std::pair<std::string, std::string> cases[] = {
-        { nested, "nested.dof: inputs: expected file names, not array" },
+        { nested, "nested.dof: arrays and objects nested more than 32 deep: not a scene file" },
         { dir + "/big.dof", "big.dof: 100 MB is too large for a .dof scene file (at most 16 MB)" },
         { dof("loop.dof", "\"loop_a.exr\""), "loop.dof: inputs:" },
         { dof("folder.dof", "\"folder.exr\""), "folder.exr: is a directory, not an image" },
@@ -1423,4 +1456,23 @@ TEST_CASE("an input overwritten while it is read: a clean error or a correct res
     int status = 0;
     waitpid(writer, &status, 0);
     CHECK(correct + refused == 20);
+}
+
+TEST_CASE("a '%' in a frame pattern's name is a character of it, not a format")
+{
+    // Found by fuzz_settings: OpenImageIO formats the whole pattern, and
+    // "a%s.#.exr" ended the process.
+    const std::string dir = scratch_dir("cli_percent_pattern");
+    const std::string scene = two_depth_scene(dir);
+    for (const char* frame : { "/a%s.0001.exr", "/a%s.0002.exr" })
+        REQUIRE(Filesystem::copy(scene, dir + frame));
+    std::string log;
+    REQUIRE(run_defocus("'" + dir + "/a%s.#.exr' -o '" + dir + "/o%x.#.exr' --focus 3", log)
+            == 0);
+    CHECK(Strutil::contains(log, "2 of 2 frames written"));
+    CHECK(Filesystem::exists(dir + "/o%x.0002.exr"));
+    REQUIRE(run_defocus("'" + dir + "/b%n.#.exr' -o '" + dir + "/o.#.exr' --focus 3 --frames 1",
+                        log)
+            == 1);
+    CHECK(Strutil::contains(log, "b%n.0001.exr: no such file"));
 }

@@ -36,6 +36,7 @@ public:
     /// Opens a file and checks its headers; false with `error` ("corrupt or
     /// truncated OpenEXR file: ...").
     bool open(const std::string& filename, std::string& error);
+    bool is_open() const { return m_context != nullptr; }
 
     /// Decodes the named channels of flat part `part` (scanline or tiled,
     /// its full-resolution level) into their targets, chunks in parallel.

@@ -71,33 +71,64 @@ bool parse_frame_pattern(const std::string& path, std::string& normalized,
     return Filesystem::parse_pattern(path.c_str(), 0, normalized, range);
 }
 
-/// The frames of a printf pattern ("shot.%04d.exr", as parse_pattern
-/// gives it) that name entries of its folder, in order. What an entry is
-/// does not matter here: a symbolic link loop or a folder among the frames
-/// is that frame's error when it is read. (OpenImageIO's scan stops at the
-/// first entry it cannot examine, dropping the frames after it.)
-std::vector<int> scan_frames(const std::string& pattern)
+/// A printf pattern as parse_pattern gives it ("shot.%04d.exr"), split at
+/// its frame number. Any other '%' is a character of the name: OpenImageIO
+/// formats the whole pattern, and aborts on "a%s.#.exr".
+struct FrameNumbering {
+    std::string prefix, suffix;
+    int width = 0;  ///< digits, zero-padded
+
+    /// The last "%d" or "%0Nd" is the frame number: it sits before the
+    /// extension, where '#' and '@' put theirs.
+    bool parse(const std::string& normalized)
+    {
+        static const std::regex number("%0?([0-9]{0,2})d");
+        std::sregex_iterator last;
+        for (std::sregex_iterator it(normalized.begin(), normalized.end(), number), end;
+             it != end; ++it)
+            last = it;
+        if (last == std::sregex_iterator())
+            return false;
+        const std::smatch& found = *last;
+        prefix = normalized.substr(0, size_t(found.position(0)));
+        suffix = found.suffix();
+        width  = found[1].length() ? std::stoi(found[1]) : 0;
+        return true;
+    }
+    std::string path(int frame) const
+    {
+        return format("{}{:0{}d}{}", prefix, frame, width, suffix);
+    }
+};
+
+/// The frames of a pattern that name entries of its folder, in order.
+/// What an entry is does not matter here: a symbolic link loop or a folder
+/// among the frames is that frame's error when it is read. (OpenImageIO's
+/// scan stops at the first entry it cannot examine, dropping the frames
+/// after it.)
+std::vector<int> scan_frames(const FrameNumbering& pattern)
 {
-    const std::string folder = Filesystem::parent_path(pattern);
-    const std::string name = Filesystem::filename(pattern);
-    const std::regex number("%0?([0-9]*)d");
-    std::smatch found;
-    if (!std::regex_search(name, found, number))
-        return {};
+    const size_t slash = pattern.prefix.rfind('/');
+    const std::string folder =
+        slash == std::string::npos ? "." : pattern.prefix.substr(0, std::max<size_t>(slash, 1));
+    const std::string name_prefix =
+        slash == std::string::npos ? pattern.prefix : pattern.prefix.substr(slash + 1);
+    if (pattern.suffix.find('/') != std::string::npos)
+        return {};  // the frame number in a folder's name
     auto literal = [](const std::string& text) {
         return std::regex_replace(text, std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)");
     };
     // The digits the pattern writes: padded to the width, with no leading
     // zero past it.
-    const std::string width = found[1].str();
-    const std::string digits = width.empty() || width == "0"
+    const std::string width = std::to_string(pattern.width);
+    const std::string digits = pattern.width == 0
                                    ? "(0|[1-9][0-9]*)"
                                    : "([0-9]{" + width + "}|[1-9][0-9]{" + width + ",})";
-    const std::regex frame_name(literal(found.prefix()) + digits + literal(found.suffix()));
+    const std::regex frame_name(literal(name_prefix) + digits + literal(pattern.suffix));
     std::vector<int> frames;
     std::error_code ec;
-    for (std::filesystem::directory_iterator it(folder.empty() ? "." : folder, ec), end;
-         !ec && it != end; it.increment(ec)) {
+    for (std::filesystem::directory_iterator it(folder, ec), end; !ec && it != end;
+         it.increment(ec)) {
         const std::string entry = it->path().filename().string();
         std::smatch frame;
         if (std::regex_match(entry, frame, frame_name) && frame[1].length() <= 9)
@@ -121,10 +152,8 @@ std::string frame_path(const std::string& path, int frame)
     std::string normalized, range;
     if (!parse_frame_pattern(path, normalized, range))
         return path;
-    std::vector<std::string> names;
-    if (!Filesystem::enumerate_file_sequence(normalized, { frame }, names) || names.empty())
-        return path;
-    return names.front();
+    FrameNumbering numbering;
+    return numbering.parse(normalized) ? numbering.path(frame) : path;
 }
 
 std::vector<std::string> frame_inputs(const Shot& shot, int frame)
@@ -163,7 +192,9 @@ bool shot_frames(const Shot& shot, std::vector<int>& frames, std::string& error)
             continue;
         if (!range.empty())
             return enumerate_frames(range, frames, error, input);
-        frames = scan_frames(normalized);
+        FrameNumbering numbering;
+        if (numbering.parse(normalized))
+            frames = scan_frames(numbering);
         if (frames.empty()) {
             error = format("{}: no files match (give --frames to name them)", input);
             return false;

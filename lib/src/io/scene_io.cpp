@@ -298,7 +298,7 @@ bool read_layer(const ExrInput& exr, ImageInput& in, const std::string& filename
                 const std::string& name, const Part& color_part, const Part* depth_part,
                 Layer& layer, std::string& error)
 {
-    if (is_openexr(filename)) {
+    if (exr.is_open()) {
         if (!decode_layer(exr, filename, name, color_part, depth_part, layer, error))
             return false;
     } else {
@@ -352,6 +352,15 @@ std::unique_ptr<ImageInput> open_file(const std::string& filename, ExrInput* exr
         if (why.empty())
             why = "not an image file OpenImageIO can read";
         error = format("{}: {}", filename, Strutil::replace(why, "\n", " ", true));
+        return in;
+    }
+    // Decided once, from what was opened: a file rewritten between the two
+    // opens must not reach OpenImageIO's EXR reader unchecked, nor the
+    // checked reader unopened.
+    const bool checked = exr ? exr->is_open() : headers_only.is_open();
+    if ((in->format_name() == std::string("openexr")) != checked) {
+        error = filename + ": changed while being read";
+        return nullptr;
     }
     return in;
 }
@@ -545,7 +554,7 @@ bool read_depth_file(const std::string& filename, const ImageSpec& render,
     }
     if (!same_display_window(spec, render, filename, error))
         return false;
-    const double bytes = window_bytes(spec, is_openexr(filename) ? 1 : spec.nchannels);
+    const double bytes = window_bytes(spec, exr.is_open() ? 1 : spec.nchannels);
     if (!limit.allows(bytes)) {
         error = format("{}: {}", filename,
                        limit.exceeded(format("a depth image of {}x{}", spec.width, spec.height),
@@ -553,7 +562,7 @@ bool read_depth_file(const std::string& filename, const ImageSpec& render,
         return false;
     }
     ImageBuf depth;
-    if (is_openexr(filename)) {
+    if (exr.is_open()) {
         depth = depth_image(spec.roi(), spec);
         if (!exr.read(0, { { spec.channelnames[channel], static_cast<float*>(depth.localpixels()),
                              1, size_t(spec.width) } },
@@ -575,7 +584,7 @@ bool read_file(const std::string& filename, const ReadOptions& options,
     auto in = open_file(filename, &exr, error);
     FileLayout layout;
     if (!in || !choose_parts(*in, filename, options, layout, error)
-        || !fits_memory_limit(layout, is_openexr(filename), filename, options.memory_limit, error))
+        || !fits_memory_limit(layout, exr.is_open(), filename, options.memory_limit, error))
         return false;
     auto layer_name = [](const Part& part, const char* fallback) -> std::string {
         return part.spec.get_string_attribute("name", format("{}{}", fallback, part.subimage));

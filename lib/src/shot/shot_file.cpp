@@ -260,11 +260,43 @@ bool read_document(const json& doc, const std::string& directory, Shot& shot,
     return true;
 }
 
+/// The deepest nesting of arrays and objects in JSON text, outside
+/// strings. A .dof nests three deep; JSON nested 100000 deep is parsed
+/// without recursion, but copying or walking it recurses past the stack.
+int nesting_depth(const std::string& text)
+{
+    int depth = 0, deepest = 0;
+    bool in_string = false, escaped = false;
+    for (const char c : text) {
+        if (in_string) {
+            if (escaped)
+                escaped = false;
+            else if (c == '\\')
+                escaped = true;
+            else if (c == '"')
+                in_string = false;
+        } else if (c == '"') {
+            in_string = true;
+        } else if (c == '[' || c == '{') {
+            deepest = std::max(deepest, ++depth);
+        } else if (c == ']' || c == '}') {
+            --depth;
+        }
+    }
+    return deepest;
+}
+
 }  // namespace
 
 bool parse_shot(const std::string& text, const std::string& directory,
                 const std::string& source, Shot& shot, std::string& error)
 {
+    constexpr int deepest = 32;
+    if (nesting_depth(text) > deepest) {
+        error = OIIO::Strutil::fmt::format("{}: arrays and objects nested more than {} deep: "
+                                           "not a scene file", source, deepest);
+        return false;
+    }
     json doc;
     try {
         doc = json::parse(text);
