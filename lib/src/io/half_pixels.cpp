@@ -1,5 +1,6 @@
 #include "io/half_pixels.h"
 
+#include <cpuid.h>
 #include <immintrin.h>
 
 #include <cstdint>
@@ -25,13 +26,21 @@ void floats_to_halves(const float* in, uint16_t* out, size_t n)
                                                           _MM_FROUND_TO_NEAREST_INT), 0));
 }
 
+/// F16C conversions and the AVX registers they use, enabled by the OS.
+/// (clang 14's __builtin_cpu_supports does not know "f16c": cpuid says.)
+bool has_f16c()
+{
+    unsigned a = 0, b = 0, c = 0, d = 0;
+    return __builtin_cpu_supports("avx") && __get_cpuid(1, &a, &b, &c, &d) && (c & bit_F16C);
+}
+
 }  // namespace
 
 bool convert_to_half(const OIIO::ImageBuf& src, OIIO::ImageBuf& dst, int nthreads)
 {
     const OIIO::ImageSpec& from = src.spec();
     if (from.format != OIIO::TypeFloat || !from.channelformats.empty() || !src.localpixels()
-        || !__builtin_cpu_supports("f16c") || !__builtin_cpu_supports("avx"))
+        || !has_f16c())
         return false;
     OIIO::ImageSpec spec = from;
     spec.set_format(OIIO::TypeHalf);

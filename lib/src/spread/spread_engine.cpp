@@ -41,6 +41,15 @@ constexpr float dense_limit = float(level_start(1));
 /// The kernels are inlined into each target_clones clone of their callers,
 /// so that they are compiled for that clone's instruction set.
 #define DEFOCUS_KERNEL inline __attribute__((always_inline))
+/// The callers are compiled for AVX-512, AVX2 and the baseline, the one
+/// the CPU runs picked at load time. clang 14 refuses 4-double vectors in
+/// the baseline clone of such a function (an ABI error, not a warning),
+/// so a clang build has the baseline only: slower, the same results.
+#if defined(__clang__)
+#define DEFOCUS_CLONES
+#else
+#define DEFOCUS_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#endif
 
 /// The output rows and columns one task accumulates: a tile of deltas
 /// that stays in the second-level cache while every source row within
@@ -462,7 +471,7 @@ void add_run_colors(ItemRow& row, int x, int n, int k, const double* color, cons
 
 /// The dense pixels of source row `sy` within [x0, x1), as runs of
 /// consecutive pixels on one program.
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+DEFOCUS_CLONES
 void prepare_dense_row(const SpreadSource& src, SpreadMethod method, const ProgramFamily& family,
                        int sy, int x0, int x1, ItemRow& row, std::vector<double>& color,
                        std::vector<float>& blend)
@@ -506,7 +515,7 @@ void prepare_dense_row(const SpreadSource& src, SpreadMethod method, const Progr
 /// The box's 16 corner deltas (Kosloff, Tao & Barsky 2009, sec. 3, with
 /// fractional edges), to be integrated down the columns and then along
 /// the rows. Deltas above the tile go straight into the column carry.
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+DEFOCUS_CLONES
 void scatter_box_row(const SpreadSource& src, int sy, int x0, int x1, double* rows,
                      double* column_carry, const Tile& tile)
 {
@@ -565,7 +574,7 @@ RunsInReach runs_in_reach(const ItemRow& items, int shift, const Reach& reach, c
 /// columns apart, anchored on row `anchor`) to the tile's delta rows: the
 /// items' reach is `reach` (of the largest of `family`'s programs they
 /// use).
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+DEFOCUS_CLONES
 void scatter_items(const ProgramFamily& family, int shift, const Reach& reach,
                    const ItemRow& items, int anchor, double* rows, const Tile& tile)
 {
@@ -591,7 +600,7 @@ void scatter_items(const ProgramFamily& family, int shift, const Reach& reach,
 
 /// Integrates a tile row along x in place (after adding it to the column
 /// carry, for the box), starting from the row carry, which it updates.
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+DEFOCUS_CLONES
 void finish_row(double* row, double* column_carry, double* row_carry, int cells)
 {
     d4 sum = load4(row_carry);
@@ -715,7 +724,7 @@ struct LayerSurvey {
 /// Surveys source rows [y0, y1), which hold whole block rows of every
 /// level: each pixel's components once, dense ones noted, sparse ones
 /// summed into their level's blocks.
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+DEFOCUS_CLONES
 void survey_rows(const SpreadSource& source, SpreadMethod method,
                  const std::vector<std::unique_ptr<SpreadEngine::Sparse>>& levels, int y0, int y1,
                  LayerSurvey& found, std::mutex& merge)
