@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages defocus builds and tests with, if missing.
+#   scripts/install-deps.sh        the build and the tests
+#   scripts/install-deps.sh fuzz   also clang and its libFuzzer runtime
 set -euo pipefail
 
 packages=(
@@ -12,6 +14,9 @@ packages=(
     nlohmann-json3-dev                     # .dof scene files (JSON)
     catch2                                 # tests
 )
+if [ "${1:-}" = fuzz ]; then
+    packages+=(clang libclang-rt-14-dev)   # libFuzzer harnesses (scripts/fuzz.sh)
+fi
 
 missing=()
 for p in "${packages[@]}"; do

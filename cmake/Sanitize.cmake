@@ -1,0 +1,48 @@
+# DEFOCUS_SANITIZE: every target is built with AddressSanitizer (memory
+# errors, leaks) and UndefinedBehaviorSanitizer, and any finding stops the
+# program (-fno-sanitize-recover) so a test cannot pass over it.
+#
+# DEFOCUS_FUZZ builds the same way plus libFuzzer's coverage instrumentation,
+# so the harnesses find memory errors as well as crashes.
+#
+# Programs built elsewhere (Debian's oiiotool and python3) that load our
+# plugin need the sanitizer runtime loaded first: DEFOCUS_SANITIZER_PRELOAD
+# is what to put in LD_PRELOAD for them, libraries separated by colons
+# (empty when not sanitizing).
+
+set(DEFOCUS_SANITIZER_PRELOAD "")
+set(DEFOCUS_SANITIZER_FLAGS "")
+if(DEFOCUS_SANITIZE OR DEFOCUS_FUZZ)
+    set(DEFOCUS_SANITIZER_FLAGS -fsanitize=address,undefined -fno-sanitize-recover=all
+                                -fno-omit-frame-pointer)
+    add_compile_options(${DEFOCUS_SANITIZER_FLAGS})
+    add_link_options(${DEFOCUS_SANITIZER_FLAGS})
+    if(CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+        # clang links its runtime statically into executables by default; a
+        # shared runtime lets the plugin share it with its host. (libFuzzer
+        # wants the static one, and the fuzz build runs no host programs.)
+        if(NOT DEFOCUS_FUZZ)
+            add_link_options(-shared-libasan)
+        endif()
+        set(_runtime libclang_rt.asan-x86_64.so)
+    else()
+        set(_runtime libasan.so)
+    endif()
+    execute_process(COMMAND ${CMAKE_CXX_COMPILER} -print-file-name=${_runtime}
+                    OUTPUT_VARIABLE DEFOCUS_SANITIZER_PRELOAD OUTPUT_STRIP_TRAILING_WHITESPACE)
+    # With the runtime loaded before libstdc++ (python3 does not link it),
+    # ASan cannot find the __cxa_throw it intercepts and aborts at the first
+    # exception: libstdc++ goes in front too.
+    execute_process(COMMAND ${CMAKE_CXX_COMPILER} -print-file-name=libstdc++.so.6
+                    OUTPUT_VARIABLE _libstdcxx OUTPUT_STRIP_TRAILING_WHITESPACE)
+    string(APPEND DEFOCUS_SANITIZER_PRELOAD ":${_libstdcxx}")
+endif()
+
+if(DEFOCUS_FUZZ)
+    if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+        message(FATAL_ERROR "DEFOCUS_FUZZ needs clang (libFuzzer): "
+                            "configure with -DCMAKE_CXX_COMPILER=clang++")
+    endif()
+    # Coverage feedback from the library too, not only the harnesses.
+    add_compile_options(-fsanitize=fuzzer-no-link)
+endif()

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer harnesses (clang, with ASan + UBSan) in build-fuzz/
+# and runs each on its seed corpus in tests/fuzz/corpus for SECONDS
+# (default 60). Inputs that grow coverage collect in build-fuzz/corpus; a
+# crash, hang, leak or over-budget allocation stops the run, is saved in
+# build-fuzz/findings/ and fails the script.
+#   scripts/fuzz.sh [SECONDS] [HARNESS...]   harnesses: shot_file settings scene
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds="${1:-60}"
+shift || true
+harnesses=("$@")
+[ ${#harnesses[@]} -gt 0 ] || harnesses=(shot_file settings scene)
+bash scripts/install-deps.sh fuzz
+cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DDEFOCUS_FUZZ=ON -DBUILD_TESTING=OFF -DDEFOCUS_BUILD_BENCHMARKS=OFF
+cmake --build build-fuzz -j"$(nproc)" --target "${harnesses[@]/#/fuzz_}"
+data="${DEFOCUS_SHARED_DATA:-$(cd .. && pwd)/shared/data}"
+export ASAN_OPTIONS="detect_leaks=1"
+export LSAN_OPTIONS="suppressions=$PWD/tests/sanitizer/lsan.supp:print_suppressions=0"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+mkdir -p build-fuzz/findings
+status=0
+for harness in "${harnesses[@]}"; do
+    seeds=(tests/fuzz/corpus/"$harness")
+    # The whole Damaged corpus, when the shared data is here (the
+    # repository keeps only its small files).
+    if [ "$harness" = scene ] && [ -d "$data/openexr-images/Damaged" ]; then
+        seeds+=("$data/openexr-images/Damaged")
+    fi
+    mkdir -p build-fuzz/corpus/"$harness"
+    echo "== fuzz_$harness for ${seconds} s"
+    # -timeout: one input taking 10 s is a hang. -rss_limit_mb: the memory
+    # the harness may use, above the 1 GB --memory-limit the scene harness
+    # sets.
+    build-fuzz/bin/fuzz_"$harness" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2560 \
+        -max_len=65536 -print_final_stats=1 -artifact_prefix=build-fuzz/findings/"$harness"- \
+        build-fuzz/corpus/"$harness" "${seeds[@]}" 2>build-fuzz/fuzz_"$harness".log \
+        || { status=1; tail -n 60 build-fuzz/fuzz_"$harness".log; }
+    grep -E "^stat::(number_of_executed_units|peak_rss_mb)|^Done" build-fuzz/fuzz_"$harness".log || true
+done
+exit $status
