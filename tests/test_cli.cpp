@@ -1037,6 +1037,14 @@ TEST_CASE("a frame list of billions, a device or a pipe as input: one-line error
     REQUIRE(run_defocus(scene + " -o " + dir + "/o.#.exr --focus 3 --frames 1-2000000000", log)
             == 1);
     CHECK(one_line_naming(log, "names 2000000000 frames; a shot renders at most 1000000"));
+    // OpenImageIO read "1001-11001040:2" as 11 million frames (fuzz_settings:
+    // a timeout): what is not one of the documented forms is refused.
+    REQUIRE(run_defocus(scene + " -o " + dir + "/o.#.exr --focus 3 --frames 1001-11001040:2", log)
+            == 1);
+    CHECK(one_line_naming(log, "'1001-11001040:2' is not a frame list"));
+    REQUIRE(run_defocus(scene + " -o " + dir + "/o.#.exr --focus 3 --frames 1-2000000y1", log)
+            == 1);
+    CHECK(one_line_naming(log, "'1-2000000y1' names no frames"));
     // The format probe read /dev/zero and a FIFO forever.
     const std::string fifo = dir + "/pipe.exr";
     REQUIRE(mkfifo(fifo.c_str(), 0600) == 0);

@@ -22,8 +22,9 @@ namespace {
 constexpr int64_t max_frames = 1000000;
 
 /// The number of frames a list such as "1-10x2,15,20-30" names, counted
-/// before OpenImageIO enumerates it; -1 when a part is not a plain
-/// "A", "A-B" or "A-BxN" (OpenImageIO then judges it).
+/// before OpenImageIO enumerates it; -1 when a part is not "A", "A-B",
+/// "A-BxN" (every Nth) or "A-ByN" (all but every Nth). OpenImageIO reads
+/// more than that: "1001-11001040:2" as eleven million frames.
 int64_t frame_count(const std::string& list)
 {
     int64_t total = 0;
@@ -35,12 +36,15 @@ int64_t frame_count(const std::string& list)
         b = a;
         if (OIIO::Strutil::parse_char(rest, '-') && !OIIO::Strutil::parse_int(rest, b))
             return -1;
+        const bool all_but = rest.size() && rest[0] == 'y';
         if ((OIIO::Strutil::parse_char(rest, 'x') || OIIO::Strutil::parse_char(rest, 'y'))
             && !OIIO::Strutil::parse_int(rest, step))
             return -1;
         if (!rest.empty() || step == 0)
             return -1;
-        total += std::abs(int64_t(b) - int64_t(a)) / std::abs(int64_t(step)) + 1;
+        const int64_t span = std::abs(int64_t(b) - int64_t(a));
+        const int64_t stepped = span / std::abs(int64_t(step)) + 1;
+        total += all_but ? span + 1 - stepped : stepped;
     }
     return total;
 }
@@ -51,14 +55,18 @@ bool enumerate_frames(const std::string& list, std::vector<int>& frames, std::st
                       const std::string& what)
 {
     const int64_t count = frame_count(list);
+    if (count < 0) {
+        error = format("{}: '{}' is not a frame list (e.g. 1001-1100, 1-99x2, 1,5,9-12)", what,
+                       list);
+        return false;
+    }
     if (count > max_frames) {
         error = format("{}: '{}' names {} frames; a shot renders at most {}", what, list, count,
                        max_frames);
         return false;
     }
     if (!Filesystem::enumerate_sequence(list, frames) || frames.empty()) {
-        error = format("{}: '{}' is not a frame list (e.g. 1001-1100, 1-99x2, 1,5,9-12)", what,
-                       list);
+        error = format("{}: '{}' names no frames", what, list);
         return false;
     }
     return true;
