@@ -1543,4 +1543,12 @@ TEST_CASE("files the fuzzers found are refused quickly and cheaply")
                     log);
         CHECK(one_line_naming(log, f.message));
     }
+    // fuzz_scene: deep samples of alpha up to 7.7e31 composited into NaN.
+    std::string log;
+    REQUIRE(run_defocus(std::string(FUZZ_CORPUS_DIR) + "/scene/found_deep_alpha.exr -o " + dir
+                            + "/deep.exr --focus 2 --max-blur 6 -v",
+                        log)
+            == 0);
+    CHECK(Strutil::contains(log, "11 with alpha above 1 clamped to 1"));
+    CHECK(no_nan(read_image(dir + "/deep.exr")));
 }

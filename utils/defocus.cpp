@@ -246,9 +246,11 @@ std::string verbose_report(const FrameResult& frame, const CommandLine& cl,
         r += format("  hybrid: {} of {} pixels ({:.2f}%) spread with the PSF image\n", slow,
                     covered, covered ? 100.0 * slow / covered : 0.0);
     r += format("  pixels fixed: {} with NaN/inf colour dropped, {} with colour beyond 1e30 "
-                "clamped, {} with bad depth taken as infinitely far, {} transparent with "
-                "colour cleared, {} edge pixels without depth given their neighbours'\n",
-                frame.fixed.nonfinite_color, frame.fixed.huge_color, frame.fixed.bad_depth,
+                "clamped, {} with alpha above 1 clamped to 1, {} with bad depth taken as "
+                "infinitely far, {} transparent with colour cleared, {} edge pixels without "
+                "depth given their neighbours'\n",
+                frame.fixed.nonfinite_color, frame.fixed.huge_color,
+                frame.fixed.alpha_above_one, frame.fixed.bad_depth,
                 frame.fixed.transparent_light, frame.fixed.edge_depth);
     for (const auto& [stage, seconds] : frame.timings)
         r += format("  {:<10} {:7.3f} s\n", stage, seconds);

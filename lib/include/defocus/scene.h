@@ -75,6 +75,7 @@ void erase_part_attributes(OIIO::ImageSpec& spec);
 struct PixelCounts {
     int64_t nonfinite_color = 0;    ///< NaN or inf in R,G,B or A: dropped
     int64_t huge_color = 0;         ///< R, G or B beyond +-1e30: clamped there
+    int64_t alpha_above_one = 0;    ///< A above 1: clamped to 1
     int64_t bad_depth       = 0;    ///< Z NaN, zero or negative: moved to infinity
     int64_t transparent_light = 0;  ///< alpha <= 0 with colour: dropped
     int64_t edge_depth = 0;  ///< partly covered, no depth: given its covered neighbours'
@@ -84,6 +85,7 @@ struct PixelCounts {
 /// changed:
 ///  - a pixel with NaN or inf colour or alpha is dropped (made transparent);
 ///  - colour beyond +-1e30 is clamped there (float sums of it overflow);
+///  - alpha above 1 is clamped to 1 ("over" would amplify what is behind);
 ///  - a pixel with alpha <= 0 carries no light: it is cleared whatever its
 ///    colour and depth (renders write Z = 0 or 1e10 there);
 ///  - a covered pixel with depth NaN, -inf, zero or negative is taken as

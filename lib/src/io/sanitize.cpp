@@ -42,6 +42,12 @@ bool sanitize_one(float& r, float& g, float& b, float& a, float& z, PixelCounts&
         ++n.bad_depth;
         z = infinity;
     }
+    // Coverage above 1 makes "over" amplify what lies behind: deep samples
+    // of alpha 1e31 composited into inf and NaN (fuzz_scene).
+    if (a > 1.0f) {
+        ++n.alpha_above_one;
+        a = 1.0f;
+    }
     if (std::max({ std::abs(r), std::abs(g), std::abs(b) }) > largest_color) {
         ++n.huge_color;
         for (float* c : { &r, &g, &b })
@@ -51,12 +57,13 @@ bool sanitize_one(float& r, float& g, float& b, float& a, float& z, PixelCounts&
 }
 
 struct AtomicCounts {
-    std::atomic<int64_t> nonfinite { 0 }, huge { 0 }, depth { 0 }, transparent { 0 },
-        edge { 0 };
+    std::atomic<int64_t> nonfinite { 0 }, huge { 0 }, opaque { 0 }, depth { 0 },
+        transparent { 0 }, edge { 0 };
     void add(const PixelCounts& n)
     {
         nonfinite += n.nonfinite_color;
         huge += n.huge_color;
+        opaque += n.alpha_above_one;
         depth += n.bad_depth;
         transparent += n.transparent_light;
         edge += n.edge_depth;
@@ -149,7 +156,8 @@ PixelCounts sanitize(Scene& scene, int nthreads)
             sanitize_deep(image, counts, nthreads);
             return true;
         });
-    return { counts.nonfinite, counts.huge, counts.depth, counts.transparent, counts.edge };
+    return { counts.nonfinite, counts.huge,        counts.opaque,
+             counts.depth,     counts.transparent, counts.edge };
 }
 
 }  // namespace defocus
