@@ -1,39 +1,22 @@
 #include "cli_options.h"
 
-#include <sys/stat.h>
-
-#include <filesystem>
 #include <regex>
-#include <set>
 
 #include <defocus/shot/option_value.h>
+#include <defocus/version.h>
 
 namespace defocus {
 
 using OIIO::ArgParse;
 using OIIO::cspan;
 
-std::string overwritten_input(const std::vector<std::string>& read,
-                              const std::vector<std::string>& written)
+void add_version_option(ArgParse& ap, const char* program)
 {
-    std::set<std::pair<dev_t, ino_t>> inputs;
-    struct stat st {};
-    for (const std::string& file : read)
-        if (::stat(file.c_str(), &st) == 0)
-            inputs.emplace(st.st_dev, st.st_ino);
-    for (const std::string& file : written)
-        if (!file.empty() && ::stat(file.c_str(), &st) == 0
-            && inputs.count({ st.st_dev, st.st_ino }))
-            return file;
-    return "";
-}
-
-bool same_path(const std::string& a, const std::string& b)
-{
-    std::error_code ec_a, ec_b;
-    const std::filesystem::path pa = std::filesystem::weakly_canonical(a, ec_a);
-    const std::filesystem::path pb = std::filesystem::weakly_canonical(b, ec_b);
-    return ec_a || ec_b ? a == b : pa == pb;
+    ap.arg("--version").help("Print the version and exit")
+        .action([&ap, program](cspan<const char*>) {
+            OIIO::Strutil::print("{} {}\n", program, version());
+            ap.abort();
+        });
 }
 
 int parse_arguments(ArgParse& ap, int argc, const char* argv[])

@@ -17,14 +17,8 @@ namespace defocus {
 /// ap.parse_args(), also taking "--option=value" for "--option value".
 int parse_arguments(OIIO::ArgParse& ap, int argc, const char* argv[]);
 
-/// The first of `written` that is the same file as one of `read` (by device
-/// and inode, so links count), or "" when none would overwrite an input.
-/// Empty names and files that do not exist yet are skipped.
-std::string overwritten_input(const std::vector<std::string>& read,
-                              const std::vector<std::string>& written);
-
-/// Whether two names, existing or not, lead to the same file.
-bool same_path(const std::string& a, const std::string& b);
+/// --version: prints "PROGRAM VERSION" and stops the parse, as --help does.
+void add_version_option(OIIO::ArgParse& ap, const char* program);
 
 /// The options given on a command line: those that set shot settings, and
 /// others stored into strings, with the checks they share (an option given

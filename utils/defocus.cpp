@@ -16,13 +16,13 @@
 #include <OpenImageIO/timer.h>
 
 #include <defocus/error_line.h>
+#include <defocus/frame_scheduler.h>
 #include <defocus/io/frames.h>
 #include <defocus/io/image_output.h>
 #include <defocus/render_frame.h>
 #include <defocus/shot/shot_file.h>
 
 #include "cli_options.h"
-#include "frame_scheduler.h"
 #include "progress.h"
 
 using namespace OIIO;
@@ -130,6 +130,7 @@ bool parse_command_line(int argc, const char* argv[], CommandLine& cl, bool& hel
     ap.arg("-q").help("Quiet: no progress, only errors")
         .action([&](cspan<const char*>) { cl.quiet = true; });
     shot_args.add_threads(ap);
+    add_version_option(ap, "defocus");
 
     if (parse_arguments(ap, argc, argv) < 0)
         return fail(ap.geterror());
@@ -159,24 +160,6 @@ bool parse_command_line(int argc, const char* argv[], CommandLine& cl, bool& hel
                     "display image");
     if (cl.output.empty() && cl.save_scene.empty())
         return fail("no output file: give -o OUTPUT");
-    return true;
-}
-
-/// The file a per-frame output (-o, --preview) names for each frame.
-bool frame_outputs(const std::string& option, const std::string& pattern,
-                   const std::vector<int>& frames, std::vector<std::string>& files,
-                   std::string& error)
-{
-    files.clear();
-    if (pattern.empty())
-        return true;
-    if (frames.size() > 1 && !is_frame_pattern(pattern)) {
-        error = format("{} {}: {} frames need a frame pattern in the name, e.g. out.#.exr",
-                       option, pattern, frames.size());
-        return false;
-    }
-    for (int frame : frames)
-        files.push_back(frame_path(pattern, frame));
     return true;
 }
 

@@ -71,6 +71,7 @@ int main(int argc, const char* argv[])
         .action([&](cspan<const char*>) { info = true; });
     ap.separator("General:");
     shot_args.add_threads(ap);
+    add_version_option(ap, "layerize");
 
     if (parse_arguments(ap, argc, argv) < 0)
         return fail("{}", ap.geterror());

@@ -9,6 +9,7 @@
 #include <defocus/io/scene_io.h>
 #include <defocus/layers/edges.h>
 #include <defocus/layers/layering.h>
+#include <defocus/version.h>
 
 namespace defocus {
 
@@ -51,26 +52,26 @@ void describe_output(ImageSpec& spec, const ImageSpec& input, const Shot& shot,
     }
     if (is_sequence(shot))
         spec.attribute("defocus:frame", frame);
-    spec.attribute("Software", "defocus " DEFOCUS_VERSION);
+    spec.attribute("Software", std::string("defocus ") + version());
 }
 
 }  // namespace
 
-bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, LayeredScene& layered,
-                    FrameResult& out, std::string& error, const StageCallback& on_stage,
-                    int nthreads)
-{
-    Timer timer;
-    auto stage = [&](const char* name) {
-        if (on_stage)
-            on_stage(name);
-    };
-    auto lap = [&](const char* name) { out.timings.emplace_back(name, timer.lap()); };
+namespace {
 
-    stage("read");
-    Scene scene;
-    if (!read_scene(frame_inputs(shot, frame), frame_read_options(shot, frame), scene, error))
-        return false;
+void run_stage(const StageCallback& on_stage, const char* name)
+{
+    if (on_stage)
+        on_stage(name);
+}
+
+/// prepare_layers() from the scene read; `timer` started with the read.
+bool layer_scene(Scene&& scene, const Shot& shot, int frame, const ShotAssets& assets,
+                 LayeredScene& layered, FrameResult& out, std::string& error,
+                 const StageCallback& on_stage, int nthreads, Timer& timer)
+{
+    auto stage = [&](const char* name) { run_stage(on_stage, name); };
+    auto lap = [&](const char* name) { out.timings.emplace_back(name, timer.lap()); };
     out.source = scene.source;
     out.notes  = scene.notes;
     out.fixed  = sanitize(scene, nthreads);
@@ -118,6 +119,31 @@ bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, Layer
     return true;
 }
 
+}  // namespace
+
+bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, LayeredScene& layered,
+                    FrameResult& out, std::string& error, const StageCallback& on_stage,
+                    int nthreads)
+{
+    Timer timer;
+    run_stage(on_stage, "read");
+    Scene scene;
+    if (!read_scene(frame_inputs(shot, frame), frame_read_options(shot, frame), scene, error))
+        return false;
+    return layer_scene(std::move(scene), shot, frame, assets, layered, out, error, on_stage,
+                       nthreads, timer);
+}
+
+bool prepare_layers(Scene&& scene, const Shot& shot, int frame, const ShotAssets& assets,
+                    LayeredScene& layered, FrameResult& out, std::string& error,
+                    const StageCallback& on_stage, int nthreads)
+{
+    Timer timer;
+    run_stage(on_stage, "read");
+    return layer_scene(std::move(scene), shot, frame, assets, layered, out, error, on_stage,
+                       nthreads, timer);
+}
+
 namespace {
 
 /// A bound on what spreading the layers holds at once: each layer grown by
@@ -151,8 +177,7 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
     const CircleOfConfusion coc(out.camera, layered.spec.roi_full());
     Timer timer;
     auto lap = [&](const char* name) { out.timings.emplace_back(name, timer.lap()); };
-    if (on_stage)
-        on_stage("render");
+    run_stage(on_stage, "render");
     ImageBuf& image = out.image;
     if (shot.output == OutputKind::FocusMap) {
         if (!focus_map(image, layered, out.camera, 8.0, nthreads)) {
@@ -249,14 +274,18 @@ bool frame_spec(const Shot& shot, int frame, const ShotAssets& assets, ImageSpec
     return true;
 }
 
-bool render_frame(const Shot& shot, int frame, const ShotAssets& assets,
-                  FrameResult& result, std::string& error, const StageCallback& on_stage,
-                  int nthreads)
+namespace {
+
+/// render_frame() and render_scene(): `prepare` makes the layers.
+template<typename Prepare>
+bool render(const Shot& shot, int frame, const ShotAssets& assets, FrameResult& result,
+            std::string& error, const StageCallback& on_stage, int nthreads,
+            Prepare&& prepare)
 {
     result = FrameResult();
     try {
         LayeredScene layered;
-        if (!prepare_layers(shot, frame, assets, layered, result, error, on_stage, nthreads))
+        if (!prepare(layered))
             return false;  // named there
         if (finish_frame(shot, frame, assets.aperture, layered, result, error, on_stage,
                          nthreads))
@@ -267,6 +296,30 @@ bool render_frame(const Shot& shot, int frame, const ShotAssets& assets,
     if (!result.source.empty())
         error = result.source + ": " + error;
     return false;
+}
+
+}  // namespace
+
+bool render_frame(const Shot& shot, int frame, const ShotAssets& assets,
+                  FrameResult& result, std::string& error, const StageCallback& on_stage,
+                  int nthreads)
+{
+    return render(shot, frame, assets, result, error, on_stage, nthreads,
+                  [&](LayeredScene& layered) {
+                      return prepare_layers(shot, frame, assets, layered, result, error,
+                                            on_stage, nthreads);
+                  });
+}
+
+bool render_scene(Scene&& scene, const Shot& shot, int frame, const ShotAssets& assets,
+                  FrameResult& result, std::string& error, const StageCallback& on_stage,
+                  int nthreads)
+{
+    return render(shot, frame, assets, result, error, on_stage, nthreads,
+                  [&](LayeredScene& layered) {
+                      return prepare_layers(std::move(scene), shot, frame, assets, layered,
+                                            result, error, on_stage, nthreads);
+                  });
 }
 
 }  // namespace defocus

@@ -55,6 +55,13 @@ bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, Layer
                     FrameResult& result, std::string& error, const StageCallback& on_stage = {},
                     int nthreads = 0);
 
+/// prepare_layers() of a scene already in memory (layers, flat renders or
+/// deep images, as read_scene() gives them) in place of the shot's inputs;
+/// its `source` names it in errors.
+bool prepare_layers(Scene&& scene, const Shot& shot, int frame, const ShotAssets& assets,
+                    LayeredScene& layers, FrameResult& result, std::string& error,
+                    const StageCallback& on_stage = {}, int nthreads = 0);
+
 /// The spec of `frame` of a shot as render_frame() gives it, from the
 /// inputs' headers alone, without reading pixels or rendering: display and
 /// data windows, channels R,G,B,A, the pixel type to write, metadata. With
@@ -69,6 +76,12 @@ bool frame_spec(const Shot& shot, int frame, const ShotAssets& assets, OIIO::Ima
 /// (read_shot_assets). False with `error` a one-line message naming the
 /// file and the problem.
 bool render_frame(const Shot& shot, int frame, const ShotAssets& assets,
+                  FrameResult& result, std::string& error, const StageCallback& on_stage = {},
+                  int nthreads = 0);
+
+/// render_frame() of a scene already in memory in place of the shot's
+/// inputs (see prepare_layers).
+bool render_scene(Scene&& scene, const Shot& shot, int frame, const ShotAssets& assets,
                   FrameResult& result, std::string& error, const StageCallback& on_stage = {},
                   int nthreads = 0);
 

@@ -22,14 +22,29 @@ using Strutil::fmt::format;
 namespace {
 
 /// The file this code was loaded from: the program that links the library,
-/// or the OpenImageIO plugin. Both sit one folder below the prefix (bin/,
-/// lib/), in the build tree as once installed.
+/// the OpenImageIO plugin or the Python module.
 std::string this_module_path()
 {
     Dl_info info {};
     if (dladdr(reinterpret_cast<const void*>(&this_module_path), &info) && info.dli_fname)
         return info.dli_fname;
     return Sysutil::this_program_path();
+}
+
+/// The shipped config in share/defocus of the nearest folder above this
+/// module that has one: the prefix, in the build tree as once installed.
+/// Programs and the plugin sit one folder below it (bin/, lib/), the Python
+/// module four (lib/python3/dist-packages/defocus/).
+std::string shipped_config_beside_module()
+{
+    std::string folder = Filesystem::parent_path(this_module_path());
+    for (int up = 0; up < 4 && !folder.empty(); ++up) {
+        folder = Filesystem::parent_path(folder);
+        const std::string config = folder + "/share/defocus/config.ocio";
+        if (Filesystem::exists(config))
+            return config;
+    }
+    return "";
 }
 
 }  // namespace
@@ -54,11 +69,11 @@ bool ColorManagement::load(const std::string& explicit_file, std::string& error)
         m_path = env;
         m_origin = "$OCIO";
     } else {
-        // Beside the program or plugin (build tree or installed), else
-        // where it was installed, for programs of other projects.
-        m_path   = Filesystem::parent_path(this_module_path()) + "/../share/defocus/config.ocio";
+        // Beside the program, plugin or module (build tree or installed),
+        // else where it was installed, for programs of other projects.
+        m_path   = shipped_config_beside_module();
         m_origin = "shipped";
-        if (!Filesystem::exists(m_path))
+        if (m_path.empty())
             m_path = DEFOCUS_INSTALLED_OCIO_CONFIG;
     }
     if (!Filesystem::exists(m_path)) {

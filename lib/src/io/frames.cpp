@@ -217,4 +217,21 @@ bool shot_frames(const Shot& shot, std::vector<int>& frames, std::string& error)
     return true;
 }
 
+bool frame_outputs(const std::string& option, const std::string& pattern,
+                   const std::vector<int>& frames, std::vector<std::string>& files,
+                   std::string& error)
+{
+    files.clear();
+    if (pattern.empty())
+        return true;
+    if (frames.size() > 1 && !is_frame_pattern(pattern)) {
+        error = format("{} {}: {} frames need a frame pattern in the name, e.g. out.#.exr",
+                       option, pattern, frames.size());
+        return false;
+    }
+    for (int frame : frames)
+        files.push_back(frame_path(pattern, frame));
+    return true;
+}
+
 }  // namespace defocus

@@ -1,12 +1,15 @@
 #include <defocus/io/image_output.h>
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <map>
+#include <set>
 #include <vector>
 
 #include <OpenImageIO/filesystem.h>
@@ -66,6 +69,29 @@ bool write_bytes(const std::string& path, const std::vector<unsigned char>& byte
 }
 
 }  // namespace
+
+std::string overwritten_input(const std::vector<std::string>& read,
+                              const std::vector<std::string>& written)
+{
+    std::set<std::pair<dev_t, ino_t>> inputs;
+    struct stat st {};
+    for (const std::string& file : read)
+        if (::stat(file.c_str(), &st) == 0)
+            inputs.emplace(st.st_dev, st.st_ino);
+    for (const std::string& file : written)
+        if (!file.empty() && ::stat(file.c_str(), &st) == 0
+            && inputs.count({ st.st_dev, st.st_ino }))
+            return file;
+    return "";
+}
+
+bool same_path(const std::string& a, const std::string& b)
+{
+    std::error_code ec_a, ec_b;
+    const std::filesystem::path pa = std::filesystem::weakly_canonical(a, ec_a);
+    const std::filesystem::path pb = std::filesystem::weakly_canonical(b, ec_b);
+    return ec_a || ec_b ? a == b : pa == pb;
+}
 
 bool check_output(const std::string& filename, const std::string& compression,
                   std::string& error)

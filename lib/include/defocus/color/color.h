@@ -24,9 +24,10 @@ public:
     ColorManagement& operator=(ColorManagement&&) noexcept;
 
     /// Loads the first of: `explicit_file` (when not empty), $OCIO, the
-    /// config shipped with defocus, found relative to the program or plugin
-    /// the library is part of (<bin or lib>/../share/defocus/config.ocio, in
-    /// the build tree and installed).
+    /// config shipped with defocus, found relative to the program, plugin or
+    /// Python module the library is part of (share/defocus/config.ocio in
+    /// the nearest of the four folders above it: the prefix, in the build
+    /// tree and installed).
     /// False with `error` saying which file failed and why.
     bool load(const std::string& explicit_file, std::string& error);
 

@@ -35,4 +35,11 @@ bool is_sequence(const Shot& shot);
 /// a pattern finds no files, or a still has keyframes (they need frames).
 bool shot_frames(const Shot& shot, std::vector<int>& frames, std::string& error);
 
+/// The file each of `frames` writes through the output `pattern` ("" gives
+/// none), named after `option` ("-o", "--preview") in errors: more than
+/// one frame needs a frame pattern.
+bool frame_outputs(const std::string& option, const std::string& pattern,
+                   const std::vector<int>& frames, std::vector<std::string>& files,
+                   std::string& error);
+
 }  // namespace defocus

@@ -34,6 +34,15 @@ void remove_temporaries_on_interrupt();
 bool check_output(const std::string& filename, const std::string& compression,
                   std::string& error);
 
+/// The first of `written` that is the same file as one of `read` (by device
+/// and inode, so links count), or "" when none would overwrite an input.
+/// Empty names and files that do not exist yet are skipped.
+std::string overwritten_input(const std::vector<std::string>& read,
+                              const std::vector<std::string>& written);
+
+/// Whether two names, existing or not, lead to the same file.
+bool same_path(const std::string& a, const std::string& b);
+
 /// Writes a text file atomically, as write_atomic() does.
 bool write_text_atomic(const std::string& filename, const std::string& text,
                        std::string& error);

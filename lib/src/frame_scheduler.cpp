@@ -1,4 +1,4 @@
-#include "frame_scheduler.h"
+#include <defocus/frame_scheduler.h>
 
 #include <sys/resource.h>
 

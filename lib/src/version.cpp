@@ -1,0 +1,10 @@
+#include <defocus/version.h>
+
+namespace defocus {
+
+const char* version()
+{
+    return DEFOCUS_VERSION;
+}
+
+}  // namespace defocus
