@@ -1,0 +1,429 @@
+"""Depth of field for layered scenes, from Python.
+
+defocus spreads each layer of a scene over its circle of confusion and
+composites the spread layers back to front (Kosloff, Tao & Barsky,
+"Depth of Field Postprocessing for Layered Scenes Using Constant-Time
+Rectangle Spreading", Graphics Interface 2009). This package renders with
+the same library as the ``defocus`` command, so the same shot gives the
+same pixels.
+
+A shot holds the inputs and the settings, named as the command's options
+with ``_`` for ``-`` (``fstop``, ``focus_at``, ``max_blur``)::
+
+    import defocus
+    shot = defocus.Shot(inputs=["layers.exr"], focal=85, fstop=1.4, focus=3.0)
+    shot.focus = {1001: 3.0, 1040: 1.2}          # keyframes
+    pixels = defocus.render(shot, frame=1001)    # float32, height x width x 4
+    defocus.render_to_file(shot, "dof.exr", frame=1001)
+    defocus.render_sequence(shot, "dof.#.exr", frames=range(1001, 1041))
+    shot.save("shot.dof")                       # defocus shot.dof -o ... renders it
+
+Layers you already hold render from memory: ``render_layers([(rgba, z),
+...], focus=3.0)`` with premultiplied RGBA and depth as float32 arrays, or
+OpenImageIO ImageBufs (``import OpenImageIO``; ``render_imagebuf`` gives an
+ImageBuf back with the result's windows and metadata).
+
+Failures raise ``defocus.Error`` (a RuntimeError) with the command's
+one-line message; bad arrays raise ValueError. Renders release the GIL, so
+threads render side by side, and Ctrl-C stops a render at its next stage
+with KeyboardInterrupt, leaving no partial file.
+"""
+
+import os
+from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from . import _defocus
+from ._defocus import Error
+
+__all__ = [
+    "Error",
+    "Shot",
+    "settings",
+    "render",
+    "render_imagebuf",
+    "render_to_file",
+    "render_sequence",
+    "focus_map",
+    "render_layers",
+    "decompose",
+    "__version__",
+]
+
+__version__: str = _defocus.__version__
+
+Error.__doc__ = """A shot, a file or a frame failed, with the defocus command's one-line
+message (the file and the problem). A subclass of RuntimeError."""
+
+# How each setting's value is written (ShotValueKind in shot.h).
+_NUMBER, _KEYFRAMES, _POINT, _TEXT, _PATH, _FILE_OR_NAME = range(6)
+_SETTINGS = {name.replace("-", "_"): (name, section, key, kind)
+             for name, section, key, kind in _defocus.settings()}
+
+
+def settings() -> Dict[str, str]:
+    """Every setting a Shot takes, with where a .dof file keeps it.
+
+    Returns {python_name: "section.key"}, e.g. {"fstop": "camera.fstop",
+    "aperture": "aperture.shape", ...}. The names are the defocus command's
+    options without the dashes, with "_" for "-".
+    """
+    return {name: f"{section}.{key}" for name, (_, section, key, _k) in _SETTINGS.items()}
+
+
+def _number_text(value: Any, name: str) -> str:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise Error(f"{name}: expected a number, got {value!r}")
+    return repr(int(value)) if isinstance(value, (int, np.integer)) else repr(float(value))
+
+
+def _point_text(value: Any, name: str) -> str:
+    try:
+        x, y = value
+    except (TypeError, ValueError):
+        raise Error(f"{name}: expected a pixel (x, y), got {value!r}") from None
+    return f"{_number_text(x, name)},{_number_text(y, name)}"
+
+
+def _keyed_text(value: Any, name: str, one: Callable[[Any, str], str]) -> str:
+    if isinstance(value, dict):
+        if not value:
+            raise Error(f"{name}: no keyframes")
+        keys = []
+        for frame in sorted(value):
+            if isinstance(frame, bool) or not isinstance(frame, (int, np.integer)):
+                raise Error(f"{name}: keyframe {frame!r} is not a whole frame number")
+            keys.append(f"{int(frame)}:{one(value[frame], name)}")
+        return ",".join(keys)
+    return one(value, name)
+
+
+def _frames_text(value: Any) -> str:
+    if isinstance(value, range):
+        if len(value) == 0:
+            raise Error("frames: an empty range")
+        last = value[-1]
+        step = value.step
+        if step < 0:
+            raise Error("frames: a range must count up")
+        return f"{value.start}-{last}" + (f"x{step}" if step != 1 else "")
+    if isinstance(value, (list, tuple)):
+        return ",".join(str(int(f)) for f in value)
+    return str(value)
+
+
+def _to_text(python_name: str, value: Any) -> str:
+    """A Python value as the text the command line gives the setting."""
+    name, _, _, kind = _SETTINGS[python_name]
+    if value is None:
+        return ""
+    if kind == _NUMBER:
+        return _number_text(value, name)
+    if kind == _KEYFRAMES:
+        return _keyed_text(value, name, _number_text)
+    if kind == _POINT:
+        return _keyed_text(value, name, _point_text)
+    if name == "frames":
+        return _frames_text(value)
+    if isinstance(value, bool):
+        return "on" if value else "off"
+    if isinstance(value, os.PathLike):
+        return os.fspath(value)
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if not isinstance(value, str):
+        raise Error(f"{name}: expected text, got {value!r}")
+    return value
+
+
+def _number(text: str) -> Union[int, float]:
+    try:
+        return int(text)
+    except ValueError:
+        return float(text)
+
+
+def _from_text(python_name: str, text: str) -> Any:
+    """The setting's text as a Python value (None when unset)."""
+    _, _, _, kind = _SETTINGS[python_name]
+    if text == "":
+        return None
+    if kind == _NUMBER:
+        return _number(text)
+    if kind in (_KEYFRAMES, _POINT):
+        arity = 1 if kind == _KEYFRAMES else 2
+        parts = text.split(",")
+        if ":" not in text:
+            values = tuple(float(p) for p in parts)
+            return values[0] if arity == 1 else values
+        keys = {}
+        for i in range(0, len(parts), arity):
+            frame, first = parts[i].split(":")
+            values = (float(first),) + tuple(float(p) for p in parts[i + 1:i + arity])
+            keys[int(frame)] = values[0] if arity == 1 else values
+        return keys
+    return text
+
+
+class Shot:
+    """Everything that says how to render a scene, frame by frame.
+
+    ``Shot(inputs=[...], focal=85, fstop=1.4, focus=3.0, aperture="disc")``
+    takes the defocus command's options as keywords (``-`` written ``_``;
+    ``defocus.settings()`` lists them). A keyframed setting (focus, focal,
+    fstop, focus_at, ...) takes a number, or a dict {frame: value}; a pixel
+    setting (focus_at, optical_centre) takes (x, y). Settings read and
+    write as attributes; an unset one reads None. ``Shot.load`` reads a
+    .dof scene file and ``save`` writes one.
+    """
+
+    __slots__ = ("_native",)
+
+    def __init__(self, inputs: Optional[Sequence[Union[str, os.PathLike]]] = None,
+                 **settings: Any) -> None:
+        object.__setattr__(self, "_native", _defocus.NativeShot())
+        if inputs is not None:
+            self.inputs = inputs
+        for name, value in settings.items():
+            self._set(name, value)
+
+    @classmethod
+    def load(cls, path: Union[str, os.PathLike]) -> "Shot":
+        """Reads a .dof scene file; its relative paths are taken from its folder."""
+        shot = cls()
+        object.__setattr__(shot, "_native", _defocus.load_shot(os.fspath(path)))
+        return shot
+
+    def save(self, path: Union[str, os.PathLike]) -> None:
+        """Writes the shot as a .dof scene file, atomically (paths beneath
+        its folder are written relative to it)."""
+        self._native.save(os.fspath(path))
+
+    def to_json(self, directory: Union[str, os.PathLike] = "") -> str:
+        """The .dof text of the shot, paths relative to `directory`."""
+        return self._native.to_json(os.fspath(directory))
+
+    def copy(self) -> "Shot":
+        """An independent copy."""
+        shot = Shot()
+        object.__setattr__(shot, "_native", _defocus.NativeShot(self._native))
+        return shot
+
+    def frames_to_render(self) -> List[int]:
+        """The frames the shot renders: its frame list, else the frames its
+        input patterns find on disk, else [1] for a still."""
+        return self._native.frames()
+
+    def check(self) -> None:
+        """Raises Error with the first reason the shot cannot be rendered."""
+        self._native.check()
+
+    def given(self) -> Dict[str, Any]:
+        """The settings that were set, as {name: value}."""
+        return {name: getattr(self, name) for name, (native, *_r) in _SETTINGS.items()
+                if self._native.is_given(native)}
+
+    @property
+    def inputs(self) -> List[str]:
+        """The files or frame patterns (``shot.#.exr``) of one scene's layers."""
+        return list(self._native.inputs)
+
+    @inputs.setter
+    def inputs(self, files: Sequence[Union[str, os.PathLike]]) -> None:
+        if isinstance(files, (str, os.PathLike)):
+            files = [files]
+        self._native.inputs = [os.fspath(f) for f in files]
+
+    def _set(self, name: str, value: Any) -> None:
+        if name not in _SETTINGS:
+            raise Error(f"unknown setting '{name}' (defocus.settings() lists them)")
+        self._native.set(_SETTINGS[name][0], _to_text(name, value), name)
+
+    def __getattr__(self, name: str) -> Any:
+        if name not in _SETTINGS:
+            raise AttributeError(f"Shot has no setting '{name}' (defocus.settings() lists them)")
+        return _from_text(name, self._native.get(_SETTINGS[name][0]))
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name == "inputs":
+            object.__setattr__(self, name, value)
+        else:
+            self._set(name, value)
+
+    def __dir__(self) -> Iterable[str]:
+        return list(super().__dir__()) + list(_SETTINGS)
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Shot) and self.to_json() == other.to_json()
+
+    def __repr__(self) -> str:
+        args = [f"inputs={self.inputs!r}"] + [f"{k}={v!r}" for k, v in self.given().items()]
+        return f"Shot({', '.join(args)})"
+
+
+_ShotArg = Union[Shot, str, os.PathLike]
+
+
+def _shot(shot: _ShotArg) -> Shot:
+    return shot if isinstance(shot, Shot) else Shot.load(shot)
+
+
+def _image_spec(xml: str):
+    import OpenImageIO as oiio
+    spec = oiio.ImageSpec()
+    spec.from_xml(xml)
+    return spec
+
+
+def _imagebuf(pixels: np.ndarray, xml: str):
+    import OpenImageIO as oiio
+    spec = _image_spec(xml)
+    spec.set_format(oiio.FLOAT)
+    buf = oiio.ImageBuf(spec)
+    buf.set_pixels(buf.roi, pixels)
+    return buf
+
+
+def render(shot: _ShotArg, frame: Optional[int] = None, crop: bool = False) -> np.ndarray:
+    """Renders a frame of a shot (a Shot or a .dof file) as defocus does.
+
+    Returns float32 pixels, height x width x 4 (premultiplied R,G,B,A in the
+    output colour space) over the result's data window, or with crop=True
+    over the display window (black outside the data). frame=None renders
+    the shot's first frame. The pixels are those defocus writes, before
+    conversion to the output's pixel type (e.g. half).
+    """
+    return _defocus.render(_shot(shot)._native, frame, crop)[0]
+
+
+def render_imagebuf(shot: _ShotArg, frame: Optional[int] = None, crop: bool = False):
+    """render() as an OpenImageIO.ImageBuf (float), with the result's data
+    and display windows and metadata (camera, settings, colour space)."""
+    return _imagebuf(*_defocus.render(_shot(shot)._native, frame, crop))
+
+
+def focus_map(shot: _ShotArg, frame: Optional[int] = None, crop: bool = False) -> np.ndarray:
+    """Where the focus falls in a frame, in false colour (defocus --output
+    focusmap): float32, height x width x 4, over the display window."""
+    return _defocus.focus_map(_shot(shot)._native, frame, crop)[0]
+
+
+def render_to_file(shot: _ShotArg, path: Union[str, os.PathLike],
+                   frame: Optional[int] = None) -> None:
+    """Renders a frame and writes it atomically, exactly as ``defocus -o
+    path`` does (format from the extension, the shot's pixel type and
+    compression, metadata kept). Never overwrites an input."""
+    _defocus.render_to_file(_shot(shot)._native, os.fspath(path), frame)
+
+
+def render_sequence(shot: _ShotArg, output: Union[str, os.PathLike],
+                    frames: Optional[Iterable[int]] = None,
+                    progress: Optional[Callable[[int, str], None]] = None,
+                    threads: int = 0, stop_on_error: bool = False) -> List[str]:
+    """Renders frames to a frame pattern (``dof.#.exr``), side by side as the
+    cores and the memory limit allow, as ``defocus`` does.
+
+    frames: the frames to render (default: the shot's). progress(frame,
+    path) is called as each frame is written, from a worker thread.
+    threads: worker threads (0 = all cores). A bad frame does not stop the
+    others (unless stop_on_error): once they are written, Error says
+    "N of M frames written; failed: ..." with each failed frame's reason.
+    Returns the files written, in frame order.
+    """
+    frame_list = None if frames is None else [int(f) for f in frames]
+    return _defocus.render_sequence(_shot(shot)._native, os.fspath(output), frame_list,
+                                    progress, threads, stop_on_error)
+
+
+def _settings_shot(shot: Optional[Shot], camera: Optional[Dict[str, Any]],
+                   settings: Dict[str, Any]) -> Shot:
+    s = Shot() if shot is None else shot.copy()
+    for name, value in {**(camera or {}), **settings}.items():
+        s._set(name, value)
+    return s
+
+
+def _array(value: Any, what: str, channels: int) -> np.ndarray:
+    """`value` (a numpy array or an OpenImageIO.ImageBuf) as C-contiguous
+    float32, height x width x channels (height x width for one)."""
+    if type(value).__name__ == "ImageBuf" and hasattr(value, "get_pixels"):
+        import OpenImageIO as oiio
+        if value.nchannels != channels:
+            raise ValueError(f"{what}: an ImageBuf of {value.nchannels} channels; "
+                             f"expected {channels}")
+        value = value.get_pixels(oiio.FLOAT)
+        if value is None:
+            raise ValueError(f"{what}: the ImageBuf holds no pixels")
+        value = value.reshape(value.shape[0], value.shape[1], channels)
+    if not isinstance(value, np.ndarray):
+        raise ValueError(f"{what}: expected a numpy array or an OpenImageIO.ImageBuf, "
+                         f"got {type(value).__name__}")
+    if value.dtype != np.float32:
+        raise ValueError(f"{what}: dtype {value.dtype}; expected float32 "
+                         f"(convert with .astype(numpy.float32))")
+    if channels == 1 and value.ndim == 3 and value.shape[2] == 1:
+        value = value[:, :, 0]
+    expected = "height x width" + ("" if channels == 1 else f" x {channels}")
+    if value.ndim != (2 if channels == 1 else 3) or (channels > 1 and value.shape[2] != channels):
+        raise ValueError(f"{what}: shape {value.shape}; expected {expected}")
+    if value.shape[0] == 0 or value.shape[1] == 0:
+        raise ValueError(f"{what}: an empty image, shape {value.shape}")
+    return np.ascontiguousarray(value)
+
+
+def _layers(layers: Sequence[Any], what: str) -> List[Tuple[str, np.ndarray, np.ndarray]]:
+    out = []
+    for i, layer in enumerate(layers):
+        if isinstance(layer, dict):
+            name, rgba, z = layer.get("name", f"layer{i}"), layer.get("rgba"), layer.get("z")
+        elif isinstance(layer, (tuple, list)) and len(layer) in (2, 3):
+            name, (rgba, z) = (layer[2] if len(layer) == 3 else f"layer{i}"), layer[:2]
+        else:
+            raise ValueError(f"{what}[{i}]: expected (rgba, z) or (rgba, z, name)")
+        rgba = _array(rgba, f"{what}[{i}] rgba", 4)
+        z = _array(z, f"{what}[{i}] z", 1)
+        if z.shape != rgba.shape[:2]:
+            raise ValueError(f"{what}[{i}]: z is {z.shape[1]}x{z.shape[0]}, "
+                             f"rgba {rgba.shape[1]}x{rgba.shape[0]}")
+        if out and rgba.shape != out[0][1].shape:
+            raise ValueError(f"{what}[{i}]: {rgba.shape[1]}x{rgba.shape[0]}, "
+                             f"the first layer {out[0][1].shape[1]}x{out[0][1].shape[0]}")
+        out.append((str(name), rgba, z))
+    if not out:
+        raise ValueError(f"{what}: no layers")
+    return out
+
+
+def render_layers(layers: Sequence[Any], shot: Optional[Shot] = None,
+                  frame: Optional[int] = None, crop: bool = False,
+                  camera: Optional[Dict[str, Any]] = None, **settings: Any) -> np.ndarray:
+    """Renders layers held in memory, as defocus renders the same layers
+    from a multi-part EXR.
+
+    layers: (rgba, z) or (rgba, z, name) per layer, in any order (they are
+    sorted by depth): rgba premultiplied float32, height x width x 4; z
+    planar camera-space depth in metres, float32, height x width. Either may
+    be an OpenImageIO.ImageBuf. All layers share one size, which is the
+    display window. The settings come from `shot` (its inputs unused),
+    then `camera` (a dict), then keywords: render_layers(layers, focal=85,
+    fstop=1.4, focus=3.0, aperture="disc"). Returns what render() returns.
+    """
+    s = _settings_shot(shot, camera, settings)
+    return _defocus.render_layers(_layers(layers, "layers"), s._native, frame, crop)[0]
+
+
+def decompose(rgba: Any, z: Any, shot: Optional[Shot] = None, frame: Optional[int] = None,
+              camera: Optional[Dict[str, Any]] = None,
+              **settings: Any) -> List[Tuple[np.ndarray, np.ndarray, str]]:
+    """Cuts a flat render (premultiplied RGBA and depth, float32 arrays or
+    ImageBufs) into depth layers, as defocus does for a flat input under
+    the camera (settings as for render_layers; layers=N asks for N).
+
+    Returns (rgba, z, name) per layer, back to front, each over the whole
+    render (transparent where the layer has nothing), in scene-linear
+    light: render_layers() takes them as they are.
+    """
+    s = _settings_shot(shot, camera, settings)
+    layers = _defocus.decompose(_layers([(rgba, z, "render")], "render"), s._native, frame)
+    return [(rgba_, z_, name) for name, rgba_, z_ in layers]

@@ -1,0 +1,427 @@
+// defocus._defocus: the library's shots, frames and sequences for the
+// Python package beside it (defocus/__init__.py), which turns Python values
+// into the settings' text and back and checks arrays before they get here.
+//
+// Every render runs on a thread of its own with the GIL released; the
+// calling thread waits for it and checks Python's signals, so Ctrl-C
+// cancels the render at its next stage and raises KeyboardInterrupt.
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <thread>
+
+#include <pybind11/functional.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/strutil.h>
+
+#include <defocus/error_line.h>
+#include <defocus/frame_scheduler.h>
+#include <defocus/io/frames.h>
+#include <defocus/io/image_output.h>
+#include <defocus/render_frame.h>
+#include <defocus/shot/shot_file.h>
+#include <defocus/version.h>
+
+namespace py = pybind11;
+using namespace defocus;
+using OIIO::ImageBuf;
+using OIIO::ImageSpec;
+using OIIO::ROI;
+using OIIO::TypeFloat;
+using OIIO::Strutil::fmt::format;
+
+namespace {
+
+/// Raised as defocus.Error, with the one-line message the CLI prints.
+struct Error : std::runtime_error {
+    explicit Error(const std::string& message) : std::runtime_error(error_line(message)) {}
+};
+
+/// Thrown out of a render at a stage boundary once Ctrl-C was pressed.
+struct Cancelled {};
+
+void check(bool ok, const std::string& error)
+{
+    if (!ok)
+        throw Error(error);
+}
+
+/// Runs work(cancelled) on its own thread while this one, GIL released,
+/// waits and checks Python's signals every 50 ms. A signal handler that
+/// raises (Ctrl-C: KeyboardInterrupt) sets `cancelled`; its exception is
+/// raised once the work has stopped, so that no file is half written.
+template<typename Work>
+void run_cancellable(Work&& work)
+{
+    std::atomic<bool> cancelled { false };
+    std::exception_ptr failure;
+    std::mutex mutex;
+    std::condition_variable finished_cv;
+    bool finished = false;
+    std::thread worker([&] {
+        try {
+            work(cancelled);
+        } catch (const Cancelled&) {
+        } catch (...) {
+            failure = std::current_exception();
+        }
+        std::lock_guard<std::mutex> lock(mutex);
+        finished = true;
+        finished_cv.notify_all();
+    });
+    bool interrupted = false;
+    for (;;) {
+        {
+            py::gil_scoped_release release;
+            std::unique_lock<std::mutex> lock(mutex);
+            if (finished_cv.wait_for(lock, std::chrono::milliseconds(50),
+                                     [&] { return finished; }))
+                break;
+        }
+        if (!interrupted && PyErr_CheckSignals() != 0) {
+            interrupted = true;
+            cancelled = true;
+        }
+    }
+    worker.join();
+    if (interrupted)
+        throw py::error_already_set();
+    if (failure)
+        std::rethrow_exception(failure);
+}
+
+/// A stage callback that stops the render once cancelled.
+StageCallback stop_when(const std::atomic<bool>& cancelled)
+{
+    return [&cancelled](const char*) {
+        if (cancelled)
+            throw Cancelled();
+    };
+}
+
+ShotAssets read_assets(const Shot& shot)
+{
+    ShotAssets assets;
+    std::string error;
+    check(check_shot(shot, error) && read_shot_assets(shot, assets, error), error);
+    return assets;
+}
+
+/// The frame to render: the one given, else the shot's first.
+int frame_or_first(const Shot& shot, std::optional<int> frame)
+{
+    if (frame)
+        return *frame;
+    std::vector<int> frames;
+    std::string error;
+    check(shot_frames(shot, frames, error), error);
+    return frames.front();
+}
+
+/// The image's data window (or display window, zero outside the data) as
+/// float32 rows of pixels, and its spec as OpenImageIO's XML.
+py::tuple image_result(const ImageBuf& image, bool crop)
+{
+    const ImageSpec& spec = image.spec();
+    ROI roi = image.roi();
+    if (crop)
+        roi = ROI(spec.full_x, spec.full_x + spec.full_width, spec.full_y,
+                  spec.full_y + spec.full_height, 0, 1, 0, spec.nchannels);
+    py::array_t<float> pixels({ roi.height(), roi.width(), roi.nchannels() });
+    float* data = pixels.mutable_data();
+    {
+        py::gil_scoped_release release;
+        image.get_pixels(roi, TypeFloat, data);
+    }
+    ImageSpec described = spec;
+    described.x = roi.xbegin, described.y = roi.ybegin;
+    described.width = roi.width(), described.height = roi.height();
+    return py::make_tuple(pixels, described.to_xml());
+}
+
+FrameResult render_one(const Shot& shot, std::optional<int> frame)
+{
+    const ShotAssets assets = read_assets(shot);
+    const int at = frame_or_first(shot, frame);
+    FrameResult result;
+    run_cancellable([&](const std::atomic<bool>& cancelled) {
+        std::string error;
+        check(render_frame(shot, at, assets, result, error, stop_when(cancelled)), error);
+    });
+    return result;
+}
+
+py::tuple render(const Shot& shot, std::optional<int> frame, bool crop)
+{
+    return image_result(render_one(shot, frame).image, crop);
+}
+
+py::tuple focus_map(const Shot& shot, std::optional<int> frame, bool crop)
+{
+    Shot map = shot;
+    map.output = OutputKind::FocusMap;
+    return image_result(render_one(map, frame).image, crop);
+}
+
+void render_to_file(const Shot& shot, const std::string& path, std::optional<int> frame)
+{
+    std::string error;
+    check(check_output(path, shot.compression, error), error);
+    const int at = frame_or_first(shot, frame);
+    check(overwritten_input(frame_inputs(shot, at), { path }).empty(),
+          path + ": the output would overwrite the input");
+    const ShotAssets assets = read_assets(shot);
+    run_cancellable([&](const std::atomic<bool>& cancelled) {
+        FrameResult result;
+        std::string error;
+        check(render_frame(shot, at, assets, result, error, stop_when(cancelled)), error);
+        if (cancelled)
+            throw Cancelled();
+        check(write_image_atomic(result.image, path, result.pixel_type, "", error), error);
+    });
+}
+
+/// Renders frames side by side as the CLI does (run_frames), writing each
+/// through `pattern`; progress(frame, path) is called as each is written.
+/// Bad frames are reported together once the others are written.
+std::vector<std::string> render_sequence(const Shot& shot, const std::string& pattern,
+                                         std::optional<std::vector<int>> frames_given,
+                                         const std::function<void(int, std::string)>& progress,
+                                         int threads, bool stop_on_error)
+{
+    std::string error;
+    std::vector<int> frames;
+    if (frames_given)
+        frames = *frames_given;
+    else
+        check(shot_frames(shot, frames, error), error);
+    check(!frames.empty(), "render_sequence: no frames to render");
+    std::vector<std::string> outputs, read;
+    check(frame_outputs("output", pattern, frames, outputs, error), error);
+    for (size_t i = 0; i < frames.size(); ++i) {
+        check(check_output(outputs[i], shot.compression, error), error);
+        for (const std::string& file : frame_inputs(shot, frames[i]))
+            read.push_back(file);
+    }
+    const std::string overwritten = overwritten_input(read, outputs);
+    check(overwritten.empty(), overwritten + ": the output would overwrite the input");
+    const ShotAssets assets = read_assets(shot);
+
+    std::vector<std::string> errors(frames.size());
+    std::exception_ptr progress_failure;
+    std::mutex progress_mutex;
+    ScheduleResult run;
+    run_cancellable([&](const std::atomic<bool>& cancelled) {
+        std::atomic<bool> stop { false };
+        run = run_frames(int(frames.size()), threads, shot.read.memory_limit.bytes(),
+                         stop_on_error, [&](int i) {
+            if (cancelled || stop)
+                return false;
+            try {
+                FrameResult result;
+                std::string& frame_error = errors[i];
+                if (!render_frame(shot, frames[i], assets, result, frame_error,
+                                  stop_when(cancelled), threads)
+                    || cancelled
+                    || !write_image_atomic(result.image, outputs[i], result.pixel_type, "",
+                                           frame_error))
+                    return false;
+            } catch (const Cancelled&) {
+                return false;
+            }
+            if (progress) {
+                py::gil_scoped_acquire gil;
+                try {
+                    progress(frames[i], outputs[i]);
+                } catch (...) {
+                    std::lock_guard<std::mutex> lock(progress_mutex);
+                    if (!progress_failure)
+                        progress_failure = std::current_exception();
+                    stop = true;
+                }
+            }
+            return true;
+        });
+        if (cancelled)
+            throw Cancelled();
+    });
+    if (progress_failure)
+        std::rethrow_exception(progress_failure);
+    if (!run.failed.empty()) {
+        std::vector<std::string> failed, reasons;
+        for (int i : run.failed) {
+            failed.push_back(std::to_string(frames[i]));
+            if (!errors[i].empty())
+                reasons.push_back(format("frame {}: {}", frames[i], errors[i]));
+        }
+        throw Error(format("{} of {} frames written; failed: {}{}{}",
+                           run.run - int(run.failed.size()), frames.size(),
+                           OIIO::Strutil::join(failed, ","), reasons.empty() ? "" : "; ",
+                           OIIO::Strutil::join(reasons, "; ")));
+    }
+    return outputs;
+}
+
+/// An ImageBuf of `channels` float channels over (0, 0, width, height)
+/// from C-contiguous float32 pixels (checked by the Python side).
+ImageBuf buffer(const py::array_t<float, py::array::c_style>& pixels,
+                std::vector<std::string> names)
+{
+    const int height = int(pixels.shape(0)), width = int(pixels.shape(1));
+    ImageSpec spec(width, height, int(names.size()), TypeFloat);
+    spec.channelnames = std::move(names);
+    if (spec.nchannels == 4)
+        spec.alpha_channel = 3;
+    else
+        spec.z_channel = 0;
+    ImageBuf buf(spec);
+    buf.set_pixels(buf.roi(), TypeFloat, pixels.data());
+    return buf;
+}
+
+/// A scene in memory: `layers` given as such, or (`flat`) one render to
+/// cut into layers.
+Scene array_scene(const std::vector<std::tuple<std::string, py::array_t<float, py::array::c_style>,
+                                               py::array_t<float, py::array::c_style>>>& layers,
+                  bool flat)
+{
+    Scene scene;
+    scene.source = flat ? "decompose()" : "render_layers()";
+    for (const auto& [name, rgba, z] : layers) {
+        Layer layer { name, buffer(rgba, { "R", "G", "B", "A" }), buffer(z, { "Z" }) };
+        (flat ? scene.flat : scene.layers).push_back(std::move(layer));
+    }
+    const ImageSpec& first = (flat ? scene.flat : scene.layers).front().color.spec();
+    scene.spec = ImageSpec(first.width, first.height, 5, TypeFloat);
+    scene.spec.channelnames = { "R", "G", "B", "A", "Z" };
+    scene.spec.alpha_channel = 3;
+    scene.spec.z_channel = 4;
+    return scene;
+}
+
+using ArrayLayers = std::vector<std::tuple<std::string, py::array_t<float, py::array::c_style>,
+                                           py::array_t<float, py::array::c_style>>>;
+
+/// `shot` with the in-memory scene as its input, so that it checks.
+Shot with_input(const Shot& settings, const Scene& scene)
+{
+    Shot shot = settings;
+    shot.inputs = { scene.source };
+    return shot;
+}
+
+py::tuple render_layers(const ArrayLayers& layers, const Shot& settings,
+                        std::optional<int> frame, bool crop)
+{
+    Scene scene = array_scene(layers, false);
+    const Shot shot = with_input(settings, scene);
+    const ShotAssets assets = read_assets(shot);
+    const int at = frame ? *frame : 1;
+    FrameResult result;
+    run_cancellable([&](const std::atomic<bool>& cancelled) {
+        std::string error;
+        check(render_scene(std::move(scene), shot, at, assets, result, error,
+                           stop_when(cancelled)),
+              error);
+    });
+    return image_result(result.image, crop);
+}
+
+/// The layers a flat render is cut into, back to front: (name, RGBA, Z)
+/// over the render's window, scene-linear.
+std::vector<py::tuple> decompose(const ArrayLayers& render, const Shot& settings,
+                                 std::optional<int> frame)
+{
+    Scene scene = array_scene(render, true);
+    const Shot shot = with_input(settings, scene);
+    const ROI window = scene.spec.roi();
+    const ShotAssets assets = read_assets(shot);
+    const int at = frame ? *frame : 1;
+    LayeredScene layered;
+    run_cancellable([&](const std::atomic<bool>& cancelled) {
+        FrameResult result;
+        std::string error;
+        check(prepare_layers(std::move(scene), shot, at, assets, layered, result, error,
+                             stop_when(cancelled)),
+              error);
+    });
+    std::vector<py::tuple> out;
+    for (const Layer& layer : layered.layers) {
+        py::array_t<float> rgba({ window.height(), window.width(), 4 });
+        py::array_t<float> z({ window.height(), window.width() });
+        ROI color = window, depth = window;
+        color.chend = 4, depth.chend = 1;
+        layer.color.get_pixels(color, TypeFloat, rgba.mutable_data());
+        layer.depth.get_pixels(depth, TypeFloat, z.mutable_data());
+        out.push_back(py::make_tuple(layer.name, rgba, z));
+    }
+    return out;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_defocus, m)
+{
+    m.doc() = "defocus's native core; use the defocus package, which wraps it.";
+    m.attr("__version__") = version();
+    py::register_exception<Error>(m, "Error", PyExc_RuntimeError);
+
+    py::class_<Shot>(m, "NativeShot")
+        .def(py::init<>())
+        .def(py::init<const Shot&>())
+        .def_readwrite("inputs", &Shot::inputs)
+        .def("get", [](const Shot& shot, const std::string& name) {
+            return shot_setting(shot, name);
+        })
+        .def("set", [](Shot& shot, const std::string& name, const std::string& value,
+                       const std::string& label) {
+            std::string error;
+            check(set_shot_setting(shot, name, value, error, label), error);
+        })
+        .def("is_given", [](const Shot& shot, const std::string& name) {
+            return is_given(shot, name);
+        })
+        .def("check", [](const Shot& shot) {
+            std::string error;
+            check(check_shot(shot, error), error);
+        })
+        .def("frames", [](const Shot& shot) {
+            std::vector<int> frames;
+            std::string error;
+            check(shot_frames(shot, frames, error), error);
+            return frames;
+        })
+        .def("to_json", [](const Shot& shot, const std::string& directory) {
+            return shot_to_json(shot, directory);
+        })
+        .def("save", [](const Shot& shot, const std::string& path) {
+            std::string error;
+            check(save_shot(shot, path, error), error);
+        });
+    m.def("load_shot", [](const std::string& path) {
+        Shot shot;
+        std::string error;
+        check(load_shot(path, shot, error), error);
+        return shot;
+    });
+    m.def("settings", [] {
+        std::vector<py::tuple> list;
+        for (const ShotSetting& s : shot_settings())
+            list.push_back(py::make_tuple(s.name, s.section, s.key, int(s.kind)));
+        return list;
+    });
+    m.def("render", &render);
+    m.def("focus_map", &focus_map);
+    m.def("render_to_file", &render_to_file);
+    m.def("render_sequence", &render_sequence);
+    m.def("render_layers", &render_layers);
+    m.def("decompose", &decompose);
+}

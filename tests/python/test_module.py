@@ -1,0 +1,316 @@
+"""The Python module against the defocus command and against itself.
+
+Run by CTest (python_module) with PYTHONPATH at the build tree's package and
+DEFOCUS_BIN, MAKE_EXAMPLE_SCENE_BIN and DEFOCUS_SHARED_DATA set.
+"""
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import threading
+import time
+
+import numpy as np
+import OpenImageIO as oiio
+import pytest
+
+import defocus
+
+DEFOCUS_BIN = os.environ["DEFOCUS_BIN"]
+GARDEN = os.path.join(os.environ.get("DEFOCUS_SHARED_DATA", ""), "scenes", "garden")
+
+
+def cli(*args):
+    """Runs the defocus command; its stderr when it fails."""
+    run = subprocess.run([DEFOCUS_BIN, *map(str, args), "-q"], capture_output=True, text=True)
+    return run.returncode, run.stderr.strip()
+
+
+def pixels(path):
+    """A file's pixels in its own pixel type, and its windows."""
+    inp = oiio.ImageInput.open(str(path))
+    assert inp, oiio.geterror()
+    spec = inp.spec()
+    data = inp.read_image(oiio.UNKNOWN)
+    inp.close()
+    return data, (spec.x, spec.y, spec.width, spec.height)
+
+
+@pytest.fixture(scope="session")
+def example(tmp_path_factory):
+    """The example scene: a four-part layered EXR with overscan."""
+    folder = tmp_path_factory.mktemp("example")
+    scene = folder / "scene.exr"
+    subprocess.run([os.environ["MAKE_EXAMPLE_SCENE_BIN"], str(scene)], check=True,
+                   capture_output=True)
+    return scene
+
+
+CAMERA = dict(focal=50, fstop=1.8, focus=4.0)
+CAMERA_ARGS = ["--focal", "50", "--fstop", "1.8", "--focus", "4"]
+
+
+def test_render_to_file_is_bit_identical_to_the_command(example, tmp_path):
+    assert cli(example, "-o", tmp_path / "cli.exr", *CAMERA_ARGS) == (0, "")
+    defocus.render_to_file(defocus.Shot(inputs=[example], **CAMERA), tmp_path / "py.exr")
+    ours, theirs = pixels(tmp_path / "py.exr"), pixels(tmp_path / "cli.exr")
+    assert ours[1] == theirs[1]
+    assert ours[0].dtype == theirs[0].dtype == np.float16
+    assert ours[0].tobytes() == theirs[0].tobytes()
+
+
+def test_render_gives_the_commands_float_pixels(example, tmp_path):
+    assert cli(example, "-o", tmp_path / "cli.exr", *CAMERA_ARGS, "-d", "float") == (0, "")
+    theirs, window = pixels(tmp_path / "cli.exr")
+    ours = defocus.render(defocus.Shot(inputs=[example], **CAMERA))
+    assert ours.dtype == np.float32 and ours.shape == (window[3], window[2], 4)
+    assert np.array_equal(ours, theirs)
+    # The same shot from a .dof file the command saved.
+    assert cli(example, *CAMERA_ARGS, "--save-scene", tmp_path / "shot.dof") == (0, "")
+    assert np.array_equal(defocus.render(tmp_path / "shot.dof"), theirs)
+
+
+def test_crop_gives_the_display_window(example):
+    shot = defocus.Shot(inputs=[example], **CAMERA)
+    whole, cropped = defocus.render(shot), defocus.render(shot, crop=True)
+    assert cropped.shape == (720, 1280, 4)
+    # The example's data window starts 64 pixels before the display window.
+    assert np.array_equal(cropped, whole[64:64 + 720, 64:64 + 1280])
+
+
+@pytest.mark.skipif(not os.path.exists(os.path.join(GARDEN, "layers.exr")),
+                    reason="no shared data (../shared/data/scenes/garden)")
+def test_garden_is_bit_identical_to_the_command(tmp_path):
+    layers = os.path.join(GARDEN, "layers.exr")
+    assert cli(layers, "-o", tmp_path / "cli.exr", "--focus", "3") == (0, "")
+    defocus.render_to_file(defocus.Shot(inputs=[layers], focus=3), tmp_path / "py.exr")
+    assert pixels(tmp_path / "py.exr")[0].tobytes() == pixels(tmp_path / "cli.exr")[0].tobytes()
+
+
+def test_a_focus_pull_sequence_matches_the_commands_frames(example, tmp_path):
+    pull = {1: 4.0, 4: 1.5}
+    assert cli(example, "--frames", "1-4", "-o", tmp_path / "cli.#.exr", "--focal", "50",
+               "--fstop", "1.8", "--focus", "1:4,4:1.5") == (0, "")
+    shot = defocus.Shot(inputs=[example], focal=50, fstop=1.8, focus=pull, frames="1-4")
+    written = []
+    files = defocus.render_sequence(shot, tmp_path / "py.#.exr",
+                                    progress=lambda frame, path: written.append(frame))
+    assert sorted(written) == [1, 2, 3, 4]
+    assert files == [str(tmp_path / f"py.{f:04d}.exr") for f in range(1, 5)]
+    frames = [pixels(f)[0] for f in files]
+    for f, ours in zip(range(1, 5), frames):
+        assert ours.tobytes() == pixels(tmp_path / f"cli.{f:04d}.exr")[0].tobytes()
+    # The pull moves the focus: every frame differs from the next.
+    assert all(not np.array_equal(a, b) for a, b in zip(frames, frames[1:]))
+
+
+def test_a_bad_frame_is_reported_after_the_others_are_written(tmp_path, example):
+    for f in (1, 2, 4):
+        os.symlink(example, tmp_path / f"in.{f:04d}.exr")
+    shot = defocus.Shot(inputs=[tmp_path / "in.#.exr"], frames="1-4", **CAMERA)
+    with pytest.raises(defocus.Error, match=r"^3 of 4 frames written; failed: 3; frame 3: .*"
+                                            r"in\.0003\.exr: no such file"):
+        defocus.render_sequence(shot, tmp_path / "out.#.exr")
+    assert sorted(os.listdir(tmp_path)) == sorted(
+        [f"in.{f:04d}.exr" for f in (1, 2, 4)] + [f"out.{f:04d}.exr" for f in (1, 2, 4)])
+
+
+def layered_arrays(width=96, height=64):
+    """Three layers of a small scene: a far gradient, a mid disc, a near bar."""
+    y, x = np.mgrid[0:height, 0:width].astype(np.float32)
+    far = np.zeros((height, width, 4), np.float32)
+    far[..., 0], far[..., 1], far[..., 2], far[..., 3] = x / width, y / height, 0.3, 1.0
+    mid = np.zeros_like(far)
+    inside = (x - 40) ** 2 + (y - 30) ** 2 < 15 ** 2
+    mid[inside] = (4.0, 2.0, 0.5, 1.0)
+    near = np.zeros_like(far)
+    near[:, 70:78] = (0.1, 0.2, 0.8, 0.75)
+    depth = lambda z: np.full((height, width), z, np.float32)
+    return [(far, depth(20.0), "far"), (mid, depth(3.0), "mid"), (near, depth(0.8), "near")]
+
+
+def write_layers(layers, path):
+    """A multi-part EXR, one float RGBA+Z part per layer."""
+    specs = []
+    for rgba, z, name in layers:
+        spec = oiio.ImageSpec(rgba.shape[1], rgba.shape[0], 5, oiio.FLOAT)
+        spec.channelnames = ("R", "G", "B", "A", "Z")
+        spec.alpha_channel, spec.z_channel = 3, 4
+        spec.attribute("name", name)
+        specs.append(spec)
+    out = oiio.ImageOutput.create(str(path))
+    assert out.open(str(path), specs)
+    for i, (rgba, z, _) in enumerate(layers):
+        if i > 0:
+            assert out.open(str(path), specs[i], "AppendSubimage")
+        assert out.write_image(np.concatenate([rgba, z[..., None]], axis=2))
+    out.close()
+
+
+SMALL_CAMERA = dict(focal=50, fstop=1.4, focus=3.0, sensor=5)
+
+
+def test_arrays_in_give_the_pixels_of_the_same_layers_from_a_file(tmp_path):
+    layers = layered_arrays()
+    write_layers(layers, tmp_path / "layers.exr")
+    from_file = defocus.render(defocus.Shot(inputs=[tmp_path / "layers.exr"], **SMALL_CAMERA))
+    from_arrays = defocus.render_layers(layers, **SMALL_CAMERA)
+    assert from_arrays.shape == from_file.shape
+    assert np.array_equal(from_arrays, from_file)
+    # The blur did something: the near bar's edges are soft.
+    assert 0.0 < from_arrays[32, 66, 3] < 1.0 or from_arrays[32, 66, 2] != layers[0][0][32, 66, 2]
+    # Settings through a shot and a camera dict give the same.
+    shot = defocus.Shot(focal=50, fstop=1.4)
+    assert np.array_equal(
+        defocus.render_layers(layers, shot, camera=dict(focus=3.0, sensor=5)), from_file)
+
+
+def test_imagebufs_in_and_out(tmp_path):
+    layers = layered_arrays()
+    bufs = []
+    for rgba, z, name in layers:
+        color = oiio.ImageBuf(oiio.ImageSpec(rgba.shape[1], rgba.shape[0], 4, oiio.FLOAT))
+        color.set_pixels(color.roi, rgba)
+        depth = oiio.ImageBuf(oiio.ImageSpec(z.shape[1], z.shape[0], 1, oiio.FLOAT))
+        depth.set_pixels(depth.roi, z[..., None])  # OIIO 2.4 misreads 2-D arrays
+        bufs.append((color, depth, name))
+    assert np.array_equal(defocus.render_layers(bufs, **SMALL_CAMERA),
+                          defocus.render_layers(layers, **SMALL_CAMERA))
+    write_layers(layers, tmp_path / "layers.exr")
+    shot = defocus.Shot(inputs=[tmp_path / "layers.exr"], **SMALL_CAMERA)
+    buf = defocus.render_imagebuf(shot)
+    assert isinstance(buf, oiio.ImageBuf)
+    assert np.array_equal(buf.get_pixels(oiio.FLOAT), defocus.render(shot))
+    assert buf.spec().get_float_attribute("defocus:focusDistance") == pytest.approx(3.0)
+    assert buf.spec().get_string_attribute("defocus:aperture") == "disc"
+    assert (buf.roi_full.width, buf.roi_full.height) == (96, 64)
+
+
+def test_decompose_cuts_a_flat_render_into_layers_that_composite_back():
+    height, width = 64, 96
+    rgba = np.zeros((height, width, 4), np.float32)
+    rgba[...] = (0.2, 0.4, 0.6, 1.0)
+    z = np.full((height, width), 30.0, np.float32)
+    rgba[20:40, 30:60] = (3.0, 1.0, 0.5, 1.0)
+    z[20:40, 30:60] = 1.0
+    layers = defocus.decompose(rgba, z, **SMALL_CAMERA)
+    assert len(layers) >= 2
+    near_depths = [np.median(lz[la[..., 3] > 0]) for la, lz, _ in layers]
+    assert near_depths == sorted(near_depths, reverse=True)  # back to front
+    over = np.zeros_like(rgba)
+    for layer_rgba, _, _ in layers:
+        over = layer_rgba + (1.0 - layer_rgba[..., 3:4]) * over
+    assert np.allclose(over, rgba, rtol=1e-6, atol=1e-6)
+    # render_layers takes them as they are; the in-focus square stays sharp.
+    out = defocus.render_layers(layers, **{**SMALL_CAMERA, "focus": 1.0})
+    assert np.allclose(out[30, 45], rgba[30, 45], rtol=1e-4)
+
+
+@pytest.mark.parametrize("bad, message", [
+    (lambda l: [(l[0][0].astype(np.float64), l[0][1])], r"rgba: dtype float64; expected float32"),
+    (lambda l: [(l[0][0][..., :3], l[0][1])], r"rgba: shape \(64, 96, 3\); expected"),
+    (lambda l: [(l[0][0], l[0][1][:10])], r"z is 96x10, rgba 96x64"),
+    (lambda l: [(l[0][0], l[0][1]), (l[1][0][:32], l[1][1][:32])], r"96x32, the first layer 96x64"),
+    (lambda l: [(l[0][0], l[0][1].astype(np.int32))], r"z: dtype int32"),
+    (lambda l: [("not an image", l[0][1])], r"expected a numpy array or an OpenImageIO"),
+    (lambda l: [], r"no layers"),
+])
+def test_bad_arrays_raise_value_errors(bad, message):
+    with pytest.raises(ValueError, match=message):
+        defocus.render_layers(bad(layered_arrays()), **SMALL_CAMERA)
+
+
+def test_errors_carry_the_commands_messages(tmp_path):
+    code, message = cli(tmp_path / "missing.exr", "-o", tmp_path / "out.exr", "--focus", "3")
+    assert code != 0
+    with pytest.raises(defocus.Error) as raised:
+        defocus.render(defocus.Shot(inputs=[tmp_path / "missing.exr"], focus=3))
+    assert "defocus: " + str(raised.value) == message
+    assert isinstance(raised.value, RuntimeError)
+    with pytest.raises(defocus.Error, match=r"unknown setting 'fsop'"):
+        defocus.Shot(fsop=2)
+    with pytest.raises(defocus.Error, match=r"fstop: -1 is out of range"):
+        defocus.Shot(fstop=-1)
+    with pytest.raises(defocus.Error, match=r"focus: keyframe 1.5 is not a whole frame"):
+        defocus.Shot(focus={1.5: 3.0})
+    with pytest.raises(AttributeError):
+        defocus.Shot().fsop
+    (tmp_path / "bad.dof").write_text('{"version": 1, "inputs": ["a.exr"], "camera": {"fsop": 2}}')
+    code, message = cli(tmp_path / "bad.dof", "-o", tmp_path / "out.exr")
+    with pytest.raises(defocus.Error) as raised:
+        defocus.Shot.load(tmp_path / "bad.dof")
+    assert "defocus: " + str(raised.value) == message
+
+
+def test_shots_round_trip_through_dof_files(tmp_path):
+    shot = defocus.Shot(inputs=[tmp_path / "plate.#.exr"], frames=range(1001, 1041), focal=85, fstop=1.4,
+                        focus={1001: 3.0, 1040: 1.2}, focus_tilt=(5, 0), aperture="polygon",
+                        blades=7, max_blur=200)
+    assert shot.focus == {1001: 3.0, 1040: 1.2}
+    assert shot.frames == "1001-1040" and shot.blades == 7 and shot.aperture == "polygon"
+    assert shot.focus_at is None
+    shot.save(tmp_path / "shot.dof")
+    loaded = defocus.Shot.load(tmp_path / "shot.dof")
+    assert loaded == shot
+    assert loaded.inputs == [str(tmp_path / "plate.#.exr")]
+    assert repr(loaded).startswith("Shot(inputs=[") and "focus={1001: 3.0, 1040: 1.2}" in repr(loaded)
+    # Setting focus_at clears focus, as on the command line.
+    loaded.focus_at = {1001: (640, 360), 1040: (200, 300)}
+    assert loaded.focus is None and loaded.focus_at[1040] == (200.0, 300.0)
+
+
+def test_two_threads_render_at_once_with_identical_results(example):
+    shot = defocus.Shot(inputs=[example], **CAMERA)
+    alone = defocus.render(shot)
+    results = [None, None]
+
+    def run(i):
+        results[i] = defocus.render(shot)
+    threads = [threading.Thread(target=run, args=(i,)) for i in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert np.array_equal(results[0], alone) and np.array_equal(results[1], alone)
+
+
+def test_ctrl_c_raises_keyboard_interrupt_and_leaves_no_partial_file(example, tmp_path):
+    script = textwrap.dedent(f"""
+        import sys, defocus
+        shot = defocus.Shot(inputs=[{str(example)!r}], frames="1-40", focal=50, fstop=1.8,
+                            focus={{1: 4.0, 40: 1.5}})
+        def progress(frame, path):
+            print("written", path, flush=True)
+        try:
+            defocus.render_sequence(shot, {str(tmp_path / "out.#.exr")!r}, progress=progress)
+        except KeyboardInterrupt:
+            print("interrupted", flush=True)
+            sys.exit(3)
+    """)
+    child = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True,
+                             env=os.environ)
+    assert child.stdout.readline().startswith("written")
+    child.send_signal(signal.SIGINT)
+    start = time.monotonic()
+    out, _ = child.communicate(timeout=60)
+    assert child.returncode == 3 and "interrupted" in out
+    assert time.monotonic() - start < 10
+    files = os.listdir(tmp_path)
+    assert 0 < len(files) < 40
+    for name in files:
+        assert name.startswith("out.") and name.endswith(".exr"), name  # no temporaries
+        assert pixels(tmp_path / name)[0].shape == (848, 1408, 4)
+
+
+def test_help_reads_well():
+    assert "render_layers" in defocus.__doc__
+    for name in defocus.__all__:
+        obj = getattr(defocus, name)
+        if callable(obj):
+            assert obj.__doc__ and len(obj.__doc__) > 40, name
+    for name in ("load", "save", "frames_to_render", "given"):
+        assert getattr(defocus.Shot, name).__doc__, name
+    assert defocus.__version__ == subprocess.run(
+        [DEFOCUS_BIN, "--version"], capture_output=True, text=True).stdout.split()[-1]
+    assert defocus.settings()["aperture"] == "aperture.shape"
