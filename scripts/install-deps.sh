@@ -13,6 +13,10 @@ packages=(
     libopencolorio-dev opencolorio-tools   # colour management, ociocheck
     nlohmann-json3-dev                     # .dof scene files (JSON)
     catch2                                 # tests
+    pybind11-dev python3-dev               # the Python module (import defocus)
+    python3-numpy python3-pytest           # its arrays, and its tests
+    help2man                               # man pages made from --help
+    bash-completion                        # tests: completion as bash runs it
 )
 if [ "${1:-}" = fuzz ]; then
     packages+=(clang libclang-rt-14-dev)   # libFuzzer harnesses (scripts/fuzz.sh)

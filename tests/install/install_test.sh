@@ -2,7 +2,9 @@
 # Installs the build into a fresh prefix, as `cmake --install --prefix`
 # does for a user, then checks that the installed tools run from there
 # (relative RPATHs, the shipped config beside them), that the docs are
-# installed, and that another CMake project finds and links the package.
+# installed, and that another project finds and links the package through
+# CMake and through pkg-config; the Python package, man pages and bash
+# completion are installed and work from there.
 #   install_test.sh BUILD_DIR SOURCE_DIR SCRATCH_DIR
 set -euo pipefail
 build=$1 source=$2 scratch=$3
@@ -24,7 +26,7 @@ case $runpath in *'$ORIGIN'*) ;; *) fail "defocus has no \$ORIGIN-relative RPATH
 "$build/bin/make_example_scene" "$scratch/scene.exr" --width 160 --height 90 > /dev/null
 log=$(env -u OCIO "$prefix/bin/defocus" "$scratch/scene.exr" -o "$scratch/out.exr" \
       --focal 50 --fstop 1.8 --focus 4 -v)
-grep -q "config $prefix/bin/../share/defocus/config.ocio (shipped)" <<< "$log" \
+grep -q "config $prefix/share/defocus/config.ocio (shipped)" <<< "$log" \
     || fail "the installed defocus did not use the installed config: $log"
 
 cmake -S "$source/tests/install" -B "$scratch/downstream" -DCMAKE_PREFIX_PATH="$prefix" \
@@ -33,4 +35,36 @@ cmake --build "$scratch/downstream" > "$scratch/build.log" 2>&1 \
     || { cat "$scratch/build.log"; fail "building against the installed package"; }
 "$scratch/downstream/downstream" | grep -q "loaded $prefix/share/defocus/config.ocio" \
     || fail "defocus_OCIO_CONFIG does not name the installed config"
+
+# pkg-config: the same program built by hand (static library: --static).
+flags=$(PKG_CONFIG_PATH="$prefix/lib/pkgconfig" pkg-config --cflags --libs --static defocus) \
+    || fail "pkg-config does not find defocus.pc"
+g++ -std=c++17 -DPACKAGE_OCIO_CONFIG="\"$prefix/share/defocus/config.ocio\"" \
+    "$source/tests/install/downstream.cpp" -o "$scratch/downstream_pc" $flags \
+    || fail "building with pkg-config --cflags --libs --static defocus"
+"$scratch/downstream_pc" | grep -q "loaded $prefix/share/defocus/config.ocio" \
+    || fail "the program built with pkg-config did not run"
+
+# The Python package, imported from the prefix (the module's RPATH finds
+# the library, the config is the installed one).
+if [ -f "$build/python/defocus/__init__.py" ]; then
+    site=$prefix/lib/python3/dist-packages
+    [ -f "$site/defocus/_defocus.pyi" ] || fail "the Python type stubs are not installed"
+    env -u OCIO PYTHONPATH="$site" /usr/bin/python3 -c "
+import defocus, numpy, sys
+assert defocus.__file__.startswith('$site'), defocus.__file__
+out = defocus.render(defocus.Shot(inputs=['$scratch/scene.exr'], focal=50, fstop=1.8, focus=4))
+assert out.shape[2] == 4 and numpy.isfinite(out).all()
+" || fail "the installed Python package does not render"
+fi
+
+if command -v help2man > /dev/null; then
+    for tool in defocus layerize; do
+        [ -s "$prefix/share/man/man1/$tool.1" ] || fail "man page $tool.1 not installed"
+    done
+fi
+for tool in defocus layerize; do
+    [ -s "$prefix/share/bash-completion/completions/$tool" ] \
+        || fail "bash completion for $tool not installed"
+done
 echo "install test passed"

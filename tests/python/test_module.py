@@ -314,3 +314,18 @@ def test_help_reads_well():
     assert defocus.__version__ == subprocess.run(
         [DEFOCUS_BIN, "--version"], capture_output=True, text=True).stdout.split()[-1]
     assert defocus.settings()["aperture"] == "aperture.shape"
+
+
+def test_the_contact_sheet_example_runs(tmp_path):
+    script = os.path.join(os.environ["EXAMPLES_DIR"], "contact_sheet.py")
+    run = subprocess.run([sys.executable, script, "--demo", "-o", str(tmp_path / "sheet.png"),
+                          "--width", "160", "--keep"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    sheet = oiio.ImageBuf(str(tmp_path / "sheet.png"))
+    assert (sheet.spec().width, sheet.spec().height) == (8 + 3 * 168, 8 + 2 * (90 + 24 + 8))
+    assert len([f for f in os.listdir(tmp_path) if f.endswith(".exr")]) == 6
+    # Six different renders: the wedge's cells differ.
+    cells = [sheet.get_pixels(oiio.FLOAT, oiio.ROI(8 + c * 168, 8 + c * 168 + 160,
+                                                   8 + r * 122, 8 + r * 122 + 90))
+             for r in range(2) for c in range(3)]
+    assert all(not np.array_equal(a, b) for i, a in enumerate(cells) for b in cells[i + 1:])
