@@ -1183,6 +1183,21 @@ pid_t start_defocus(const std::vector<std::string>& args)
     return pid;
 }
 
+/// Runs defocus with `args` to the end; its exit code (-1 when a signal
+/// ended it) and its peak resident memory in KB.
+struct Finished {
+    int exit_code;
+    double peak_kb;
+};
+Finished run_to_end(const std::vector<std::string>& args)
+{
+    const pid_t pid = start_defocus(args);
+    int status = 0;
+    struct rusage usage = {};
+    REQUIRE(wait4(pid, &status, 0, &usage) == pid);
+    return { WIFEXITED(status) ? WEXITSTATUS(status) : -1, double(usage.ru_maxrss) };
+}
+
 /// The names of the files in a folder, sorted.
 std::vector<std::string> folder(const std::string& dir)
 {
@@ -1494,21 +1509,16 @@ TEST_CASE("memory over a 16-frame sequence stays bounded by the frames in flight
                 "--height 720", log) == 0);
     for (int frame = 2; frame <= 16; ++frame)
         REQUIRE(Filesystem::copy(dir + "/f.0001.exr", format("{}/f.{:04d}.exr", dir, frame)));
-    // The peak resident memory of a run, in KB.
-    auto peak_kb = [&](const std::vector<std::string>& args) {
-        const pid_t pid = start_defocus(args);
-        int status = 0;
-        struct rusage usage = {};
-        REQUIRE(wait4(pid, &status, 0, &usage) == pid);
-        REQUIRE((WIFEXITED(status) && WEXITSTATUS(status) == 0));
-        return double(usage.ru_maxrss);
-    };
-    const double one = peak_kb({ dir + "/f.0001.exr", "-o", dir + "/one.exr", "--focus", "4" });
+    const Finished first = run_to_end({ dir + "/f.0001.exr", "-o", dir + "/one.exr", "--focus",
+                                        "4" });
     // Two frames at most run side by side here (--threads 2): with the
     // program's own memory, under twice one frame's peak, however long the
     // sequence.
-    const double sixteen = peak_kb({ dir + "/f.#.exr", "-o", dir + "/o.#.exr", "--focus", "4",
-                                     "--threads", "2" });
+    const Finished all = run_to_end({ dir + "/f.#.exr", "-o", dir + "/o.#.exr", "--focus", "4",
+                                      "--threads", "2" });
+    REQUIRE(first.exit_code == 0);
+    REQUIRE(all.exit_code == 0);
+    const double one = first.peak_kb, sixteen = all.peak_kb;
     INFO("one frame " << one / 1024 << " MB, 16 frames " << sixteen / 1024 << " MB");
     CHECK(sixteen < 2.0 * one);
     CHECK(Filesystem::exists(dir + "/o.0016.exr"));
@@ -1530,13 +1540,10 @@ TEST_CASE("files the fuzzers found are refused quickly and cheaply")
     };
     for (const Found& f : found) {
         INFO(f.file);
-        const pid_t pid = start_defocus({ std::string(FUZZ_CORPUS_DIR) + "/scene/" + f.file, "-o",
-                                          dir + "/o.exr", "--focus", "2" });
-        int status = 0;
-        struct rusage usage = {};
-        REQUIRE(wait4(pid, &status, 0, &usage) == pid);
-        CHECK((WIFEXITED(status) && WEXITSTATUS(status) == 1));
-        CHECK(usage.ru_maxrss < 1024 * 1024);  // KB: under 1 GB
+        const Finished run = run_to_end({ std::string(FUZZ_CORPUS_DIR) + "/scene/" + f.file,
+                                          "-o", dir + "/o.exr", "--focus", "2" });
+        CHECK(run.exit_code == 1);
+        CHECK(run.peak_kb < 1024 * 1024);  // under 1 GB
         std::string log;
         run_defocus(std::string(FUZZ_CORPUS_DIR) + "/scene/" + f.file + " -o " + dir
                         + "/o.exr --focus 2",
