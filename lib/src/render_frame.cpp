@@ -161,10 +161,10 @@ double spread_bytes(const LayeredScene& layered)
         grown.xend += reach;
         grown.ybegin -= reach;
         grown.yend += reach;
-        bytes += double(grown.npixels()) * 5 * sizeof(float);
+        bytes += float_bytes(grown.npixels(), 5);
         all = roi_union(all, grown);
     }
-    return bytes + 2.0 * double(all.npixels()) * 4 * sizeof(float);
+    return bytes + 2.0 * float_bytes(all.npixels(), 4);
 }
 
 /// A frame from its prepared layers to the image to write. Errors do not
@@ -244,8 +244,8 @@ bool frame_spec(const Shot& shot, int frame, const ShotAssets& assets, ImageSpec
         // window, with a margin for block alignment and lateral CA.
         const double reach = 0.5 * camera.max_blur_px + 64
                              + std::abs(camera.lateral_ca) * (input.full_width + input.full_height);
-        const double probe_bytes = (window.width() + 2 * reach) * (window.height() + 2 * reach)
-                                   * 4 * sizeof(float);
+        const double probe_bytes =
+            float_bytes((window.width() + 2 * reach) * (window.height() + 2 * reach), 4);
         if (!shot.read.memory_limit.allows(probe_bytes)) {
             error = format("{}: {}", Strutil::join(frame_inputs(shot, frame), " "),
                            shot.read.memory_limit.exceeded(
@@ -259,7 +259,7 @@ bool frame_spec(const Shot& shot, int frame, const ShotAssets& assets, ImageSpec
     }
     // A host allocates what the spec says (OpenImageIO crashes on windows
     // near 100000 pixels square), so a spec is a promise the frame fits.
-    const double bytes = double(std::max(window.npixels(), display.npixels())) * 4 * sizeof(float);
+    const double bytes = float_bytes(std::max(window.npixels(), display.npixels()), 4);
     if (!shot.read.memory_limit.allows(bytes)) {
         error = format("{}: {}", Strutil::join(frame_inputs(shot, frame), " "),
                        shot.read.memory_limit.exceeded(

@@ -481,12 +481,6 @@ bool choose_parts(ImageInput& in, const std::string& filename, const ReadOptions
     return true;
 }
 
-/// Bytes of float pixels over a part's data window, `channels` a pixel.
-double window_bytes(const ImageSpec& spec, int channels)
-{
-    return double(spec.width) * double(spec.height) * channels * sizeof(float);
-}
-
 /// What reading a file's chosen parts will allocate, from their headers
 /// (a deep part's samples are counted once its sample counts are read):
 /// checked against the memory limit before anything is allocated.
@@ -495,9 +489,9 @@ bool fits_memory_limit(const FileLayout& layout, bool openexr, const std::string
 {
     double bytes = 0.0;
     auto flat = [&](const Part& part) {
-        bytes += window_bytes(part.spec, 5);  // the layer: RGBA + Z
+        bytes += float_bytes(part.spec.image_pixels(), 5);  // the layer: RGBA + Z
         if (!openexr)                          // and the file's channels, read first
-            bytes += window_bytes(part.spec, part.spec.nchannels);
+            bytes += float_bytes(part.spec.image_pixels(), part.spec.nchannels);
     };
     for (size_t i : layout.complete)
         if (layout.parts[i].spec.deep)
@@ -507,7 +501,7 @@ bool fits_memory_limit(const FileLayout& layout, bool openexr, const std::string
     if (layout.joined_color >= 0)
         flat(layout.parts[layout.joined_color]);
     if (layout.joined_depth >= 0)
-        bytes += window_bytes(layout.parts[layout.joined_depth].spec, openexr ? 1 : 4);
+        bytes += float_bytes(layout.parts[layout.joined_depth].spec.image_pixels(), openexr ? 1 : 4);
     if (limit.allows(bytes))
         return true;
     const ROI& w = layout.data_window;
@@ -554,7 +548,7 @@ bool read_depth_file(const std::string& filename, const ImageSpec& render,
     }
     if (!same_display_window(spec, render, filename, error))
         return false;
-    const double bytes = window_bytes(spec, exr.is_open() ? 1 : spec.nchannels);
+    const double bytes = float_bytes(spec.image_pixels(), exr.is_open() ? 1 : spec.nchannels);
     if (!limit.allows(bytes)) {
         error = format("{}: {}", filename,
                        limit.exceeded(format("a depth image of {}x{}", spec.width, spec.height),

@@ -268,12 +268,6 @@ std::vector<bool> hidden_under_nearer(const Fragments& frags, const Layer& layer
     return holes;
 }
 
-/// Bytes of a layer's RGBA and Z over `roi`.
-double layer_bytes(const ROI& roi)
-{
-    return double(roi.npixels()) * 5 * sizeof(float);
-}
-
 /// A bound on the bytes of a deep image's fragments: volume samples are
 /// split at every layer plane they cross, and the fragments are held twice
 /// for a moment (per row, then together).
@@ -308,7 +302,7 @@ bool slice(const Fragments& frags, const std::string& base, const LayerBounds& b
     layers.reserve(layers.size() + bounds.count());
     for (int k = 0; k < bounds.count(); ++k) {
         // A layer is made over all of the fragments' window, then cropped.
-        const double need = held + fragment_bytes + layer_bytes(frags.roi);
+        const double need = held + fragment_bytes + float_bytes(frags.roi.npixels(), 5);
         if (!limit.allows(need)) {
             error = cutting_exceeds(limit, base, bounds, need);
             return false;
@@ -327,7 +321,7 @@ bool slice(const Fragments& frags, const std::string& base, const LayerBounds& b
                                    box_half_width(0.5 * c) + 1.0, nthreads);
         }
         crop_to_content(layer, nthreads);
-        held += layer_bytes(layer.color.roi());
+        held += float_bytes(layer.color.roi().npixels(), 5);
         layers.push_back(std::move(layer));
     }
     return true;
@@ -435,7 +429,7 @@ bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
     bounds = choose_layer_bounds(scene, coc, options);
     double held = 0.0;
     for (const Layer& layer : scene.layers)
-        held += layer_bytes(layer.color.roi());
+        held += float_bytes(layer.color.roi().npixels(), 5);
     for (const Layer& flat : scene.flat)
         if (!slice(flat_fragments(flat, coc, bounds, nthreads), flat.name, bounds,
                    options.memory_limit, held, scene.layers, error, nthreads))

@@ -32,4 +32,11 @@ private:
     size_t m_bytes = 0;  ///< 0: the default
 };
 
+/// The bytes of `pixels` pixels of `channels` floats, as the checks
+/// against the limit count them (in double: a hostile size cannot overflow).
+inline double float_bytes(double pixels, int channels)
+{
+    return pixels * channels * sizeof(float);
+}
+
 }  // namespace defocus
