@@ -336,8 +336,10 @@ def render_sequence(shot: _ShotArg, output: Union[str, os.PathLike],
                                     progress, threads, stop_on_error)
 
 
-def _settings_shot(shot: Optional[Shot], camera: Optional[Dict[str, Any]],
+def _settings_shot(shot: Union[Shot, Dict[str, Any], None], camera: Optional[Dict[str, Any]],
                    settings: Dict[str, Any]) -> Shot:
+    if isinstance(shot, dict):  # the camera given in the shot's place
+        shot, camera = None, {**shot, **(camera or {})}
     s = Shot() if shot is None else shot.copy()
     for name, value in {**(camera or {}), **settings}.items():
         s._set(name, value)
@@ -395,7 +397,7 @@ def _layers(layers: Sequence[Any], what: str) -> List[Tuple[str, np.ndarray, np.
     return out
 
 
-def render_layers(layers: Sequence[Any], shot: Optional[Shot] = None,
+def render_layers(layers: Sequence[Any], shot: Union[Shot, Dict[str, Any], None] = None,
                   frame: Optional[int] = None, crop: bool = False,
                   camera: Optional[Dict[str, Any]] = None, **settings: Any) -> np.ndarray:
     """Renders layers held in memory, as defocus renders the same layers
@@ -405,15 +407,17 @@ def render_layers(layers: Sequence[Any], shot: Optional[Shot] = None,
     sorted by depth): rgba premultiplied float32, height x width x 4; z
     planar camera-space depth in metres, float32, height x width. Either may
     be an OpenImageIO.ImageBuf. All layers share one size, which is the
-    display window. The settings come from `shot` (its inputs unused),
-    then `camera` (a dict), then keywords: render_layers(layers, focal=85,
+    display window. The settings come from `shot` (a Shot, whose inputs
+    are unused, or a dict of settings), then `camera` (a dict), then
+    keywords: render_layers(layers, focal=85,
     fstop=1.4, focus=3.0, aperture="disc"). Returns what render() returns.
     """
     s = _settings_shot(shot, camera, settings)
     return _defocus.render_layers(_layers(layers, "layers"), s._native, frame, crop)[0]
 
 
-def decompose(rgba: Any, z: Any, shot: Optional[Shot] = None, frame: Optional[int] = None,
+def decompose(rgba: Any, z: Any, shot: Union[Shot, Dict[str, Any], None] = None,
+              frame: Optional[int] = None,
               camera: Optional[Dict[str, Any]] = None,
               **settings: Any) -> List[Tuple[np.ndarray, np.ndarray, str]]:
     """Cuts a flat render (premultiplied RGBA and depth, float32 arrays or

@@ -196,6 +196,9 @@ def test_decompose_cuts_a_flat_render_into_layers_that_composite_back():
     z[20:40, 30:60] = 1.0
     layers = defocus.decompose(rgba, z, **SMALL_CAMERA)
     assert len(layers) >= 2
+    # The camera as a dict in the shot's place gives the same layers.
+    again = defocus.decompose(rgba, z, SMALL_CAMERA)
+    assert all(np.array_equal(a[0], b[0]) for a, b in zip(layers, again))
     near_depths = [np.median(lz[la[..., 3] > 0]) for la, lz, _ in layers]
     assert near_depths == sorted(near_depths, reverse=True)  # back to front
     over = np.zeros_like(rgba)
