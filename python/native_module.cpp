@@ -27,6 +27,7 @@
 #include <defocus/io/frames.h>
 #include <defocus/io/image_output.h>
 #include <defocus/render_frame.h>
+#include <defocus/shot/settings_hash.h>
 #include <defocus/shot/shot_file.h>
 #include <defocus/version.h>
 
@@ -399,6 +400,9 @@ PYBIND11_MODULE(_defocus, m)
             check(shot_frames(shot, frames, error), error);
             return frames;
         })
+        .def("settings_hash", [](const Shot& shot, int frame) {
+            return settings_hash(shot, frame);
+        })
         .def("to_json", [](const Shot& shot, const std::string& directory) {
             return shot_to_json(shot, directory);
         })
@@ -417,6 +421,13 @@ PYBIND11_MODULE(_defocus, m)
         for (const ShotSetting& s : shot_settings())
             list.push_back(py::make_tuple(s.name, s.section, s.key, int(s.kind)));
         return list;
+    });
+    m.def("frame_path", &frame_path);
+    m.def("chunk_frames", &chunk_frames);
+    m.def("written_with_settings", [](const std::string& path, const std::string& hash) {
+        std::string why;
+        const bool current = written_with_settings(path, hash, why);
+        return py::make_tuple(current, why);
     });
     m.def("render", &render);
     m.def("focus_map", &focus_map);

@@ -17,6 +17,7 @@ packages=(
     python3-numpy python3-pytest           # its arrays, and its tests
     help2man                               # man pages made from --help
     bash-completion                        # tests: completion as bash runs it
+    slurm-wlm munge                        # tests: defocus-submit on a one-node Slurm cluster
 )
 if [ "${1:-}" = fuzz ]; then
     packages+=(clang libclang-rt-14-dev)   # libFuzzer harnesses (scripts/fuzz.sh)

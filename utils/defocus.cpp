@@ -20,6 +20,7 @@
 #include <defocus/io/frames.h>
 #include <defocus/io/image_output.h>
 #include <defocus/render_frame.h>
+#include <defocus/shot/settings_hash.h>
 #include <defocus/shot/shot_file.h>
 
 #include "cli_options.h"
@@ -33,8 +34,9 @@ namespace {
 
 struct CommandLine {
     Shot shot;
-    std::string output, preview, display, display_view, save_scene;
+    std::string output, preview, display, display_view, save_scene, chunk;
     bool verbose = false, quiet = false, stop_on_error = false, preview_alpha = false;
+    bool skip_existing = false;
     int threads = 0;
 };
 
@@ -94,6 +96,14 @@ bool parse_command_line(int argc, const char* argv[], CommandLine& cl, bool& hel
     ap.arg("--stop-on-error").help("Stop at the first bad frame (default: report it, "
                                    "write the others, exit non-zero)")
         .action([&](cspan<const char*>) { cl.stop_on_error = true; });
+    ap.arg("--chunk K/N")
+        .help("Render only the K-th of N chunks of the frames: neighbouring frames, every "
+              "frame in exactly one chunk (for render farms; see defocus-submit)")
+        .action(shot_args.store_into(cl.chunk));
+    ap.arg("--skip-existing")
+        .help("Skip frames whose output was written with the same settings (the output "
+              "records them: defocus:settingsHash); render the others, -v says why")
+        .action([&](cspan<const char*>) { cl.skip_existing = true; });
     shot_args.add_options(ap, OptionGroup::Camera);
     shot_args.add_options(ap, OptionGroup::Aperture);
     shot_args.add_options(ap, OptionGroup::Scene);
@@ -273,6 +283,44 @@ int main(int argc, const char* argv[])
         || !frame_outputs("-o", cl.output, frames, outputs, error)
         || !frame_outputs("--preview", cl.preview, frames, previews, error))
         return fail(error);
+    const size_t shot_frame_count = frames.size();
+    if (!cl.chunk.empty()) {
+        int k = 0, n = 0;
+        if (!parse_chunk("--chunk", cl.chunk, k, n, error))
+            return fail(error);
+        frames = chunk_frames(frames, k, n);
+        if (frames.empty()) {
+            if (!cl.quiet)
+                Strutil::print("defocus: chunk {}/{} has no frames ({} frames in {} chunks)\n",
+                               k, n, shot_frame_count, n);
+            return EXIT_SUCCESS;
+        }
+    }
+    int skipped = 0;
+    if (cl.skip_existing) {
+        // Frames already written with these settings are left as they are.
+        std::vector<int> to_render;
+        for (int frame : frames) {
+            const std::string output = frame_path(cl.output, frame);
+            std::string why;
+            const std::string label = is_sequence(shot) ? format("frame {}: ", frame) : "";
+            if (written_with_settings(output, settings_hash(shot, frame), why)) {
+                ++skipped;
+                if (cl.verbose)
+                    Strutil::print("defocus {}skipped: {} is written with these settings\n",
+                                   label, output);
+                continue;
+            }
+            if (cl.verbose && why != "does not exist")
+                Strutil::print("defocus {}rendering again: {} {}\n", label, output, why);
+            to_render.push_back(frame);
+        }
+        frames = std::move(to_render);
+    }
+    if (frames.size() != shot_frame_count
+        && (!frame_outputs("-o", cl.output, frames, outputs, error)
+            || !frame_outputs("--preview", cl.preview, frames, previews, error)))
+        return fail(error);
     // Refused before any frame is rendered, not after each.
     for (size_t i = 0; i < outputs.size(); ++i) {
         if (!check_output(outputs[i], shot.compression, error))
@@ -359,6 +407,8 @@ int main(int argc, const char* argv[])
             failed.push_back(std::to_string(frames[i]));
         const int written_count = run.run - int(run.failed.size());
         std::string summary = format("{} of {} frames written", written_count, frames.size());
+        if (skipped > 0)
+            summary += format(" ({} more skipped: written with these settings)", skipped);
         if (!failed.empty())
             summary += format("; failed: {}", Strutil::join(failed, ","));
         if (run.run < int(frames.size()))
@@ -367,6 +417,8 @@ int main(int argc, const char* argv[])
             Strutil::print(stderr, "defocus: {}\n", error_line(summary));
         else if (!cl.quiet)
             Strutil::print("defocus: {}\n", summary);
+    } else if (skipped > 0 && !cl.quiet) {
+        Strutil::print("defocus: {} is written with these settings: skipped\n", cl.output);
     }
     return run.failed.empty() ? EXIT_SUCCESS : EXIT_FAILURE;
 }

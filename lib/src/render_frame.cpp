@@ -9,6 +9,7 @@
 #include <defocus/io/scene_io.h>
 #include <defocus/layers/edges.h>
 #include <defocus/layers/layering.h>
+#include <defocus/shot/settings_hash.h>
 #include <defocus/version.h>
 
 namespace defocus {
@@ -52,6 +53,7 @@ void describe_output(ImageSpec& spec, const ImageSpec& input, const Shot& shot,
     }
     if (is_sequence(shot))
         spec.attribute("defocus:frame", frame);
+    spec.attribute("defocus:settingsHash", settings_hash(shot, frame));
     spec.attribute("Software", std::string("defocus ") + version());
 }
 

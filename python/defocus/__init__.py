@@ -48,6 +48,9 @@ __all__ = [
     "focus_map",
     "render_layers",
     "decompose",
+    "frame_path",
+    "chunk_frames",
+    "written_with_settings",
     "__version__",
 ]
 
@@ -215,6 +218,13 @@ class Shot:
         input patterns find on disk, else [1] for a still."""
         return self._native.frames()
 
+    def settings_hash(self, frame: int) -> str:
+        """The fingerprint of what `frame` is rendered with (inputs, every
+        setting, the frame), which each output records as
+        defocus:settingsHash: ``defocus --skip-existing`` skips a frame
+        whose output has the same."""
+        return self._native.settings_hash(frame)
+
     def check(self) -> None:
         """Raises Error with the first reason the shot cannot be rendered."""
         self._native.check()
@@ -334,6 +344,27 @@ def render_sequence(shot: _ShotArg, output: Union[str, os.PathLike],
     frame_list = None if frames is None else [int(f) for f in frames]
     return _defocus.render_sequence(_shot(shot)._native, os.fspath(output), frame_list,
                                     progress, threads, stop_on_error)
+
+
+def frame_path(pattern: Union[str, os.PathLike], frame: int) -> str:
+    """The file of `frame` in a frame pattern (``dof.#.exr`` -> ``dof.1001.exr``),
+    as defocus names it; `pattern` itself when it is not one."""
+    return _defocus.frame_path(os.fspath(pattern), frame)
+
+
+def chunk_frames(frames: Sequence[int], k: int, n: int) -> List[int]:
+    """The K-th (1-based) of `n` chunks of `frames`, as ``defocus --chunk K/N``
+    renders it: neighbouring frames, sizes differing by at most one, every
+    frame in exactly one chunk."""
+    if not 1 <= k <= n:
+        raise ValueError(f"chunk {k}/{n}: need 1 <= K <= N")
+    return _defocus.chunk_frames([int(f) for f in frames], k, n)
+
+
+def written_with_settings(path: Union[str, os.PathLike], settings_hash: str) -> Tuple[bool, str]:
+    """(True, "") when `path` is an image defocus wrote with the settings of
+    `settings_hash` (Shot.settings_hash); else (False, what is there instead)."""
+    return _defocus.written_with_settings(os.fspath(path), settings_hash)
 
 
 def _settings_shot(shot: Union[Shot, Dict[str, Any], None], camera: Optional[Dict[str, Any]],

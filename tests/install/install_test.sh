@@ -63,6 +63,10 @@ if command -v help2man > /dev/null; then
         [ -s "$prefix/share/man/man1/$tool.1" ] || fail "man page $tool.1 not installed"
     done
 fi
+if [ -f "$build/bin/defocus-submit" ]; then
+    "$prefix/bin/defocus-submit" --version | grep -q "^defocus-submit " \
+        || fail "the installed defocus-submit does not find its Python package"
+fi
 for tool in defocus layerize; do
     [ -s "$prefix/share/bash-completion/completions/$tool" ] \
         || fail "bash completion for $tool not installed"

@@ -332,3 +332,50 @@ def test_the_contact_sheet_example_runs(tmp_path):
                                                    8 + r * 122, 8 + r * 122 + 90))
              for r in range(2) for c in range(3)]
     assert all(not np.array_equal(a, b) for i, a in enumerate(cells) for b in cells[i + 1:])
+
+
+def test_chunks_and_skip_existing_on_the_command_line(example, tmp_path):
+    pull = ["--focal", "50", "--fstop", "1.8", "--focus", "1:4,6:1.5", "--frames", "1-6"]
+    out = tmp_path / "f.#.exr"
+    for k in (1, 2, 3):
+        assert cli(example, *pull, "-o", out, "--chunk", f"{k}/3") == (0, "")
+    frames = [tmp_path / f"f.{f:04d}.exr" for f in range(1, 7)]
+    mtimes = [f.stat().st_mtime_ns for f in frames]
+    # The Python module records the same settings hash as the command.
+    shot = defocus.Shot(inputs=[example], focal=50, fstop=1.8, focus={1: 4.0, 6: 1.5},
+                        frames="1-6")
+    for f, path in zip(range(1, 7), frames):
+        assert defocus.written_with_settings(path, shot.settings_hash(f)) == (True, "")
+    run = subprocess.run([DEFOCUS_BIN, str(example), *pull, "-o", str(out), "--skip-existing"],
+                         capture_output=True, text=True)
+    assert run.returncode == 0 and "0 of 0 frames written (6 more skipped" in run.stdout
+    assert [f.stat().st_mtime_ns for f in frames] == mtimes
+    # Other settings: every frame is rendered again, and -v says why.
+    frames[2].unlink()
+    other = [a if a != "1.8" else "2.8" for a in pull]
+    run = subprocess.run([DEFOCUS_BIN, str(example), *other, "-o", str(out),
+                          "--skip-existing", "--chunk", "2/3", "-v"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert "frame 4: rendering again" in run.stdout and "other settings" in run.stdout
+    assert "2 of 2 frames written" in run.stdout
+    assert frames[3].stat().st_mtime_ns != mtimes[3]
+
+
+def test_defocus_submit_dry_run_prints_the_batch_scripts(example, tmp_path):
+    submit = os.path.join(os.path.dirname(DEFOCUS_BIN), "defocus-submit")
+    run = subprocess.run([submit, "--dry-run", "--chunk-size", "10", "--cpus", "2", "--mem", "3G",
+                          "--job-dir", str(tmp_path / "job"), str(example), "--frames", "1-24",
+                          "--focus", "1:4,24:1.5", "-o", str(tmp_path / "f.#.exr")],
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    for line in ["#SBATCH --array=1,2,3", "#SBATCH --cpus-per-task=2", "#SBATCH --mem=3072M",
+                 f"#SBATCH --output={tmp_path}/job/chunk_%a.log", '--chunk "$SLURM_ARRAY_TASK_ID/3"',
+                 "--skip-existing", "#SBATCH --dependency=afterany:<array job id>", "--check"]:
+        assert line in run.stdout, line
+    assert (tmp_path / "job" / "shot.dof").exists()
+    shot = defocus.Shot.load(tmp_path / "job" / "shot.dof")
+    assert shot.frames_to_render() == list(range(1, 25))
+    run = subprocess.run([submit, "--chunk-size", "10", str(example), "--focus", "4",
+                          "-o", str(tmp_path / "nowhere" / "f.#.exr")], capture_output=True,
+                         text=True)
+    assert run.returncode != 0 and "does not exist" in run.stderr

@@ -9,10 +9,13 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/shot/option_value.h>
+
 namespace defocus {
 
 using OIIO::Strutil::fmt::format;
 namespace Filesystem = OIIO::Filesystem;
+namespace Strutil = OIIO::Strutil;
 
 namespace {
 
@@ -215,6 +218,25 @@ bool shot_frames(const Shot& shot, std::vector<int>& frames, std::string& error)
     }
     frames = { 1 };
     return true;
+}
+
+bool parse_chunk(const std::string& option, const std::string& text, int& k, int& n,
+                 std::string& error)
+{
+    const std::vector<std::string> parts = Strutil::splits(text, "/");
+    if (parts.size() == 2 && parse_whole_number(option, parts[0], 1, 1e6, k, error)
+        && parse_whole_number(option, parts[1], 1, 1e6, n, error) && k <= n)
+        return true;
+    error = format("{}: '{}' is not a chunk K/N with 1 <= K <= N (e.g. 2/10)", option, text);
+    return false;
+}
+
+std::vector<int> chunk_frames(const std::vector<int>& frames, int k, int n)
+{
+    const size_t count = frames.size();
+    const size_t begin = count * size_t(k - 1) / size_t(n);
+    const size_t end   = count * size_t(k) / size_t(n);
+    return std::vector<int>(frames.begin() + begin, frames.begin() + end);
 }
 
 bool frame_outputs(const std::string& option, const std::string& pattern,

@@ -93,6 +93,31 @@ bool same_path(const std::string& a, const std::string& b)
     return ec_a || ec_b ? a == b : pa == pb;
 }
 
+bool written_with_settings(const std::string& filename, const std::string& hash,
+                           std::string& why)
+{
+    if (!Filesystem::exists(filename)) {
+        why = "does not exist";
+        return false;
+    }
+    auto in = ImageInput::open(filename);
+    if (!in) {
+        why = "cannot be read (" + Strutil::replace(OIIO::geterror(), "\n", " ", true) + ")";
+        return false;
+    }
+    const std::string recorded = in->spec().get_string_attribute("defocus:settingsHash");
+    if (recorded.empty()) {
+        why = "has no defocus:settingsHash (not written by this defocus)";
+        return false;
+    }
+    if (recorded != hash) {
+        why = "was written with other settings (defocus:settingsHash " + recorded + ", now "
+              + hash + ")";
+        return false;
+    }
+    return true;
+}
+
 bool check_output(const std::string& filename, const std::string& compression,
                   std::string& error)
 {

@@ -35,6 +35,17 @@ bool is_sequence(const Shot& shot);
 /// a pattern finds no files, or a still has keyframes (they need frames).
 bool shot_frames(const Shot& shot, std::vector<int>& frames, std::string& error);
 
+/// Parses "K/N" (1 <= K <= N), the K-th of N chunks, into `k` and `n`; else
+/// false with `error` naming `option`.
+bool parse_chunk(const std::string& option, const std::string& text, int& k, int& n,
+                 std::string& error);
+
+/// The K-th (1-based) of `n` chunks of `frames`: contiguous runs of frames
+/// in order, their sizes differing by at most one, so that every frame is
+/// in exactly one chunk (a chunk is empty when there are fewer frames than
+/// chunks). A chunk reads neighbouring frames, as a render farm task wants.
+std::vector<int> chunk_frames(const std::vector<int>& frames, int k, int n);
+
 /// The file each of `frames` writes through the output `pattern` ("" gives
 /// none), named after `option` ("-o", "--preview") in errors: more than
 /// one frame needs a frame pattern.

@@ -43,6 +43,13 @@ std::string overwritten_input(const std::vector<std::string>& read,
 /// Whether two names, existing or not, lead to the same file.
 bool same_path(const std::string& a, const std::string& b);
 
+/// True when `filename` is an image that defocus wrote with the settings
+/// whose settings_hash() is `hash` (its defocus:settingsHash); else false
+/// with `why` saying what is there instead ("does not exist", "was written
+/// with other settings", ...).
+bool written_with_settings(const std::string& filename, const std::string& hash,
+                           std::string& why);
+
 /// Writes a text file atomically, as write_atomic() does.
 bool write_text_atomic(const std::string& filename, const std::string& text,
                        std::string& error);

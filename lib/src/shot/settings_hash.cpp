@@ -1,0 +1,43 @@
+#include <defocus/shot/settings_hash.h>
+
+#include <filesystem>
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/hash.h>
+#include <OpenImageIO/strutil.h>
+
+namespace defocus {
+
+namespace {
+
+std::string absolute_path(const std::string& path)
+{
+    if (path.empty())
+        return path;
+    std::error_code ec;
+    const std::filesystem::path absolute = std::filesystem::absolute(path, ec);
+    return ec ? path : absolute.lexically_normal().string();
+}
+
+}  // namespace
+
+std::string settings_hash(const Shot& shot, int frame)
+{
+    // One line per value, in the settings table's order: a canonical text.
+    std::string text = OIIO::Strutil::fmt::format("frame={}\n", frame);
+    for (const std::string& input : shot.inputs)
+        text += "input=" + absolute_path(input) + "\n";
+    for (const ShotSetting& s : shot_settings()) {
+        const std::string name = s.name;
+        if (name == "frames" || name == "memory-limit")
+            continue;
+        std::string value = shot_setting(shot, name);
+        if (s.kind == ShotValueKind::Path
+            || (s.kind == ShotValueKind::FileOrName && OIIO::Filesystem::exists(value)))
+            value = absolute_path(value);
+        text += name + "=" + value + "\n";
+    }
+    return OIIO::Strutil::fmt::format("{:016x}", OIIO::farmhash::Fingerprint64(text));
+}
+
+}  // namespace defocus

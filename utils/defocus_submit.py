@@ -1,0 +1,265 @@
+#!/usr/bin/python3
+"""defocus-submit -- render a defocus sequence on a render farm, in chunks
+
+Usage:
+  defocus-submit --chunk-size N [farm options] INPUT... -o OUTPUT.#.exr [defocus options]
+  defocus-submit --chunk-size N [farm options] SHOT.dof -o OUTPUT.#.exr [defocus options]
+  defocus-submit --resume [farm options] (the same arguments)
+  defocus-submit --check --job-dir DIR
+
+The shot (inputs and defocus options) is saved as DIR/shot.dof and its
+frames are cut into chunks of at most N neighbouring frames. One array job
+renders them, a task per chunk, each task running
+
+  defocus DIR/shot.dof -o OUTPUT --chunk K/CHUNKS --skip-existing
+
+so any scheduler that runs a command per task can run the same chunks. A
+final job, started once every task has ended, checks every frame and prints
+"N of M frames written; failed: ..." (DIR/check.log). --resume submits only
+the chunks with frames missing or written with other settings; each frame
+records a hash of its settings (defocus:settingsHash), so a task renders
+only what is missing.
+
+Memory per task is the first frame's measured peak times the frames a task
+runs at once (--cpus), unless --mem gives it. --dry-run prints the batch
+scripts instead of submitting them.
+"""
+import argparse
+import json
+import math
+import os
+import resource
+import shlex
+import subprocess
+import sys
+import tempfile
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+# Where this script finds the Python package: beside it in the build tree,
+# in <prefix>/lib/python3/dist-packages once installed (set by CMake).
+sys.path.insert(0, os.path.normpath(os.path.join(HERE, "@DEFOCUS_SUBMIT_PYTHONPATH@")))
+import defocus  # noqa: E402
+
+DEFOCUS = os.path.join(HERE, "defocus")
+
+
+def fail(message):
+    sys.exit(f"defocus-submit: {message}")
+
+
+class Slurm:
+    """Slurm through sbatch. A scheduler here is what submits an array job
+    (one task per chunk, the task's chunk number in an environment
+    variable) and a job that runs after it: OpenCue (a layer of frames
+    1-CHUNKS, chunk size 1, #IFRAME# as K), Deadline (a job of frames
+    1-CHUNKS, <STARTFRAME> as K) or Tractor (a task per chunk) take the same
+    two commands."""
+
+    name = "slurm"
+    task_variable = "$SLURM_ARRAY_TASK_ID"
+
+    def array_script(self, job, tasks, command):
+        lines = ["#!/bin/bash",
+                 f"#SBATCH --job-name={job['name']}",
+                 f"#SBATCH --array={tasks}",
+                 f"#SBATCH --cpus-per-task={job['cpus']}",
+                 f"#SBATCH --mem={job['mem_mb']}M",
+                 f"#SBATCH --output={job['dir']}/chunk_%a.log"]
+        lines += [f"#SBATCH --partition={job['partition']}"] if job["partition"] else []
+        lines += [f"#SBATCH --time={job['time']}"] if job["time"] else []
+        return "\n".join(lines + ["set -eu", "exec " + command]) + "\n"
+
+    def after_script(self, job, after_id, command):
+        lines = ["#!/bin/bash",
+                 f"#SBATCH --job-name={job['name']}-check",
+                 f"#SBATCH --dependency=afterany:{after_id}",
+                 "#SBATCH --cpus-per-task=1",
+                 "#SBATCH --mem=256M",
+                 f"#SBATCH --output={job['dir']}/check.log"]
+        lines += [f"#SBATCH --partition={job['partition']}"] if job["partition"] else []
+        return "\n".join(lines + ["exec " + command]) + "\n"
+
+    def submit(self, script):
+        run = subprocess.run(["sbatch", "--parsable"], input=script, text=True,
+                             capture_output=True)
+        if run.returncode != 0:
+            fail(f"sbatch: {run.stderr.strip() or 'failed'}")
+        return run.stdout.strip().split(";")[0]
+
+
+SCHEDULERS = {"slurm": Slurm}
+
+
+def parse_size_mb(text):
+    units = {"": 1, "K": 1 / 1024, "M": 1, "G": 1024, "T": 1024 * 1024}
+    number, unit = text.rstrip("KMGTkmgtBb"), text[len(text.rstrip("KMGTkmgtBb")):].upper()
+    unit = unit.rstrip("B")
+    try:
+        return max(1, math.ceil(float(number) * units[unit]))
+    except (ValueError, KeyError):
+        fail(f"--mem: '{text}' is not a size (e.g. 4G, 800M)")
+
+
+def frame_file(pattern, frame):
+    """The file of a frame, named as defocus names it."""
+    return defocus.frame_path(pattern, frame)
+
+
+def first_frame_peak_mb(shot_file, frame, cpus):
+    """Renders `frame` here and returns the process's peak memory in MB."""
+    with tempfile.TemporaryDirectory() as scratch:
+        before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+        run = subprocess.run([DEFOCUS, shot_file, "-o", os.path.join(scratch, "probe.exr"),
+                              "--frames", str(frame), "--threads", str(cpus), "-q"],
+                             capture_output=True, text=True)
+        if run.returncode != 0:
+            fail(f"measuring frame {frame}: {run.stderr.strip()}")
+        peak_kb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+        return max(peak_kb, before) / 1024
+
+
+def chunk_status(job, shot):
+    """Per chunk, the frames not written with the shot's settings."""
+    missing = {}
+    for k in range(1, job["chunks"] + 1):
+        for frame in defocus.chunk_frames(job["frames"], k, job["chunks"]):
+            path = frame_file(job["output"], frame)
+            current, why = defocus.written_with_settings(path, shot.settings_hash(frame))
+            if not current:
+                missing.setdefault(k, []).append((frame, why))
+    return missing
+
+
+def ranges(frames):
+    """1,2,3,5 -> '1-3,5'."""
+    out, start = [], None
+    for i, f in enumerate(frames):
+        if start is None:
+            start = f
+        if i + 1 == len(frames) or frames[i + 1] != f + 1:
+            out.append(str(start) if start == f else f"{start}-{f}")
+            start = None
+    return ",".join(out)
+
+
+def check(job_dir):
+    """The final job: every frame there, written with the shot's settings."""
+    with open(os.path.join(job_dir, "job.json")) as f:
+        job = json.load(f)
+    shot = defocus.Shot.load(os.path.join(job_dir, "shot.dof"))
+    missing = chunk_status(job, shot)
+    failed = sorted(frame for frames in missing.values() for frame, _ in frames)
+    total = len(job["frames"])
+    summary = f"{total - len(failed)} of {total} frames written"
+    if not failed:
+        print(f"defocus-submit: {summary}")
+        return 0
+    chunks = ", ".join(f"chunk {k} (log {job_dir}/chunk_{k}.log): frames "
+                       f"{ranges([f for f, _ in v])}" for k, v in sorted(missing.items()))
+    print(f"defocus-submit: {summary}; failed: {ranges(failed)} -- {chunks}; "
+          f"resubmit them with defocus-submit --resume and the same arguments")
+    return 1
+
+
+def main():
+    parser = argparse.ArgumentParser(
+        prog="defocus-submit", formatter_class=argparse.RawDescriptionHelpFormatter,
+        description=__doc__.split("\n", 2)[2].split("\n\n", 1)[1],
+        usage=__doc__.split("Usage:\n", 1)[1].split("\n\n")[0])
+    farm = parser.add_argument_group("farm options")
+    farm.add_argument("--chunk-size", type=int, metavar="N", help="frames per task")
+    farm.add_argument("--scheduler", default="slurm", choices=sorted(SCHEDULERS))
+    farm.add_argument("--cpus", type=int, default=2, metavar="N",
+                      help="CPUs per task, the frames it renders at once (default: 2)")
+    farm.add_argument("--mem", metavar="SIZE",
+                      help="memory per task, e.g. 8G (default: measured from the first frame)")
+    farm.add_argument("--partition", help="the partition (queue) to run in")
+    farm.add_argument("--time", help="time limit per task, e.g. 2:00:00")
+    farm.add_argument("--job-name", help="(default: the output's name)")
+    farm.add_argument("--job-dir", metavar="DIR",
+                      help="the shot, logs and job description "
+                           "(default: OUTPUT's folder/defocus-farm/JOB_NAME)")
+    farm.add_argument("--dry-run", action="store_true",
+                      help="print the batch scripts instead of submitting them")
+    farm.add_argument("--resume", action="store_true",
+                      help="submit only the chunks with frames missing or written with "
+                           "other settings")
+    farm.add_argument("--check", action="store_true",
+                      help="check a submitted job's frames (what its final job runs)")
+    farm.add_argument("-o", dest="output", metavar="OUTPUT", help="output frame pattern")
+    farm.add_argument("--version", action="version", version=f"defocus-submit {defocus.__version__}")
+    args, shot_args = parser.parse_known_args()
+
+    if args.check:
+        if not args.job_dir:
+            fail("--check needs --job-dir DIR")
+        return check(args.job_dir)
+    if not args.output:
+        fail("no output: give -o OUTPUT.#.exr")
+    if not args.chunk_size or args.chunk_size < 1:
+        fail("give --chunk-size N, the frames of one task (N >= 1)")
+    if args.cpus < 1:
+        fail("--cpus: at least 1")
+    if not shot_args:
+        fail("no input: give the inputs or a .dof and the defocus options")
+    output = os.path.abspath(args.output)
+    if not os.path.isdir(os.path.dirname(output)):
+        fail(f"{args.output}: the folder {os.path.dirname(output)} does not exist")
+    name = args.job_name or os.path.basename(output).split(".")[0].strip("#@%") or "defocus"
+    job_dir = os.path.abspath(args.job_dir or os.path.join(os.path.dirname(output),
+                                                           "defocus-farm", name))
+    os.makedirs(job_dir, exist_ok=True)
+    shot_file = os.path.join(job_dir, "shot.dof")
+    run = subprocess.run([DEFOCUS, *shot_args, "--save-scene", shot_file, "-q"],
+                         capture_output=True, text=True)
+    if run.returncode != 0:
+        fail(run.stderr.strip().removeprefix("defocus: "))
+    shot = defocus.Shot.load(shot_file)
+    frames = shot.frames_to_render()
+    chunks = math.ceil(len(frames) / args.chunk_size)
+    scheduler = SCHEDULERS[args.scheduler]()
+    job = {"name": name, "dir": job_dir, "output": output, "frames": frames, "chunks": chunks,
+           "cpus": args.cpus, "partition": args.partition, "time": args.time,
+           "scheduler": scheduler.name}
+
+    tasks = list(range(1, chunks + 1))
+    if args.resume:
+        tasks = sorted(chunk_status(job, shot))
+        if not tasks:
+            print(f"defocus-submit: nothing to resume: all {len(frames)} frames are written")
+            return 0
+    first = defocus.chunk_frames(frames, tasks[0], chunks)[0]
+    if args.mem:
+        job["mem_mb"] = parse_size_mb(args.mem)
+    else:
+        # Frames in flight each take about one frame's peak; a margin for the
+        # process and the scheduler's own accounting.
+        peak = first_frame_peak_mb(shot_file, first, args.cpus)
+        job["mem_mb"] = math.ceil(peak * min(args.cpus, args.chunk_size) * 1.25 + 256)
+    with open(os.path.join(job_dir, "job.json"), "w") as f:
+        json.dump(job, f, indent=2)
+
+    task_command = " ".join([
+        shlex.quote(DEFOCUS), shlex.quote(shot_file), "-o", shlex.quote(output),
+        "--chunk", f'"{scheduler.task_variable}/{chunks}"', "--skip-existing",
+        "--threads", str(args.cpus), "--memory-limit", f"{job['mem_mb']}M", "-v"])
+    check_command = " ".join([shlex.quote(os.path.join(HERE, "defocus-submit")), "--check",
+                              "--job-dir", shlex.quote(job_dir)])
+    array = scheduler.array_script(job, ",".join(map(str, tasks)), task_command)
+    if args.dry_run:
+        print(array)
+        print(scheduler.after_script(job, "<array job id>", check_command))
+        return 0
+    array_id = scheduler.submit(array)
+    check_id = scheduler.submit(scheduler.after_script(job, array_id, check_command))
+    with open(os.path.join(job_dir, "submitted.log"), "a") as f:
+        f.write(f"{array_id} {check_id} chunks {','.join(map(str, tasks))}\n")
+    print(f"defocus-submit: {name}: {len(tasks)} of {chunks} chunk(s) of at most "
+          f"{args.chunk_size} frames ({len(frames)} frames), {args.cpus} CPUs and "
+          f"{job['mem_mb']} MB a task: array job {array_id}, check job {check_id}; "
+          f"logs in {job_dir}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
