@@ -165,14 +165,17 @@ def main():
     parser = argparse.ArgumentParser(
         prog="defocus-submit", formatter_class=argparse.RawDescriptionHelpFormatter,
         description=__doc__.split("\n", 2)[2].split("\n\n", 1)[1],
-        usage=__doc__.split("Usage:\n", 1)[1].split("\n\n")[0])
+        usage=__doc__.split("Usage:\n", 1)[1].split("\n\n")[0].strip(),
+        epilog="Example:\n  defocus-submit --chunk-size 10 --cpus 4 plate.#.exr --frames 1001-1240 "
+               "\\\n      --focal 35 --fstop 2 --focus 1001:3,1240:1.2 -o /shows/x/dof/dof.#.exr")
     farm = parser.add_argument_group("farm options")
     farm.add_argument("--chunk-size", type=int, metavar="N", help="frames per task")
     farm.add_argument("--scheduler", default="slurm", choices=sorted(SCHEDULERS))
     farm.add_argument("--cpus", type=int, default=2, metavar="N",
                       help="CPUs per task, the frames it renders at once (default: 2)")
     farm.add_argument("--mem", metavar="SIZE",
-                      help="memory per task, e.g. 8G (default: measured from the first frame)")
+                      help="memory per task, e.g. 8G (a bare number is MB, as Slurm reads it; "
+                           "default: measured from the first frame)")
     farm.add_argument("--partition", help="the partition (queue) to run in")
     farm.add_argument("--time", help="time limit per task, e.g. 2:00:00")
     farm.add_argument("--job-name", help="(default: the output's name)")
