@@ -219,6 +219,11 @@ def main():
         fail(run.stderr.strip().removeprefix("defocus: "))
     shot = defocus.Shot.load(shot_file)
     frames = shot.frames_to_render()
+    # Refused here rather than by every task on the farm.
+    for frame in sorted({frames[0], frames[-1]}):
+        for pattern in shot.inputs:
+            if not os.path.exists(frame_file(pattern, frame)):
+                fail(f"{frame_file(pattern, frame)}: no such file (frame {frame})")
     chunks = math.ceil(len(frames) / args.chunk_size)
     scheduler = SCHEDULERS[args.scheduler]()
     job = {"name": name, "dir": job_dir, "output": output, "frames": frames, "chunks": chunks,

@@ -379,3 +379,8 @@ def test_defocus_submit_dry_run_prints_the_batch_scripts(example, tmp_path):
                           "-o", str(tmp_path / "nowhere" / "f.#.exr")], capture_output=True,
                          text=True)
     assert run.returncode != 0 and "does not exist" in run.stderr
+    run = subprocess.run([submit, "--chunk-size", "10", str(tmp_path / "in.#.exr"), "--frames",
+                          "1-24", "--focus", "4", "-o", str(tmp_path / "f.#.exr")],
+                         capture_output=True, text=True)
+    assert run.returncode != 0
+    assert run.stderr.strip() == f"defocus-submit: {tmp_path}/in.0001.exr: no such file (frame 1)"
