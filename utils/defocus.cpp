@@ -38,6 +38,7 @@ struct CommandLine {
     bool verbose = false, quiet = false, stop_on_error = false, preview_alpha = false;
     bool skip_existing = false;
     int threads = 0;
+    int chunk_k = 0, chunk_n = 0;  ///< --chunk K/N; 0: all frames
 };
 
 /// Reads the arguments into `cl`. False with `error` the problem; true
@@ -159,7 +160,8 @@ bool parse_command_line(int argc, const char* argv[], CommandLine& cl, bool& hel
                 return fail(input + ": a .dof scene file must be the only input");
         cl.shot.inputs = inputs;
     }
-    if (!shot_args.apply(cl.shot, error) || !shot_args.threads(cl.threads, error))
+    if (!shot_args.apply(cl.shot, error) || !shot_args.threads(cl.threads, error)
+        || (!cl.chunk.empty() && !parse_chunk("--chunk", cl.chunk, cl.chunk_k, cl.chunk_n, error)))
         return false;
     if (inputs.empty())
         return fail("no input file (usage: defocus INPUT -o OUTPUT [options]; see --help)");
@@ -171,6 +173,34 @@ bool parse_command_line(int argc, const char* argv[], CommandLine& cl, bool& hel
     if (cl.output.empty() && cl.save_scene.empty())
         return fail("no output file: give -o OUTPUT");
     return true;
+}
+
+/// The frames this run renders: `frames`, or their --chunk, less those
+/// --skip-existing finds written with these settings (counted in `skipped`;
+/// -v says why a frame that exists is rendered again).
+std::vector<int> frames_to_render(const CommandLine& cl, std::vector<int> frames, int& skipped)
+{
+    if (cl.chunk_n > 0)
+        frames = chunk_frames(frames, cl.chunk_k, cl.chunk_n);
+    if (!cl.skip_existing)
+        return frames;
+    std::vector<int> to_render;
+    for (int frame : frames) {
+        const std::string output = frame_path(cl.output, frame);
+        const std::string label = is_sequence(cl.shot) ? format("frame {}: ", frame) : "";
+        std::string why;
+        if (written_with_settings(output, settings_hash(cl.shot, frame), why)) {
+            ++skipped;
+            if (cl.verbose)
+                Strutil::print("defocus {}skipped: {} is written with these settings\n", label,
+                               output);
+            continue;
+        }
+        if (cl.verbose && why != "does not exist")
+            Strutil::print("defocus {}rendering again: {} {}\n", label, output, why);
+        to_render.push_back(frame);
+    }
+    return to_render;
 }
 
 bool write_preview(const FrameResult& frame, const CommandLine& cl, const std::string& file,
@@ -284,38 +314,13 @@ int main(int argc, const char* argv[])
         || !frame_outputs("--preview", cl.preview, frames, previews, error))
         return fail(error);
     const size_t shot_frame_count = frames.size();
-    if (!cl.chunk.empty()) {
-        int k = 0, n = 0;
-        if (!parse_chunk("--chunk", cl.chunk, k, n, error))
-            return fail(error);
-        frames = chunk_frames(frames, k, n);
-        if (frames.empty()) {
-            if (!cl.quiet)
-                Strutil::print("defocus: chunk {}/{} has no frames ({} frames in {} chunks)\n",
-                               k, n, shot_frame_count, n);
-            return EXIT_SUCCESS;
-        }
-    }
     int skipped = 0;
-    if (cl.skip_existing) {
-        // Frames already written with these settings are left as they are.
-        std::vector<int> to_render;
-        for (int frame : frames) {
-            const std::string output = frame_path(cl.output, frame);
-            std::string why;
-            const std::string label = is_sequence(shot) ? format("frame {}: ", frame) : "";
-            if (written_with_settings(output, settings_hash(shot, frame), why)) {
-                ++skipped;
-                if (cl.verbose)
-                    Strutil::print("defocus {}skipped: {} is written with these settings\n",
-                                   label, output);
-                continue;
-            }
-            if (cl.verbose && why != "does not exist")
-                Strutil::print("defocus {}rendering again: {} {}\n", label, output, why);
-            to_render.push_back(frame);
-        }
-        frames = std::move(to_render);
+    frames = frames_to_render(cl, std::move(frames), skipped);
+    if (frames.empty() && skipped == 0) {
+        if (!cl.quiet)
+            Strutil::print("defocus: chunk {} has no frames ({} frames in {} chunks)\n", cl.chunk,
+                           shot_frame_count, cl.chunk_n);
+        return EXIT_SUCCESS;
     }
     if (frames.size() != shot_frame_count
         && (!frame_outputs("-o", cl.output, frames, outputs, error)
