@@ -46,11 +46,17 @@ g++ -std=c++17 -DPACKAGE_OCIO_CONFIG="\"$prefix/share/defocus/config.ocio\"" \
     || fail "the program built with pkg-config did not run"
 
 # The Python package, imported from the prefix (the module's RPATH finds
-# the library, the config is the installed one).
+# the library, the config is the installed one). A sanitized build names
+# its runtime in DEFOCUS_PYTHON_PRELOAD, for python3 to load first (leaks
+# unchecked: CPython frees nothing at exit).
+python_env=()
+if [ -n "${DEFOCUS_PYTHON_PRELOAD:-}" ]; then
+    python_env=(LD_PRELOAD="$DEFOCUS_PYTHON_PRELOAD" ASAN_OPTIONS=detect_leaks=0)
+fi
 if [ -f "$build/python/defocus/__init__.py" ]; then
     site=$prefix/lib/python3/dist-packages
     [ -f "$site/defocus/_defocus.pyi" ] || fail "the Python type stubs are not installed"
-    env -u OCIO PYTHONPATH="$site" /usr/bin/python3 -c "
+    env -u OCIO "${python_env[@]}" PYTHONPATH="$site" /usr/bin/python3 -c "
 import defocus, numpy, sys
 assert defocus.__file__.startswith('$site'), defocus.__file__
 out = defocus.render(defocus.Shot(inputs=['$scratch/scene.exr'], focal=50, fstop=1.8, focus=4))
@@ -64,7 +70,7 @@ if command -v help2man > /dev/null; then
     done
 fi
 if [ -f "$build/bin/defocus-submit" ]; then
-    "$prefix/bin/defocus-submit" --version | grep -q "^defocus-submit " \
+    env "${python_env[@]}" "$prefix/bin/defocus-submit" --version | grep -q "^defocus-submit " \
         || fail "the installed defocus-submit does not find its Python package"
 fi
 for tool in defocus layerize; do
