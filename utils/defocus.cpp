@@ -407,18 +407,8 @@ int main(int argc, const char* argv[])
                                           render_one);
     progress.finish();
     if (sequence) {
-        std::vector<std::string> failed;
-        for (int i : run.failed)
-            failed.push_back(std::to_string(frames[i]));
-        const int written_count = run.run - int(run.failed.size());
-        std::string summary = format("{} of {} frames written", written_count, frames.size());
-        if (skipped > 0)
-            summary += format(" ({} more skipped: written with these settings)", skipped);
-        if (!failed.empty())
-            summary += format("; failed: {}", Strutil::join(failed, ","));
-        if (run.run < int(frames.size()))
-            summary += "; stopped at the first bad frame (--stop-on-error)";
-        if (!failed.empty())
+        const std::string summary = frames_written(run, frames, skipped);
+        if (!run.failed.empty())
             Strutil::print(stderr, "defocus: {}\n", error_line(summary));
         else if (!cl.quiet)
             Strutil::print("defocus: {}\n", summary);

@@ -7,6 +7,7 @@
 #include <mutex>
 #include <thread>
 
+#include <OpenImageIO/strutil.h>
 #include <OpenImageIO/sysutil.h>
 
 namespace defocus {
@@ -70,6 +71,24 @@ ScheduleResult run_frames(int count, int threads, size_t memory_limit, bool stop
         t.join();
     std::sort(result.failed.begin(), result.failed.end());
     return result;
+}
+
+std::string frames_written(const ScheduleResult& run, const std::vector<int>& frames,
+                           int skipped)
+{
+    using OIIO::Strutil::fmt::format;
+    std::string summary = format("{} of {} frames written", run.run - int(run.failed.size()),
+                                 frames.size());
+    if (skipped > 0)
+        summary += format(" ({} more skipped: written with these settings)", skipped);
+    std::vector<std::string> failed;
+    for (int i : run.failed)
+        failed.push_back(std::to_string(frames[i]));
+    if (!failed.empty())
+        summary += "; failed: " + OIIO::Strutil::join(failed, ",");
+    if (run.run < int(frames.size()))
+        summary += "; stopped at the first bad frame (--stop-on-error)";
+    return summary;
 }
 
 }  // namespace defocus

@@ -3,6 +3,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <string>
 #include <vector>
 
 namespace defocus {
@@ -24,5 +25,12 @@ struct ScheduleResult {
 /// `stop_on_error`, no frame starts after one has failed.
 ScheduleResult run_frames(int count, int threads, size_t memory_limit, bool stop_on_error,
                           const FrameJob& job);
+
+/// The line that closes a sequence: "98 of 100 frames written (3 more
+/// skipped: written with these settings); failed: 1004,1010; stopped at
+/// the first bad frame (--stop-on-error)", each part only when it applies.
+/// `frames` are the frame numbers `run` ran over, by index.
+std::string frames_written(const ScheduleResult& run, const std::vector<int>& frames,
+                           int skipped = 0);
 
 }  // namespace defocus
