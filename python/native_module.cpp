@@ -148,28 +148,34 @@ py::tuple image_result(const ImageBuf& image, bool crop)
     return py::make_tuple(pixels, described.to_xml());
 }
 
-FrameResult render_one(const Shot& shot, std::optional<int> frame)
+/// What to do with a rendered frame on the render's own thread.
+using AfterRender = std::function<void(const FrameResult&, const std::atomic<bool>& cancelled)>;
+
+/// Renders frame `at` of a shot, cancellably; `after` runs on the render's
+/// thread (so that writing a file does not hold the GIL either).
+FrameResult render_one(const Shot& shot, int at, const AfterRender& after = {})
 {
     const ShotAssets assets = read_assets(shot);
-    const int at = frame_or_first(shot, frame);
     FrameResult result;
     run_cancellable([&](const std::atomic<bool>& cancelled) {
         std::string error;
         check(render_frame(shot, at, assets, result, error, stop_when(cancelled)), error);
+        if (after)
+            after(result, cancelled);
     });
     return result;
 }
 
 py::tuple render(const Shot& shot, std::optional<int> frame, bool crop)
 {
-    return image_result(render_one(shot, frame).image, crop);
+    return image_result(render_one(shot, frame_or_first(shot, frame)).image, crop);
 }
 
 py::tuple focus_map(const Shot& shot, std::optional<int> frame, bool crop)
 {
     Shot map = shot;
     map.output = OutputKind::FocusMap;
-    return image_result(render_one(map, frame).image, crop);
+    return image_result(render_one(map, frame_or_first(map, frame)).image, crop);
 }
 
 void render_to_file(const Shot& shot, const std::string& path, std::optional<int> frame)
@@ -179,13 +185,10 @@ void render_to_file(const Shot& shot, const std::string& path, std::optional<int
     const int at = frame_or_first(shot, frame);
     check(overwritten_input(frame_inputs(shot, at), { path }).empty(),
           path + ": the output would overwrite the input");
-    const ShotAssets assets = read_assets(shot);
-    run_cancellable([&](const std::atomic<bool>& cancelled) {
-        FrameResult result;
-        std::string error;
-        check(render_frame(shot, at, assets, result, error, stop_when(cancelled)), error);
+    render_one(shot, at, [&](const FrameResult& result, const std::atomic<bool>& cancelled) {
         if (cancelled)
             throw Cancelled();
+        std::string error;
         check(write_image_atomic(result.image, path, result.pixel_type, "", error), error);
     });
 }
@@ -257,16 +260,11 @@ std::vector<std::string> render_sequence(const Shot& shot, const std::string& pa
     if (progress_failure)
         std::rethrow_exception(progress_failure);
     if (!run.failed.empty()) {
-        std::vector<std::string> failed, reasons;
-        for (int i : run.failed) {
-            failed.push_back(std::to_string(frames[i]));
+        std::string summary = frames_written(run, frames);
+        for (int i : run.failed)
             if (!errors[i].empty())
-                reasons.push_back(format("frame {}: {}", frames[i], errors[i]));
-        }
-        throw Error(format("{} of {} frames written; failed: {}{}{}",
-                           run.run - int(run.failed.size()), frames.size(),
-                           OIIO::Strutil::join(failed, ","), reasons.empty() ? "" : "; ",
-                           OIIO::Strutil::join(reasons, "; ")));
+                summary += format("; frame {}: {}", frames[i], errors[i]);
+        throw Error(summary);
     }
     return outputs;
 }
@@ -288,11 +286,13 @@ ImageBuf buffer(const py::array_t<float, py::array::c_style>& pixels,
     return buf;
 }
 
+/// Layers from Python: (name, RGBA, Z), checked there.
+using ArrayLayers = std::vector<std::tuple<std::string, py::array_t<float, py::array::c_style>,
+                                           py::array_t<float, py::array::c_style>>>;
+
 /// A scene in memory: `layers` given as such, or (`flat`) one render to
 /// cut into layers.
-Scene array_scene(const std::vector<std::tuple<std::string, py::array_t<float, py::array::c_style>,
-                                               py::array_t<float, py::array::c_style>>>& layers,
-                  bool flat)
+Scene array_scene(const ArrayLayers& layers, bool flat)
 {
     Scene scene;
     scene.source = flat ? "decompose()" : "render_layers()";
@@ -307,9 +307,6 @@ Scene array_scene(const std::vector<std::tuple<std::string, py::array_t<float, p
     scene.spec.z_channel = 4;
     return scene;
 }
-
-using ArrayLayers = std::vector<std::tuple<std::string, py::array_t<float, py::array::c_style>,
-                                           py::array_t<float, py::array::c_style>>>;
 
 /// `shot` with the in-memory scene as its input, so that it checks.
 Shot with_input(const Shot& settings, const Scene& scene)
