@@ -100,22 +100,16 @@ def parse_size_mb(text):
         fail(f"--mem: '{text}' is not a size (e.g. 4G, 800M)")
 
 
-def frame_file(pattern, frame):
-    """The file of a frame, named as defocus names it."""
-    return defocus.frame_path(pattern, frame)
-
-
 def first_frame_peak_mb(shot_file, frame, cpus):
-    """Renders `frame` here and returns the process's peak memory in MB."""
+    """Renders `frame` here and returns the process's peak memory in MB (the
+    largest of this script's children, which this render is)."""
     with tempfile.TemporaryDirectory() as scratch:
-        before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
         run = subprocess.run([DEFOCUS, shot_file, "-o", os.path.join(scratch, "probe.exr"),
                               "--frames", str(frame), "--threads", str(cpus), "-q"],
                              capture_output=True, text=True)
         if run.returncode != 0:
             fail(f"measuring frame {frame}: {run.stderr.strip()}")
-        peak_kb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
-        return max(peak_kb, before) / 1024
+        return resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
 
 
 def chunk_status(job, shot):
@@ -123,7 +117,7 @@ def chunk_status(job, shot):
     missing = {}
     for k in range(1, job["chunks"] + 1):
         for frame in defocus.chunk_frames(job["frames"], k, job["chunks"]):
-            path = frame_file(job["output"], frame)
+            path = defocus.frame_path(job["output"], frame)
             current, why = defocus.written_with_settings(path, shot.settings_hash(frame))
             if not current:
                 missing.setdefault(k, []).append((frame, why))
@@ -222,8 +216,9 @@ def main():
     # Refused here rather than by every task on the farm.
     for frame in sorted({frames[0], frames[-1]}):
         for pattern in shot.inputs:
-            if not os.path.exists(frame_file(pattern, frame)):
-                fail(f"{frame_file(pattern, frame)}: no such file (frame {frame})")
+            path = defocus.frame_path(pattern, frame)
+            if not os.path.exists(path):
+                fail(f"{path}: no such file (frame {frame})")
     chunks = math.ceil(len(frames) / args.chunk_size)
     scheduler = SCHEDULERS[args.scheduler]()
     job = {"name": name, "dir": job_dir, "output": output, "frames": frames, "chunks": chunks,
