@@ -490,7 +490,7 @@ bool fits_memory_limit(const FileLayout& layout, bool openexr, const std::string
     double bytes = 0.0;
     auto flat = [&](const Part& part) {
         bytes += float_bytes(part.spec.image_pixels(), 5);  // the layer: RGBA + Z
-        if (!openexr)                          // and the file's channels, read first
+        if (!openexr)  // and the file's channels, read first
             bytes += float_bytes(part.spec.image_pixels(), part.spec.nchannels);
     };
     for (size_t i : layout.complete)
@@ -501,7 +501,8 @@ bool fits_memory_limit(const FileLayout& layout, bool openexr, const std::string
     if (layout.joined_color >= 0)
         flat(layout.parts[layout.joined_color]);
     if (layout.joined_depth >= 0)
-        bytes += float_bytes(layout.parts[layout.joined_depth].spec.image_pixels(), openexr ? 1 : 4);
+        bytes += float_bytes(layout.parts[layout.joined_depth].spec.image_pixels(),
+                             openexr ? 1 : 4);
     if (limit.allows(bytes))
         return true;
     const ROI& w = layout.data_window;
