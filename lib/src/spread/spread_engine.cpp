@@ -248,12 +248,23 @@ struct Workspace {
     std::vector<double> row_carry;     ///< per band row, the sum left of the tile
 };
 
+/// The most taps of a cluster added in one pass over a run's items. A
+/// uniform block of 4 spreads each edge over 5 columns (6 when two sizes
+/// blend), which reach into the next block's: added whole, every cell is
+/// written once. Elsewhere clusters are at most 4 wide but for a mask's
+/// rows, which go 4 taps at a time.
+constexpr int max_taps = 8;
+DEFOCUS_KERNEL int max_cluster_taps(int shift)
+{
+    return shift == 2 ? max_taps : 4;
+}
+
 /// A run's colours as a cluster's taps see them: one colour per item with
 /// the taps' weights blended once (Folded), or each item's share of the
 /// program's two sizes with each size's weights (Blended).
 struct Folded {
     const double* color;
-    d4 weight[4];
+    d4 weight[max_taps];
     DEFOCUS_KERNEL d4 tap(int t, ptrdiff_t item) const
     {
         return weight[t] * load4(color + item * 4);
@@ -263,7 +274,7 @@ struct Folded {
 struct Blended {
     const double* smaller;  ///< colours times (1 - t)
     const double* larger;   ///< colours times t
-    d4 weight[4][2];
+    d4 weight[max_taps][2];
     DEFOCUS_KERNEL d4 tap(int t, ptrdiff_t item) const
     {
         return weight[t][0] * load4(smaller + item * 4) + weight[t][1] * load4(larger + item * 4);
@@ -308,26 +319,37 @@ DEFOCUS_KERNEL void items_body(double* cells, const Colors& c, int stride, int l
     }
 }
 
-/// Adds the M (3 or 4) taps of items [lo, hi) two columns apart, item lo's
-/// first tap at `cells`. Neighbours' taps share cells; each cell is written
-/// once, with the earlier item's taps carried in registers, so that no item
-/// waits for the store of the one before.
-template<int M, typename Colors>
-DEFOCUS_KERNEL void paired_items_body(double* cells, const Colors& c, int lo, int hi)
+/// Adds the M taps of items [lo, hi) S columns apart (S < M <= 2 S), item
+/// lo's first tap at `cells`. Neighbours' taps share cells; each cell is
+/// written once, with the earlier item's last M - S taps carried in
+/// registers, so that no item waits for the store of the one before and
+/// no cell is visited twice.
+template<int S, int M, typename Colors>
+DEFOCUS_KERNEL void carried_items_body(double* cells, const Colors& c, int lo, int hi)
 {
-    static_assert(M == 3 || M == 4, "two columns apart, fewer taps do not overlap");
-    d4 carry[2] = { splat(0.0), splat(0.0) };  // the previous item's taps 2 and 3
-    for (int i = lo; i < hi; ++i, cells += 8) {
-        for (int u = 0; u < 2; ++u)
-            store4(cells + u * 4, load4(cells + u * 4) + carry[u] + c.tap(u, i));
-        for (int u = 0; u < M - 2; ++u)
-            carry[u] = c.tap(2 + u, i);
+    static_assert(S < M && M <= 2 * S, "the taps of an item reach into the next one's only");
+    constexpr int carried = M - S;
+    d4 carry[carried];
+    for (int u = 0; u < carried; ++u)
+        carry[u] = splat(0.0);
+    for (int i = lo; i < hi; ++i, cells += S * 4) {
+        d4 tap[M];  // read before any cell is written, so the colour is loaded once
+        for (int t = 0; t < M; ++t)
+            tap[t] = c.tap(t, i);
+        for (int u = 0; u < S; ++u) {
+            d4 sum = load4(cells + u * 4) + tap[u];
+            if (u < carried)
+                sum += carry[u];
+            store4(cells + u * 4, sum);
+        }
+        for (int u = 0; u < carried; ++u)
+            carry[u] = tap[S + u];
     }
-    for (int u = 0; u < M - 2; ++u)
+    for (int u = 0; u < carried; ++u)
         store4(cells + u * 4, load4(cells + u * 4) + carry[u]);
 }
 
-/// Adds one cluster of m <= 4 taps for items [lo, hi) of a run whose items
+/// Adds one cluster of m <= max_cluster_taps(shift) taps for items [lo, hi) of a run whose items
 /// are 2^shift columns apart, item 0's first tap at cell cb. Along a run of
 /// pixels one column apart, which share cells, each cell is written once;
 /// blocks further apart are written item by item.
@@ -368,16 +390,21 @@ DEFOCUS_KERNEL void add_cluster(double* row, const Colors& c, int m, int cb, int
             case 2: items_body<2>(cells, c, stride, inside_lo, inside_hi); break;
             case 3:
                 if (shift == 1)
-                    paired_items_body<3>(cells, c, inside_lo, inside_hi);
+                    carried_items_body<2, 3>(cells, c, inside_lo, inside_hi);
                 else
                     items_body<3>(cells, c, stride, inside_lo, inside_hi);
                 break;
-            default:
+            case 4:
                 if (shift == 1)
-                    paired_items_body<4>(cells, c, inside_lo, inside_hi);
+                    carried_items_body<2, 4>(cells, c, inside_lo, inside_hi);
                 else
                     items_body<4>(cells, c, stride, inside_lo, inside_hi);
                 break;
+            // Wider clusters come at blocks 4 columns apart only.
+            case 5: carried_items_body<4, 5>(cells, c, inside_lo, inside_hi); break;
+            case 6: carried_items_body<4, 6>(cells, c, inside_lo, inside_hi); break;
+            case 7: carried_items_body<4, 7>(cells, c, inside_lo, inside_hi); break;
+            default: carried_items_body<4, 8>(cells, c, inside_lo, inside_hi); break;
             }
         }
         for (int i = inside_hi; i < touch_hi; ++i)
@@ -426,10 +453,11 @@ DEFOCUS_KERNEL void add_run(double* row, const FootprintProgram& p, int o, const
 {
     const double* w0 = p.smaller();
     const double* w1 = p.larger();
-    // Clusters wider than 4 taps (a mask's rows) go 4 taps at a time.
+    // Wider clusters (a mask's rows) go a few taps at a time.
+    const int most = max_cluster_taps(shift);
     for (const DeltaCluster* c = p.begin(o); c != p.end(o); ++c)
-        for (int first = 0; first < c->taps; first += 4) {
-            const int m = std::min(4, c->taps - first);
+        for (int first = 0; first < c->taps; first += most) {
+            const int m = std::min(most, c->taps - first);
             const int at = c->at + first;
             if (run.blended) {
                 Blended b;
