@@ -77,6 +77,58 @@ TEST_CASE("visible bokeh weighs colour by the luminance weights it is given")
     CHECK(selected(Imath::V3d(0.0, 0.0, 1.0)) == 1);
 }
 
+TEST_CASE("visible bokeh selects exactly the pixels a direct window mean selects")
+{
+    // Bright and dim pixels at random over an image tall enough to be cut
+    // into bands, radii from 0 to 14 px across it, a data window off the
+    // origin: every pixel's verdict against the mean summed directly.
+    const ROI roi(-7, 233, 5, 415, 0, 1, 0, 4);
+    ImageBuf color = zero_image(roi, 4), radius = zero_image(ROI(-7, 233, 5, 415, 0, 1, 0, 1), 1);
+    uint32_t state = 12345;
+    auto random = [&] {
+        state = state * 1664525u + 1013904223u;
+        return float(state >> 8) * 0x1p-24f;
+    };
+    for (int y = roi.ybegin; y < roi.yend; ++y)
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const float v = random() < 0.03f ? 40.0f * random() : random() < 0.2f ? 0.0f : random();
+            const float c[4] = { v, 0.5f * v, 2.0f * v, 1.0f };
+            color.setpixel(x, y, c);
+            const float r = 14.0f * float(x - roi.xbegin) / roi.width();
+            radius.setpixel(x, y, &r);
+        }
+    const Imath::V3d luma = luma_weights(nullptr);
+    const double threshold = 2.0;
+    const std::vector<uint8_t> selected = visible_bokeh(color, radius, { threshold, luma }, 2);
+    auto luminance = [&](int x, int y) {
+        float c[4];
+        color.getpixel(x, y, c);
+        return luma.x * c[0] + luma.y * c[1] + luma.z * c[2];
+    };
+    int highlights = 0, differ = 0;
+    for (int y = roi.ybegin; y < roi.yend; ++y)
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            float r;
+            radius.getpixel(x, y, &r);
+            const double l = luminance(x, y);
+            bool expect = false;
+            if (r >= 1.0f && l > 0.0) {
+                const int k = int(std::ceil(r));
+                double sum = 0.0;
+                int n = 0;
+                for (int j = std::max(roi.ybegin, y - k); j < std::min(roi.yend, y + k + 1); ++j)
+                    for (int i = std::max(roi.xbegin, x - k); i < std::min(roi.xend, x + k + 1); ++i, ++n)
+                        sum += luminance(i, j);
+                expect = l > threshold * sum / n;
+            }
+            highlights += expect;
+            differ += expect
+                      != bool(selected[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)]);
+        }
+    CHECK(highlights > 1000);
+    CHECK(differ == 0);
+}
+
 TEST_CASE("a PSF image is scaled to the CoC and normalised")
 {
     PsfImage psf;

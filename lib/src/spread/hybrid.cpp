@@ -2,14 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <memory>
 
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/parallel.h>
 
 #include "util/float_pixels.h"
 #include "util/parallel_rows.h"
-#include "util/prefault.h"
 
 namespace defocus {
 
@@ -103,51 +101,86 @@ std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius
     const int w = roi.width(), h = roi.height();
     const FloatPixels pixels(color, roi);
     const FloatPixels radii(radius, ROI(roi.xbegin, roi.xend, roi.ybegin, roi.yend, 0, 1, 0, 1));
-    // Summed-area table of luminance, one row and column of zeros in front:
-    // each row's running sums in parallel, then down the columns in bands.
-    // Not zero-filled on allocation: the passes below write every entry,
-    // in parallel, which also spreads the fresh pages' faults over threads.
-    const std::unique_ptr<double[]> sat(new double[size_t(w + 1) * (h + 1)]);
-    prefault(sat.get(), sizeof(double) * size_t(w + 1) * (h + 1), nthreads);
-    std::fill(&sat[0], &sat[0] + w + 1, 0.0);
-    parallel_for(0, h, [&](int y) {
-        double* row = &sat[size_t(y + 1) * (w + 1)];
-        *row++ = 0.0;
-        const float* c = pixels(roi.xbegin, roi.ybegin + y);
-        double sum = 0.0;
-        for (int x = 0; x < w; ++x, c += pixels.nchannels())
-            row[x] = sum += luminance(c, test.luma);
-    }, by_rows(nthreads));
-    parallel_for_chunked(0, w + 1, 0, [&](int64_t x0, int64_t x1) {
-        for (int y = 1; y <= h; ++y) {
-            double* row = &sat[size_t(y) * (w + 1)];
-            const double* above = row - (w + 1);
-            for (int64_t x = x0; x < x1; ++x)
-                row[x] += above[x];
-        }
-    }, by_rows(nthreads));
     std::vector<uint8_t> selected(size_t(w) * h, 0);
+    if (w <= 0 || h <= 0)
+        return selected;
+    // How far any window reaches from its row: the largest radius of a
+    // pixel that is tested.
+    std::vector<float> row_largest(h, 0.0f);
     parallel_for(0, h, [&](int y) {
+        const Imath::V3d luma = test.luma;
+        const float* c = pixels(roi.xbegin, roi.ybegin + y);
+        const float* r = radii(roi.xbegin, roi.ybegin + y);
+        float largest = 0.0f;
+        for (int x = 0; x < w; ++x, c += pixels.nchannels())
+            if (r[x] > largest && luminance(c, luma) > 0.0)
+                largest = r[x];
+        row_largest[y] = largest;
+    }, by_rows(nthreads));
+    const float largest = *std::max_element(row_largest.begin(), row_largest.end());
+    const int reach = std::min(h, int(std::ceil(largest)));
+    // Each band of rows keeps a summed-area table of luminance of only the
+    // rows its windows reach (the boundaries above rows y - reach ..
+    // y + reach + 1, in a ring), relative to its first row: a window's sum
+    // is a difference of boundaries, whatever they are relative to. The
+    // ring stays in cache, so the pixels are read from memory about once,
+    // where a table of the whole layer would be written and read again.
+    const int ring = std::min(h + 1, 2 * reach + 2);
+    paropt threads = by_rows(nthreads);
+    threads.resolve();
+    // Bands of at least a few reaches, so that the rows summed twice (by
+    // two bands) stay few.
+    const int bands = std::max(1, std::min(4 * threads.maxthreads(), h / std::max(1, 4 * reach)));
+    const int band_rows = (h + bands - 1) / bands;
+    parallel_for(0, bands, [&](int band) {
         // Locals, not the captures: a store through a byte pointer may
         // alias anything, so captured values would be reloaded every pixel.
-        const double* table = sat.get();
         const double contrast = test.threshold;
         const Imath::V3d luma = test.luma;
         const int channels = pixels.nchannels();
-        uint8_t* out = selected.data() + size_t(y) * w;
-        const float* c = pixels(roi.xbegin, roi.ybegin + y);
-        const float* r = radii(roi.xbegin, roi.ybegin + y);
-        for (int x = 0; x < w; ++x, c += channels) {
-            const double l = luminance(c, luma);
-            if (r[x] < 1.0f || l <= 0.0)
-                continue;
-            const int k = int(std::ceil(r[x]));
-            const int x0 = std::max(0, x - k), x1 = std::min(w, x + k + 1);
-            const int y0 = std::max(0, y - k), y1 = std::min(h, y + k + 1);
-            const double sum = table[size_t(y1) * (w + 1) + x1] - table[size_t(y0) * (w + 1) + x1]
-                               - table[size_t(y1) * (w + 1) + x0] + table[size_t(y0) * (w + 1) + x0];
-            const double mean = sum / (double(x1 - x0) * (y1 - y0));
-            out[x] = l > contrast * mean;
+        const int y_begin = band * band_rows, y_end = std::min(h, y_begin + band_rows);
+        std::vector<double> table(size_t(ring) * (w + 1));
+        auto boundary = [&](int j) { return table.data() + size_t(j % ring) * (w + 1); };
+        std::vector<const double*> above_row(size_t(reach) + 1), below_row(size_t(reach) + 1);
+        // The boundaries up to `made` are in the ring.
+        int made = std::max(0, y_begin - reach);
+        std::fill(boundary(made), boundary(made) + w + 1, 0.0);
+        for (int y = y_begin; y < y_end; ++y) {
+            for (; made < std::min(h, y + reach + 1); ++made) {
+                const double* above = boundary(made);
+                double* below = boundary(made + 1);
+                const float* c = pixels(roi.xbegin, roi.ybegin + made);
+                double sum = 0.0;
+                below[0] = 0.0;
+                for (int x = 0; x < w; ++x, c += channels) {
+                    sum += luminance(c, luma);
+                    below[x + 1] = above[x + 1] + sum;
+                }
+            }
+            // The boundaries k rows above and k + 1 below row y, by k.
+            for (int k = 0; k <= reach; ++k) {
+                above_row[k] = boundary(std::max(0, y - k));
+                below_row[k] = boundary(std::min(h, y + k + 1));
+            }
+            const double* const* above = above_row.data();
+            const double* const* below = below_row.data();
+            uint8_t* out = selected.data() + size_t(y) * w;
+            const float* c = pixels(roi.xbegin, roi.ybegin + y);
+            const float* r = radii(roi.xbegin, roi.ybegin + y);
+            for (int x = 0; x < w; ++x, c += channels) {
+                const double l = luminance(c, luma);
+                if (r[x] < 1.0f || l <= 0.0)
+                    continue;
+                const int k = int(std::ceil(r[x]));
+                const int x0 = std::max(0, x - k), x1 = std::min(w, x + k + 1);
+                const int y0 = std::max(0, y - k), y1 = std::min(h, y + k + 1);
+                // reach <= h: windows of larger k span every row too.
+                const double* top = above[std::min(k, reach)];
+                const double* bottom = below[std::min(k, reach)];
+                const double sum = bottom[x1] - top[x1] - bottom[x0] + top[x0];
+                // l > contrast * sum / area, without a division.
+                out[x] = l * (double(x1 - x0) * (y1 - y0)) > contrast * sum;
+            }
         }
     }, by_rows(nthreads));
     return selected;
