@@ -208,8 +208,8 @@ bool read_stage(const std::string& filename)
 /// The four 4096x2160 layers of the floor, as a scene with a camera that
 /// gives blur up to 100 px: far field (CoC 60 px), hills in the lower half
 /// (10 to 40 px), an in-focus post (10% of the width) and near leaves
-/// (100 px, a quarter of the frame), layered: described and ordered back to
-/// front, as the layering stage hands them on.
+/// (100 px, a quarter of the frame), layered: cropped to their content,
+/// described and ordered back to front, as the layering stage hands them on.
 struct FloorScene {
     defocus::LayeredScene scene;
     defocus::Camera camera;
@@ -237,6 +237,7 @@ FloorScene make_floor_scene(const std::vector<bench::FloorLayer>& layers)
         std::transform(l.coc.begin(), l.coc.end(), depth.begin(),
                        [&](float diameter) { return float(coc.depth_at(diameter, 0, 0)); });  // a plane of focus: the same everywhere
         layer.depth.set_pixels(ROI(0, l.width, 0, l.height, 0, 1, 0, 1), TypeFloat, depth.data());
+        defocus::crop_to_content(layer);
         s.scene.layers.push_back(std::move(layer));
     }
     s.scene.spec = ImageSpec(width, 2160, 4, TypeFloat);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numeric>
 
+#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/parallel.h>
 
 #include "util/float_pixels.h"
@@ -75,6 +76,22 @@ LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc, int
     rep.coc_min = total.pixels ? total.cmin : 0.0;
     rep.coc_max = total.pixels ? total.cmax : 0.0;
     return rep;
+}
+
+void crop_to_content(Layer& layer, int nthreads)
+{
+    ROI content = ImageBufAlgo::nonzero_region(layer.color, {}, nthreads);
+    content.chbegin = 0;
+    content.chend = 4;
+    if (content == layer.color.roi())
+        return;
+    ImageBuf color, depth;
+    ImageBufAlgo::crop(color, layer.color, content, nthreads);
+    ROI zroi = content;
+    zroi.chend = 1;
+    ImageBufAlgo::crop(depth, layer.depth, zroi, nthreads);
+    layer.color = std::move(color);
+    layer.depth = std::move(depth);
 }
 
 void order_layers(LayeredScene& scene, const CircleOfConfusion& coc, int nthreads)

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <mutex>
 
-#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/parallel.h>
 #include <OpenImageIO/strutil.h>
 
@@ -231,23 +230,6 @@ bool extract_layer(const Fragments& frags, int k, Layer& layer, int nthreads)
             any = true;
     }, by_rows(nthreads));
     return any;
-}
-
-/// Crops a layer to the pixels that carry light.
-void crop_to_content(Layer& layer, int nthreads)
-{
-    ROI content = ImageBufAlgo::nonzero_region(layer.color, {}, nthreads);
-    content.chbegin = 0;
-    content.chend = 4;
-    if (content == layer.color.roi())
-        return;
-    ImageBuf color, depth;
-    ImageBufAlgo::crop(color, layer.color, content, nthreads);
-    ROI zroi = content;
-    zroi.chend = 1;
-    ImageBufAlgo::crop(depth, layer.depth, zroi, nthreads);
-    layer.color = std::move(color);
-    layer.depth = std::move(depth);
 }
 
 /// The pixels that a layer nearer than k covers and layer k does not:

@@ -43,6 +43,10 @@ struct LayeredScene {
     Imath::V3d luma = luma_weights(nullptr);
 };
 
+/// Crops a layer (colour and depth) to the pixels that carry light, as
+/// layering hands layers on.
+void crop_to_content(Layer& layer, int nthreads = 0);
+
 /// Describes every layer of `scene` and orders them back to front.
 void order_layers(LayeredScene& scene, const CircleOfConfusion& coc, int nthreads = 0);
 
