@@ -777,6 +777,21 @@ void survey_rows(const SpreadSource& source, SpreadMethod method,
     Component c[2];
     ProgramBlend blend[2];
     int n = 0;
+    // Per level, the pixels of one block on one program and blend summed
+    // before they go to the block's sums: along a row, a block's pixels
+    // mostly come one after another alike.
+    struct Pending {
+        int b = 0, k = -1;
+        float t = 0.0f;
+        double value[4];
+    };
+    Pending pending[max_level + 1];
+    auto flush = [&](int l) {
+        Pending& p = pending[l];
+        if (p.k >= 0)
+            sums[l].add(p.b, p.k, p.t, load4(p.value));
+        p.k = -1;
+    };
     for (int y = y0; y < y1; ++y) {
         const size_t row = size_t(y - roi.ybegin) * roi.width();
         for (int x = roi.xbegin; x < roi.xend; ++x) {
@@ -807,10 +822,22 @@ void survey_rows(const SpreadSource& source, SpreadMethod method,
                     const int first = floor_shift(roi.xbegin, l);
                     sums[l].start(first, floor_shift(roi.xend - 1, l) - first + 1);
                 }
-                sums[l].add(floor_shift(x, l), blend[i].k, blend[i].t,
-                            load4(v) * splat(c[i].weight));
+                const int b = floor_shift(x, l);
+                const d4 value = load4(v) * splat(c[i].weight);
+                Pending& p = pending[l];
+                if (p.k == blend[i].k && p.b == b && p.t == blend[i].t) {
+                    store4(p.value, load4(p.value) + value);
+                } else {
+                    flush(l);
+                    p.b = b;
+                    p.k = blend[i].k;
+                    p.t = blend[i].t;
+                    store4(p.value, value);
+                }
             }
         }
+        for (int l = 0; l < nlevels; ++l)
+            flush(l);
     }
     for (int l = 0; l < nlevels; ++l)
         finish(l);
