@@ -4,7 +4,6 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
-#include <chrono>
 #include <thread>
 
 #include <OpenImageIO/filesystem.h>
@@ -80,14 +79,6 @@ void require_identical(const std::string& a, const std::string& b)
     CHECK(diff.maxerror == 0.0);
 }
 
-double seconds_to_run(const std::string& command, std::string& log)
-{
-    const auto start = std::chrono::steady_clock::now();
-    INFO(command);
-    REQUIRE(run(command, log) == 0);
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
 }  // namespace
 
 TEST_CASE("oiiotool opens a .dof as the image the defocus command renders from it")
@@ -138,7 +129,9 @@ TEST_CASE("oiiotool renders each frame of a sequence scene with --iconfig dof:fr
 
 TEST_CASE("oiiotool --info reports the spec without rendering")
 {
-    // Pixels that cannot be read: open() must not need them.
+    // Pixels that cannot be read: open() must not need them, so it cannot
+    // be rendering (a timed comparison with a render said the same, less
+    // surely, and grew flaky as rendering got faster).
     const std::string dir = scratch_dir("plugin_info");
     const std::string scene = dir + "/scene.exr", truncated = dir + "/truncated.exr";
     std::string log;
@@ -159,19 +152,6 @@ TEST_CASE("oiiotool --info reports the spec without rendering")
     // Reading the pixels renders, and that fails here, as an error.
     CHECK(run(with_plugin + OIIOTOOL_BIN + " " + dir + "/t.dof -o " + dir + "/x.exr", log) == 1);
     CHECK(Strutil::contains(log, "truncated.exr: corrupt or truncated OpenEXR file"));
-
-    // A scene that takes seconds to render opens in a fraction of that.
-    const std::string big = dir + "/big.exr";
-    REQUIRE(run(format("{} {} --width 2560 --height 1440", MAKE_EXAMPLE_SCENE_BIN, big), log) == 0);
-    REQUIRE(run(format("{} {} --focal 50 --fstop 1.4 --focus 4 --save-scene {}/big.dof",
-                       DEFOCUS_BIN, big, dir),
-                log) == 0);
-    const double render = seconds_to_run(
-        format("{} {}/big.dof -o {}/big_out.exr -q", DEFOCUS_BIN, dir, dir), log);
-    const double info = seconds_to_run(with_plugin + OIIOTOOL_BIN + " --info -v " + dir + "/big.dof", log);
-    WARN("render " << render << " s, oiiotool --info " << info << " s");
-    CHECK(Strutil::contains(log, "full/display size: 2560 x 1440"));
-    CHECK(info < 0.25 * render);
 }
 
 TEST_CASE("with --grow the plugin's window holds all the light the defocus command spreads")
