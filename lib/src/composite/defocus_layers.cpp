@@ -4,6 +4,7 @@
 #include <cmath>
 #include <memory>
 #include <new>
+#include <type_traits>
 
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/parallel.h>
@@ -35,12 +36,20 @@ bool coc_radius(ImageBuf& dst, const ImageBuf& depth,
     dst.reset(spec, InitializePixels::No);  // every pixel is written below
     prefault(dst.localpixels(), spec.image_bytes(), nthreads);
     const FloatPixels z(depth, roi);
-    parallel_for(roi.ybegin, roi.yend, [&](int y) {
-        const float* in = z(roi.xbegin, y);
-        float* out = static_cast<float*>(dst.pixeladdr(roi.xbegin, y));
-        for (int x = 0; x < roi.width(); ++x, in += z.nchannels())
-            out[x] = float(0.5 * std::abs(coc.diameter(*in, roi.xbegin + x, y, channel)));
-    }, by_rows(nthreads));
+    // Depth is mostly one channel: a loop of unit stride vectorises.
+    auto rows = [&](auto stride) {
+        parallel_for(roi.ybegin, roi.yend, [&](int y) {
+            const float* in = z(roi.xbegin, y);
+            float* out = static_cast<float*>(dst.pixeladdr(roi.xbegin, y));
+            for (int x = 0; x < roi.width(); ++x)
+                out[x] = float(
+                    0.5 * std::abs(coc.diameter(in[x * stride], roi.xbegin + x, y, channel)));
+        }, by_rows(nthreads));
+    };
+    if (z.nchannels() == 1)
+        rows(std::integral_constant<int, 1>());
+    else
+        rows(z.nchannels());
     return true;
 }
 

@@ -130,7 +130,7 @@ public:
 private:
     double unclamped(double z, int x, int y) const
     {
-        const double inv_z = std::isinf(z) ? 0.0 : 1.0 / z;
+        const double inv_z = 1.0 / z;  // 0 at infinity
         // Thin lens (the paper's eq. 1 with the image plane fixed):
         //   c = f^2 / (N s) * W * (1/z_f - 1/z).
         // Potmesil & Chakravarty: f^2 |z - z_f| / (N z (z_f - f)) * W/s,
