@@ -687,21 +687,36 @@ public:
     /// folded when all of their pixels blend its sizes alike.
     ItemRow runs(const SpreadEngine::Sparse& level)
     {
-        // Mostly every block has one program: its sums are in block order.
-        // Otherwise every sum, ordered by program, in m_others' storage
-        // (start() clears it).
-        const bool mixed = !m_others.empty();
-        if (mixed) {
-            for (const Sum& sum : m_sums)
-                if (sum.k >= 0)
-                    m_others.push_back(sum);
-            std::sort(m_others.begin(), m_others.end(), [](const Sum& a, const Sum& e) {
-                return a.k != e.k ? a.k < e.k : a.b < e.b;
-            });
-        }
-        const std::vector<Sum>& all = mixed ? m_others : m_sums;
+        // Every block's first program, in block order; the few other
+        // programs of blocks across a change of program, ordered by
+        // program, after them; then all the runs by column.
+        std::sort(m_others.begin(), m_others.end(), [](const Sum& a, const Sum& e) {
+            return a.k != e.k ? a.k < e.k : a.b < e.b;
+        });
         ItemRow row;
-        row.color.reserve(all.size() * 8);
+        row.color.reserve((m_sums.size() + m_others.size()) * 8);
+        add_runs(m_sums, level, row);
+        if (m_others.empty())
+            return row;
+        add_runs(m_others, level, row);
+        std::sort(row.runs.begin(), row.runs.end(),
+                  [](const ProgramRun& a, const ProgramRun& b) { return a.x < b.x; });
+        return row;
+    }
+
+private:
+    struct Sum {
+        int b = 0, k = -1;     ///< block and program; k < 0: no pixel yet
+        float t = 0.0f;        ///< the blend of its pixels, when they all share one
+        bool blended = false;  ///< when they do not
+        double smaller[4] = { 0, 0, 0, 0 }, larger[4] = { 0, 0, 0, 0 };
+    };
+    /// Appends `sums` (ordered so that a run's blocks are neighbours) as
+    /// runs of consecutive blocks on one program, folded when all of their
+    /// pixels blend its sizes alike.
+    static void add_runs(const std::vector<Sum>& all, const SpreadEngine::Sparse& level,
+                         ItemRow& row)
+    {
         for (size_t i = 0; i < all.size();) {
             if (all[i].k < 0) {
                 ++i;
@@ -723,19 +738,8 @@ public:
                 }
             i = j;
         }
-        if (mixed)
-            std::sort(row.runs.begin(), row.runs.end(),
-                      [](const ProgramRun& a, const ProgramRun& b) { return a.x < b.x; });
-        return row;
     }
 
-private:
-    struct Sum {
-        int b = 0, k = -1;     ///< block and program; k < 0: no pixel yet
-        float t = 0.0f;        ///< the blend of its pixels, when they all share one
-        bool blended = false;  ///< when they do not
-        double smaller[4] = { 0, 0, 0, 0 }, larger[4] = { 0, 0, 0, 0 };
-    };
     int m_first = 0;
     std::vector<Sum> m_sums;    ///< per block, its first program
     std::vector<Sum> m_others;  ///< other programs of a block
