@@ -349,10 +349,11 @@ DEFOCUS_KERNEL void carried_items_body(double* cells, const Colors& c, int lo, i
         store4(cells + u * 4, load4(cells + u * 4) + carry[u]);
 }
 
-/// Adds one cluster of m <= max_cluster_taps(shift) taps for items [lo, hi) of a run whose items
-/// are 2^shift columns apart, item 0's first tap at cell cb. Along a run of
-/// pixels one column apart, which share cells, each cell is written once;
-/// blocks further apart are written item by item.
+/// Adds one cluster of m <= max_cluster_taps(shift) taps for items
+/// [lo, hi) of a run whose items are 2^shift columns apart, item 0's first
+/// tap at cell cb. Along a run of pixels one column apart, which share
+/// cells, each cell is written once; blocks further apart are written item
+/// by item.
 template<typename Colors>
 DEFOCUS_KERNEL void add_cluster(double* row, const Colors& c, int m, int cb, int shift, int lo,
                                 int hi, const Tile& tile)
@@ -658,35 +659,31 @@ public:
         m_first = first_block;
         m_sums.assign(size_t(blocks), Sum {});
         m_others.clear();
+        m_pending.k = -1;
     }
 
     /// Adds `value` to block `b` on program k, blending its sizes by t.
+    /// Along a row a block's pixels mostly come one after another on one
+    /// program and blend: they are summed first, and go to the block's sums
+    /// together.
     DEFOCUS_KERNEL void add(int b, int k, float t, const d4& value)
     {
-        Sum* sum = &m_sums[size_t(b - m_first)];
-        if (sum->k != k && sum->k >= 0) {  // rare: a block across a change of program
-            auto other = std::find_if(m_others.begin(), m_others.end(),
-                                      [&](const Sum& o) { return o.b == b && o.k == k; });
-            if (other == m_others.end()) {
-                m_others.push_back(Sum {});
-                other = m_others.end() - 1;
-            }
-            sum = &*other;
+        if (m_pending.k == k && m_pending.b == b && m_pending.t == t) {
+            store4(m_pending.value, load4(m_pending.value) + value);
+            return;
         }
-        if (sum->k < 0) {
-            sum->b = b;
-            sum->k = k;
-            sum->t = t;
-        }
-        sum->blended |= sum->t != t;
-        store4(sum->smaller, load4(sum->smaller) + value * splat(1.0 - t));
-        store4(sum->larger, load4(sum->larger) + value * splat(t));
+        add_pending();
+        m_pending.b = b;
+        m_pending.k = k;
+        m_pending.t = t;
+        store4(m_pending.value, value);
     }
 
     /// The row's blocks as runs of consecutive blocks on one program,
     /// folded when all of their pixels blend its sizes alike.
     ItemRow runs(const SpreadEngine::Sparse& level)
     {
+        add_pending();
         // Every block's first program, in block order; the few other
         // programs of blocks across a change of program, ordered by
         // program, after them; then all the runs by column.
@@ -711,6 +708,42 @@ private:
         bool blended = false;  ///< when they do not
         double smaller[4] = { 0, 0, 0, 0 }, larger[4] = { 0, 0, 0, 0 };
     };
+    /// Pixels of one block, program and blend not yet in the block's sums.
+    struct Pending {
+        int b = 0, k = -1;  ///< k < 0: none
+        float t = 0.0f;
+        double value[4];
+    };
+
+    /// Adds the pending pixels to their block's sums.
+    DEFOCUS_KERNEL void add_pending()
+    {
+        if (m_pending.k < 0)
+            return;
+        const int b = m_pending.b, k = m_pending.k;
+        const float t = m_pending.t;
+        const d4 value = load4(m_pending.value);
+        m_pending.k = -1;
+        Sum* sum = &m_sums[size_t(b - m_first)];
+        if (sum->k != k && sum->k >= 0) {  // rare: a block across a change of program
+            auto other = std::find_if(m_others.begin(), m_others.end(),
+                                      [&](const Sum& o) { return o.b == b && o.k == k; });
+            if (other == m_others.end()) {
+                m_others.push_back(Sum {});
+                other = m_others.end() - 1;
+            }
+            sum = &*other;
+        }
+        if (sum->k < 0) {
+            sum->b = b;
+            sum->k = k;
+            sum->t = t;
+        }
+        sum->blended |= sum->t != t;
+        store4(sum->smaller, load4(sum->smaller) + value * splat(1.0 - t));
+        store4(sum->larger, load4(sum->larger) + value * splat(t));
+    }
+
     /// Appends `sums` (ordered so that a run's blocks are neighbours) as
     /// runs of consecutive blocks on one program, folded when all of their
     /// pixels blend its sizes alike.
@@ -743,6 +776,7 @@ private:
     int m_first = 0;
     std::vector<Sum> m_sums;    ///< per block, its first program
     std::vector<Sum> m_others;  ///< other programs of a block
+    Pending m_pending;
 };
 
 /// What one pass over a layer finds: the largest radius on the dense path
@@ -781,21 +815,6 @@ void survey_rows(const SpreadSource& source, SpreadMethod method,
     Component c[2];
     ProgramBlend blend[2];
     int n = 0;
-    // Per level, the pixels of one block on one program and blend summed
-    // before they go to the block's sums: along a row, a block's pixels
-    // mostly come one after another alike.
-    struct Pending {
-        int b = 0, k = -1;
-        float t = 0.0f;
-        double value[4];
-    };
-    Pending pending[max_level + 1];
-    auto flush = [&](int l) {
-        Pending& p = pending[l];
-        if (p.k >= 0)
-            sums[l].add(p.b, p.k, p.t, load4(p.value));
-        p.k = -1;
-    };
     for (int y = y0; y < y1; ++y) {
         const size_t row = size_t(y - roi.ybegin) * roi.width();
         for (int x = roi.xbegin; x < roi.xend; ++x) {
@@ -826,22 +845,10 @@ void survey_rows(const SpreadSource& source, SpreadMethod method,
                     const int first = floor_shift(roi.xbegin, l);
                     sums[l].start(first, floor_shift(roi.xend - 1, l) - first + 1);
                 }
-                const int b = floor_shift(x, l);
-                const d4 value = load4(v) * splat(c[i].weight);
-                Pending& p = pending[l];
-                if (p.k == blend[i].k && p.b == b && p.t == blend[i].t) {
-                    store4(p.value, load4(p.value) + value);
-                } else {
-                    flush(l);
-                    p.b = b;
-                    p.k = blend[i].k;
-                    p.t = blend[i].t;
-                    store4(p.value, value);
-                }
+                sums[l].add(floor_shift(x, l), blend[i].k, blend[i].t,
+                            load4(v) * splat(c[i].weight));
             }
         }
-        for (int l = 0; l < nlevels; ++l)
-            flush(l);
     }
     for (int l = 0; l < nlevels; ++l)
         finish(l);
