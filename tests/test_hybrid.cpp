@@ -116,8 +116,10 @@ TEST_CASE("visible bokeh selects exactly the pixels a direct window mean selects
                 const int k = int(std::ceil(r));
                 double sum = 0.0;
                 int n = 0;
-                for (int j = std::max(roi.ybegin, y - k); j < std::min(roi.yend, y + k + 1); ++j)
-                    for (int i = std::max(roi.xbegin, x - k); i < std::min(roi.xend, x + k + 1); ++i, ++n)
+                const int x0 = std::max(roi.xbegin, x - k), x1 = std::min(roi.xend, x + k + 1);
+                const int y0 = std::max(roi.ybegin, y - k), y1 = std::min(roi.yend, y + k + 1);
+                for (int j = y0; j < y1; ++j)
+                    for (int i = x0; i < x1; ++i, ++n)
                         sum += luminance(i, j);
                 expect = l > threshold * sum / n;
             }

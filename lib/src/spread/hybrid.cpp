@@ -141,7 +141,8 @@ std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius
         const int y_begin = band * band_rows, y_end = std::min(h, y_begin + band_rows);
         std::vector<double> table(size_t(ring) * (w + 1));
         auto boundary = [&](int j) { return table.data() + size_t(j % ring) * (w + 1); };
-        std::vector<const double*> above_row(size_t(reach) + 1), below_row(size_t(reach) + 1);
+        // The boundaries k rows above and k + 1 below the row tested, by k.
+        std::vector<const double*> tops(size_t(reach) + 1), bottoms(size_t(reach) + 1);
         // The boundaries up to `made` are in the ring.
         int made = std::max(0, y_begin - reach);
         std::fill(boundary(made), boundary(made) + w + 1, 0.0);
@@ -157,13 +158,13 @@ std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius
                     below[x + 1] = above[x + 1] + sum;
                 }
             }
-            // The boundaries k rows above and k + 1 below row y, by k.
             for (int k = 0; k <= reach; ++k) {
-                above_row[k] = boundary(std::max(0, y - k));
-                below_row[k] = boundary(std::min(h, y + k + 1));
+                tops[k] = boundary(std::max(0, y - k));
+                bottoms[k] = boundary(std::min(h, y + k + 1));
             }
-            const double* const* above = above_row.data();
-            const double* const* below = below_row.data();
+            // Plain pointers, for the reason above: a vector's would be reloaded.
+            const double* const* top_of = tops.data();
+            const double* const* bottom_of = bottoms.data();
             uint8_t* out = selected.data() + size_t(y) * w;
             const float* c = pixels(roi.xbegin, roi.ybegin + y);
             const float* r = radii(roi.xbegin, roi.ybegin + y);
@@ -175,8 +176,8 @@ std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius
                 const int x0 = std::max(0, x - k), x1 = std::min(w, x + k + 1);
                 const int y0 = std::max(0, y - k), y1 = std::min(h, y + k + 1);
                 // reach <= h: windows of larger k span every row too.
-                const double* top = above[std::min(k, reach)];
-                const double* bottom = below[std::min(k, reach)];
+                const double* top = top_of[std::min(k, reach)];
+                const double* bottom = bottom_of[std::min(k, reach)];
                 const double sum = bottom[x1] - top[x1] - bottom[x0] + top[x0];
                 // l > contrast * sum / area, without a division.
                 out[x] = l * (double(x1 - x0) * (y1 - y0)) > contrast * sum;
