@@ -17,8 +17,7 @@
 #include "spread/spread_engine.h"
 #include "util/float_pixels.h"
 #include "util/parallel_rows.h"
-#include "util/prefault.h"
-#include "util/zeroed_image.h"
+#include "util/fresh_image.h"
 
 namespace defocus {
 
@@ -33,8 +32,7 @@ bool coc_radius(ImageBuf& dst, const ImageBuf& depth,
     roi.chend = 1;
     ImageSpec spec(roi, TypeFloat);
     spec.channelnames = { "radius" };
-    dst.reset(spec, InitializePixels::No);  // every pixel is written below
-    prefault(dst.localpixels(), spec.image_bytes(), nthreads);
+    reset_for_overwrite(dst, spec, nthreads);
     const FloatPixels z(depth, roi);
     // Depth is mostly one channel: a loop of unit stride vectorises.
     auto rows = [&](auto stride) {

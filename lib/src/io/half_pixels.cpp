@@ -8,7 +8,7 @@
 #include <OpenImageIO/parallel.h>
 
 #include "util/parallel_rows.h"
-#include "util/prefault.h"
+#include "util/fresh_image.h"
 
 namespace defocus {
 
@@ -44,8 +44,7 @@ bool convert_to_half(const OIIO::ImageBuf& src, OIIO::ImageBuf& dst, int nthread
         return false;
     OIIO::ImageSpec spec = from;
     spec.set_format(OIIO::TypeHalf);
-    dst.reset(spec, OIIO::InitializePixels::No);
-    prefault(dst.localpixels(), spec.image_bytes(), nthreads);
+    reset_for_overwrite(dst, spec, nthreads);
     const size_t row_values = size_t(from.width) * from.nchannels;
     OIIO::parallel_for(int64_t(0), int64_t(from.height) * from.depth, [&](int64_t row) {
         const float* in = static_cast<const float*>(src.localpixels()) + size_t(row) * row_values;

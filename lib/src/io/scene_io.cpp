@@ -14,7 +14,7 @@
 #include <defocus/io/image_input.h>
 
 #include "io/exr_input.h"
-#include "util/prefault.h"
+#include "util/fresh_image.h"
 #include "util/parallel_rows.h"
 
 namespace defocus {
@@ -182,12 +182,9 @@ bool allocate_layer(const std::string& name, const ROI& window, const ImageSpec&
     color_spec.alpha_channel = 3;
     depth_spec.channelnames  = { "Z" };
     depth_spec.z_channel     = 0;
-    // Every pixel is written next: no need to clear them first.
     layer.name = name;
-    layer.color.reset(color_spec, InitializePixels::No);
-    layer.depth.reset(depth_spec, InitializePixels::No);
-    prefault(layer.color.localpixels(), color_spec.image_bytes(), 0);
-    prefault(layer.depth.localpixels(), depth_spec.image_bytes(), 0);
+    reset_for_overwrite(layer.color, color_spec, 0);
+    reset_for_overwrite(layer.depth, depth_spec, 0);
     return true;
 }
 

@@ -10,7 +10,7 @@
 #include <OpenImageIO/parallel.h>
 
 #include "util/parallel_rows.h"
-#include "util/zeroed_image.h"
+#include "util/fresh_image.h"
 
 namespace defocus {
 
@@ -93,7 +93,7 @@ ImageSpec output_spec(const OIIO::ImageBuf& src, const ROI& window)
 
 namespace {
 
-/// Writes spread rows into a float image of `nchannels`.
+/// Writes spread rows into a float image of `nchannels`, every pixel.
 class StoreRows final : public RowSink {
 public:
     StoreRows(OIIO::ImageBuf& dst, int nchannels) : m_dst(dst), m_nchannels(nchannels) {}
@@ -103,6 +103,11 @@ public:
         for (int x = x_begin; x < x_end; ++x, rgba += 4, out += m_nchannels)
             for (int c = 0; c < m_nchannels; ++c)
                 out[c] = float(rgba[c]);
+    }
+    void dark(int y, int x_begin, int x_end) override
+    {
+        float* out = static_cast<float*>(m_dst.pixeladdr(x_begin, y));
+        std::fill(out, out + size_t(x_end - x_begin) * m_nchannels, 0.0f);
     }
 
 private:
@@ -159,7 +164,8 @@ bool spread_image(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const OIIO::Im
     if (shape)
         programs = std::make_unique<ShapePrograms>(borrow(*shape), in.max_radius);
     const SpreadEngine engine(source, method, programs.get(), nthreads);
-    reset_zeroed(dst, output_spec(src, engine.extent()), nthreads);
+    // The engine hands on every pixel of its extent.
+    reset_for_overwrite(dst, output_spec(src, engine.extent()), nthreads);
     StoreRows rows(dst, nc);
     engine.run(engine.extent(), rows, nthreads);
     return true;

@@ -1021,8 +1021,10 @@ void SpreadEngine::run(const ROI& window_in, RowSink& sink, int nthreads) const
                 ws.rows.resize(row_size);
                 for (int y = y_begin; y < y_end; ++y) {
                     const double* carry = ws.row_carry.data() + size_t(y - y_begin) * 4;
-                    if (std::all_of(carry, carry + 4, [](double v) { return v == 0.0; }))
+                    if (std::all_of(carry, carry + 4, [](double v) { return v == 0.0; })) {
+                        sink.dark(y, tile.x_begin, tile.x_end);
                         continue;
+                    }
                     for (size_t i = 0; i < row_size; i += 4)
                         std::copy(carry, carry + 4, ws.rows.begin() + ptrdiff_t(i));
                     sink.row(y, tile.x_begin, tile.x_end, ws.rows.data() + 4);

@@ -36,15 +36,18 @@
 
 namespace defocus {
 
-/// Receives spread rows. Called once for every row of the window that the
-/// spread reaches, in column pieces; concurrently, but never twice for one
-/// pixel.
+/// Receives spread rows. Every row of the window that the spread reaches
+/// comes once, in column pieces, each as row() or, where no light falls,
+/// as dark(); concurrently, but never twice for one pixel.
 class RowSink {
 public:
     virtual ~RowSink() = default;
     /// Row y over columns [x_begin, x_end): premultiplied RGBA, 4 doubles
     /// per pixel.
     virtual void row(int y, int x_begin, int x_end, const double* rgba) = 0;
+    /// Row y over columns [x_begin, x_end) is black. Skipped by default:
+    /// most sinks add.
+    virtual void dark(int /*y*/, int /*x_begin*/, int /*x_end*/) {}
 };
 
 /// The footprints of one aperture shape, for single pixels and for merged
