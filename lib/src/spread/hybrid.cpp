@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/parallel.h>
 
+#include "util/clones.h"
 #include "util/float_pixels.h"
 #include "util/parallel_rows.h"
 
@@ -15,9 +17,95 @@ using namespace OIIO;
 
 namespace {
 
-double luminance(const float* c, const Imath::V3d& luma)
+DEFOCUS_KERNEL double luminance(const float* c, const Imath::V3d& luma)
 {
     return luma.x * c[0] + luma.y * c[1] + luma.z * c[2];
+}
+
+/// The luminance of a row of w pixels of `channels` floats each.
+template<typename Channels>
+DEFOCUS_KERNEL void luminance_row(const float* c, Channels channels, int w,
+                                  const Imath::V3d& luma, double* out)
+{
+    for (int x = 0; x < w; ++x)
+        out[x] = luminance(c + x * channels, luma);
+}
+
+DEFOCUS_CLONES
+void luminance_row(const float* c, int channels, int w, const Imath::V3d& luma, double* out)
+{
+    // RGBA mostly: a constant stride vectorises.
+    if (channels == 4)
+        luminance_row(c, std::integral_constant<int, 4>(), w, luma, out);
+    else
+        luminance_row(c, channels, w, luma, out);
+}
+
+/// The boundary below a row of luminance `l` in a summed-area table,
+/// from the boundary above it.
+void next_boundary(const double* above, const double* l, int w, double* below)
+{
+    double sum = 0.0;
+    below[0] = 0.0;
+    for (int x = 0; x < w; ++x) {
+        sum += l[x];
+        below[x + 1] = above[x + 1] + sum;
+    }
+}
+
+/// The rows of a summed-area table a pixel's window spans: k rows above
+/// and k below it, by k = ceil(CoC radius) up to the layer's reach.
+struct WindowRows {
+    const double* const* top;     ///< the boundaries above the windows
+    const double* const* bottom;  ///< the boundaries below them
+    int reach;
+    int y, height;                ///< the row tested, of the layer's
+};
+
+/// The verdicts of one row (see visible_bokeh) of w pixels of luminance
+/// `l` and CoC radius `r`: 1 where l exceeds `contrast` times the mean
+/// over the window. Comparisons without a division, the sums as
+/// differences of boundaries.
+DEFOCUS_CLONES
+void test_row(const double* l, const float* r, int w, const WindowRows& rows, double contrast,
+              uint8_t* out)
+{
+    auto window_size = [&](int k) {
+        return std::min(rows.reach, k);  // reach <= height: larger windows span every row too
+    };
+    auto rows_spanned = [&](int k) {
+        return std::min(rows.height, rows.y + k + 1) - std::max(0, rows.y - k);
+    };
+    constexpr int lanes = 8;
+    int x = 0;
+    while (x < w) {
+        // Pixels `lanes` at a time where their windows are one size and
+        // lie within the row: one vector of sums from four rows' stretches.
+        const int k = r[x] >= 1.0f ? int(std::ceil(r[x])) : 0;
+        bool same = k > 0 && x - k >= 0 && x + lanes + k <= w;
+        for (int j = 1; same && j < lanes; ++j)
+            same = r[x + j] >= 1.0f && int(std::ceil(r[x + j])) == k;
+        if (same) {
+            const double* top = rows.top[window_size(k)];
+            const double* bottom = rows.bottom[window_size(k)];
+            const double area = double(2 * k + 1) * rows_spanned(k);
+            for (int j = 0; j < lanes; ++j) {
+                const int x0 = x + j - k, x1 = x + j + k + 1;
+                const double sum = bottom[x1] - top[x1] - bottom[x0] + top[x0];
+                out[x + j] = l[x + j] > 0.0 && l[x + j] * area > contrast * sum;
+            }
+            x += lanes;
+            continue;
+        }
+        if (r[x] >= 1.0f && l[x] > 0.0) {
+            const int x0 = std::max(0, x - k), x1 = std::min(w, x + k + 1);
+            const double* top = rows.top[window_size(k)];
+            const double* bottom = rows.bottom[window_size(k)];
+            const double sum = bottom[x1] - top[x1] - bottom[x0] + top[x0];
+            out[x] = l[x] * (double(x1 - x0) * rows_spanned(k)) > contrast * sum;
+        }
+        ++x;
+    }
 }
 
 }  // namespace
@@ -133,13 +221,8 @@ std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius
     const int bands = std::max(1, std::min(4 * threads.maxthreads(), h / std::max(1, 4 * reach)));
     const int band_rows = (h + bands - 1) / bands;
     parallel_for(0, bands, [&](int band) {
-        // Locals, not the captures: a store through a byte pointer may
-        // alias anything, so captured values would be reloaded every pixel.
-        const double contrast = test.threshold;
-        const Imath::V3d luma = test.luma;
-        const int channels = pixels.nchannels();
         const int y_begin = band * band_rows, y_end = std::min(h, y_begin + band_rows);
-        std::vector<double> table(size_t(ring) * (w + 1));
+        std::vector<double> table(size_t(ring) * (w + 1)), l(w);
         auto boundary = [&](int j) { return table.data() + size_t(j % ring) * (w + 1); };
         // The boundaries k rows above and k + 1 below the row tested, by k.
         std::vector<const double*> tops(size_t(reach) + 1), bottoms(size_t(reach) + 1);
@@ -148,40 +231,19 @@ std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius
         std::fill(boundary(made), boundary(made) + w + 1, 0.0);
         for (int y = y_begin; y < y_end; ++y) {
             for (; made < std::min(h, y + reach + 1); ++made) {
-                const double* above = boundary(made);
-                double* below = boundary(made + 1);
-                const float* c = pixels(roi.xbegin, roi.ybegin + made);
-                double sum = 0.0;
-                below[0] = 0.0;
-                for (int x = 0; x < w; ++x, c += channels) {
-                    sum += luminance(c, luma);
-                    below[x + 1] = above[x + 1] + sum;
-                }
+                luminance_row(pixels(roi.xbegin, roi.ybegin + made), pixels.nchannels(), w,
+                              test.luma, l.data());
+                next_boundary(boundary(made), l.data(), w, boundary(made + 1));
             }
             for (int k = 0; k <= reach; ++k) {
                 tops[k] = boundary(std::max(0, y - k));
                 bottoms[k] = boundary(std::min(h, y + k + 1));
             }
-            // Plain pointers, for the reason above: a vector's would be reloaded.
-            const double* const* top_of = tops.data();
-            const double* const* bottom_of = bottoms.data();
-            uint8_t* out = selected.data() + size_t(y) * w;
-            const float* c = pixels(roi.xbegin, roi.ybegin + y);
-            const float* r = radii(roi.xbegin, roi.ybegin + y);
-            for (int x = 0; x < w; ++x, c += channels) {
-                const double l = luminance(c, luma);
-                if (r[x] < 1.0f || l <= 0.0)
-                    continue;
-                const int k = int(std::ceil(r[x]));
-                const int x0 = std::max(0, x - k), x1 = std::min(w, x + k + 1);
-                const int y0 = std::max(0, y - k), y1 = std::min(h, y + k + 1);
-                // reach <= h: windows of larger k span every row too.
-                const double* top = top_of[std::min(k, reach)];
-                const double* bottom = bottom_of[std::min(k, reach)];
-                const double sum = bottom[x1] - top[x1] - bottom[x0] + top[x0];
-                // l > contrast * sum / area, without a division.
-                out[x] = l * (double(x1 - x0) * (y1 - y0)) > contrast * sum;
-            }
+            luminance_row(pixels(roi.xbegin, roi.ybegin + y), pixels.nchannels(), w, test.luma,
+                          l.data());
+            test_row(l.data(), radii(roi.xbegin, roi.ybegin + y), w,
+                     { tops.data(), bottoms.data(), reach, y, h }, test.threshold,
+                     selected.data() + size_t(y) * w);
         }
     }, by_rows(nthreads));
     return selected;

@@ -14,6 +14,7 @@
 
 #include <defocus/spread/footprint.h>
 
+#include "util/clones.h"
 #include "util/parallel_rows.h"
 
 namespace defocus {
@@ -38,19 +39,6 @@ constexpr double level_start(int level)
 /// The largest radius a bounded spread takes on the dense path: where
 /// blocks of 2 pixels take over.
 constexpr float dense_limit = float(level_start(1));
-/// The kernels are inlined into each target_clones clone of their callers,
-/// so that they are compiled for that clone's instruction set.
-#define DEFOCUS_KERNEL inline __attribute__((always_inline))
-/// The callers are compiled for AVX-512, AVX2 and the baseline, the one
-/// the CPU runs picked at load time. clang 14 refuses 4-double vectors in
-/// the baseline clone of such a function (an ABI error, not a warning),
-/// so a clang build has the baseline only: slower, the same results.
-#if defined(__clang__)
-#define DEFOCUS_CLONES
-#else
-#define DEFOCUS_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
-#endif
-
 /// The output rows and columns one task accumulates: a tile of deltas
 /// that stays in the second-level cache while every source row within
 /// reach adds to it.
