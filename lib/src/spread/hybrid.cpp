@@ -7,7 +7,7 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/parallel.h>
 
-#include "util/clones.h"
+#include "util/simd.h"
 #include "util/float_pixels.h"
 #include "util/parallel_rows.h"
 

@@ -1,9 +1,5 @@
 #include "spread/spread_engine.h"
 
-// The 4-double vector helpers below are inlined into each clone of the
-// kernels, so the ABI of passing them by value never applies.
-#pragma GCC diagnostic ignored "-Wpsabi"
-
 #include <algorithm>
 #include <climits>
 #include <cmath>
@@ -14,7 +10,7 @@
 
 #include <defocus/spread/footprint.h>
 
-#include "util/clones.h"
+#include "util/simd.h"
 #include "util/parallel_rows.h"
 
 namespace defocus {
@@ -47,33 +43,6 @@ constexpr int tile_rows = 64, tile_columns = 256;
 /// reaching far, whose pixels all take this path, gets tiles a few times
 /// its reach on a side: fewer visits outweigh a tile that leaves the cache.
 constexpr int box_tile_reaches = 4, box_tile_limit = 2048;
-
-using d4 = double __attribute__((vector_size(32)));
-using f4 = float __attribute__((vector_size(16)));
-
-DEFOCUS_KERNEL d4 load4(const double* p)
-{
-    d4 v;
-    std::memcpy(&v, p, sizeof v);
-    return v;
-}
-
-DEFOCUS_KERNEL void store4(double* p, const d4& v)
-{
-    std::memcpy(p, &v, sizeof v);
-}
-
-DEFOCUS_KERNEL d4 load4(const float* p)
-{
-    f4 v;
-    std::memcpy(&v, p, sizeof v);
-    return __builtin_convertvector(v, d4);
-}
-
-DEFOCUS_KERNEL d4 splat(double w)
-{
-    return d4 { w, w, w, w };
-}
 
 inline bool is_zero(const float* v)
 {
