@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <type_traits>
 
 #include <OpenImageIO/imagebufalgo.h>
@@ -89,11 +90,15 @@ void test_row(const double* l, const float* r, int w, const WindowRows& rows, do
             const double* top = rows.top[window_size(k)];
             const double* bottom = rows.bottom[window_size(k)];
             const double area = double(2 * k + 1) * rows_spanned(k);
+            // Verdicts stored together: a byte stored alone may alias
+            // the table, which the next lane would then have to reload.
+            uint8_t verdicts[lanes];
             for (int j = 0; j < lanes; ++j) {
                 const int x0 = x + j - k, x1 = x + j + k + 1;
                 const double sum = bottom[x1] - top[x1] - bottom[x0] + top[x0];
-                out[x + j] = l[x + j] > 0.0 && l[x + j] * area > contrast * sum;
+                verdicts[j] = (l[x + j] > 0.0) & (l[x + j] * area > contrast * sum);
             }
+            std::memcpy(out + x, verdicts, lanes);
             x += lanes;
             continue;
         }
@@ -222,8 +227,12 @@ std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius
     const int band_rows = (h + bands - 1) / bands;
     parallel_for(0, bands, [&](int band) {
         const int y_begin = band * band_rows, y_end = std::min(h, y_begin + band_rows);
-        std::vector<double> table(size_t(ring) * (w + 1)), l(w);
+        std::vector<double> table(size_t(ring) * (w + 1));
         auto boundary = [&](int j) { return table.data() + size_t(j % ring) * (w + 1); };
+        // The luminance of the rows summed and not yet tested: rows y to
+        // y + reach.
+        std::vector<double> luminances(size_t(reach + 1) * w);
+        auto luminance_of = [&](int j) { return luminances.data() + size_t(j % (reach + 1)) * w; };
         // The boundaries k rows above and k + 1 below the row tested, by k.
         std::vector<const double*> tops(size_t(reach) + 1), bottoms(size_t(reach) + 1);
         // The boundaries up to `made` are in the ring.
@@ -232,16 +241,14 @@ std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius
         for (int y = y_begin; y < y_end; ++y) {
             for (; made < std::min(h, y + reach + 1); ++made) {
                 luminance_row(pixels(roi.xbegin, roi.ybegin + made), pixels.nchannels(), w,
-                              test.luma, l.data());
-                next_boundary(boundary(made), l.data(), w, boundary(made + 1));
+                              test.luma, luminance_of(made));
+                next_boundary(boundary(made), luminance_of(made), w, boundary(made + 1));
             }
             for (int k = 0; k <= reach; ++k) {
                 tops[k] = boundary(std::max(0, y - k));
                 bottoms[k] = boundary(std::min(h, y + k + 1));
             }
-            luminance_row(pixels(roi.xbegin, roi.ybegin + y), pixels.nchannels(), w, test.luma,
-                          l.data());
-            test_row(l.data(), radii(roi.xbegin, roi.ybegin + y), w,
+            test_row(luminance_of(y), radii(roi.xbegin, roi.ybegin + y), w,
                      { tops.data(), bottoms.data(), reach, y, h }, test.threshold,
                      selected.data() + size_t(y) * w);
         }
