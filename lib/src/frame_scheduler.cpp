@@ -87,7 +87,7 @@ std::string frames_written(const ScheduleResult& run, const std::vector<int>& fr
     if (!failed.empty())
         summary += "; failed: " + OIIO::Strutil::join(failed, ",");
     if (run.run < int(frames.size()))
-        summary += "; stopped at the first bad frame (--stop-on-error)";
+        summary += "; stopped at the first bad frame";
     return summary;
 }
 

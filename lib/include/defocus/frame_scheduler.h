@@ -28,7 +28,8 @@ ScheduleResult run_frames(int count, int threads, size_t memory_limit, bool stop
 
 /// The line that closes a sequence: "98 of 100 frames written (3 more
 /// skipped: written with these settings); failed: 1004,1010; stopped at
-/// the first bad frame (--stop-on-error)", each part only when it applies.
+/// the first bad frame" (when asked to stop there), each part only when it
+/// applies. The words suit every caller: the CLI and the Python module.
 /// `frames` are the frame numbers `run` ran over, by index.
 std::string frames_written(const ScheduleResult& run, const std::vector<int>& frames,
                            int skipped = 0);
