@@ -468,15 +468,23 @@ void prepare_dense_row(const SpreadSource& src, SpreadMethod method, const Progr
     blend.resize(size_t(std::max(0, x1 - x0)));
     float cached_radius = -1.0f;
     ProgramBlend b { 0, 0.0f };
+    // Neighbours mostly share a radius: components() once per change.
+    float components_radius = NAN;
+    Component c[2];
+    int components_count = 0;
     int run_x = 0, n = 0, k = -1;
     for (int x = x0; x <= x1; ++x) {
         const float* v = x < x1 ? src.color + (base + x) * 4 : nullptr;
-        Component c[2];
         int count = 0;
         float r = 0.0f;
         if (v && !is_zero(v)) {
             r = src.radius[base + x];
-            count = components(method, r, src.keep_exact && src.keep_exact[base + x], c);
+            const bool keep = src.keep_exact && src.keep_exact[base + x];
+            if (keep || r != components_radius) {
+                components_count = components(method, r, keep, c);
+                components_radius = keep ? NAN : r;
+            }
+            count = components_count;
         }
         const bool dense = count > 0 && c[0].level == 0 && r <= dense_limit;
         if (dense && r != cached_radius) {
