@@ -16,9 +16,9 @@
 
 #include "spread/spread_engine.h"
 #include "util/float_pixels.h"
+#include "util/fresh_image.h"
 #include "util/parallel_rows.h"
 #include "util/simd.h"
-#include "util/fresh_image.h"
 
 namespace defocus {
 

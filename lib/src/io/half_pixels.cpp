@@ -7,8 +7,8 @@
 
 #include <OpenImageIO/parallel.h>
 
-#include "util/parallel_rows.h"
 #include "util/fresh_image.h"
+#include "util/parallel_rows.h"
 
 namespace defocus {
 

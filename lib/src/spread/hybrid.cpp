@@ -8,9 +8,9 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/parallel.h>
 
-#include "util/simd.h"
 #include "util/float_pixels.h"
 #include "util/parallel_rows.h"
+#include "util/simd.h"
 
 namespace defocus {
 
@@ -71,9 +71,9 @@ DEFOCUS_CLONES
 void test_row(const double* l, const float* r, int w, const WindowRows& rows, double contrast,
               uint8_t* out)
 {
-    auto window_size = [&](int k) {
-        return std::min(rows.reach, k);  // reach <= height: larger windows span every row too
-    };
+    // The boundaries of windows k rows up and down: those of the reach
+    // for larger ones, as reach <= height and they span every row too.
+    auto up_to_reach = [&](int k) { return std::min(rows.reach, k); };
     auto rows_spanned = [&](int k) {
         return std::min(rows.height, rows.y + k + 1) - std::max(0, rows.y - k);
     };
@@ -87,8 +87,8 @@ void test_row(const double* l, const float* r, int w, const WindowRows& rows, do
         for (int j = 1; same && j < lanes; ++j)
             same = r[x + j] >= 1.0f && int(std::ceil(r[x + j])) == k;
         if (same) {
-            const double* top = rows.top[window_size(k)];
-            const double* bottom = rows.bottom[window_size(k)];
+            const double* top = rows.top[up_to_reach(k)];
+            const double* bottom = rows.bottom[up_to_reach(k)];
             const double area = double(2 * k + 1) * rows_spanned(k);
             // Verdicts stored together: a byte stored alone may alias
             // the table, which the next lane would then have to reload.
@@ -104,8 +104,8 @@ void test_row(const double* l, const float* r, int w, const WindowRows& rows, do
         }
         if (r[x] >= 1.0f && l[x] > 0.0) {
             const int x0 = std::max(0, x - k), x1 = std::min(w, x + k + 1);
-            const double* top = rows.top[window_size(k)];
-            const double* bottom = rows.bottom[window_size(k)];
+            const double* top = rows.top[up_to_reach(k)];
+            const double* bottom = rows.bottom[up_to_reach(k)];
             const double sum = bottom[x1] - top[x1] - bottom[x0] + top[x0];
             out[x] = l[x] * (double(x1 - x0) * rows_spanned(k)) > contrast * sum;
         }

@@ -3,15 +3,14 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
-#include <cstring>
 #include <mutex>
 
 #include <OpenImageIO/parallel.h>
 
 #include <defocus/spread/footprint.h>
 
-#include "util/simd.h"
 #include "util/parallel_rows.h"
+#include "util/simd.h"
 
 namespace defocus {
 
