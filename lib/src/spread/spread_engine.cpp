@@ -801,7 +801,7 @@ void survey_rows(const SpreadSource& source, SpreadMethod method,
             d4 value = load4(v);
             if (n == 1 && c[0].level > 0) {
                 const int block_end =
-                    std::min(roi.xend, (floor_shift(x, c[0].level) + 1) << c[0].level);
+                    std::min(roi.xend, (floor_shift(x, c[0].level) + 1) * (1 << c[0].level));
                 for (size_t q = p + 1; x + 1 < block_end; ++q, ++x) {
                     const float* u = source.color + q * 4;
                     if (is_zero(u) || source.radius[q] != r
