@@ -18,7 +18,6 @@
 #include "util/float_pixels.h"
 #include "util/fresh_image.h"
 #include "util/parallel_rows.h"
-#include "util/simd.h"
 
 namespace defocus {
 
@@ -81,41 +80,6 @@ std::vector<ChannelPass> channel_passes(const Camera& camera)
     return { green_and_alpha, red_and_blue };
 }
 
-/// The spread layer's coverage of a pixel of spread alpha `a`, and the
-/// factor its colour is scaled by (see Over).
-DEFOCUS_KERNEL double coverage(double a, double& scale)
-{
-    scale = a > 1.0 ? 1.0 / a : 1.0;
-    return a > 1.0 ? 1.0 : std::max(0.0, a);
-}
-
-/// A row of n spread pixels over `out`, every channel.
-DEFOCUS_CLONES
-void over_row(const double* rgba, int n, float* out)
-{
-    for (int x = 0; x < n; ++x, rgba += 4, out += 4) {
-        double scale;
-        const double alpha = coverage(rgba[3], scale);
-        d4 spread = load4(rgba) * splat(scale);
-        spread[3] = alpha;
-        store4(out, spread + splat(1.0 - alpha) * load4(out));
-    }
-}
-
-/// A row of n spread pixels over `out`, in the channels of `pass`.
-void over_row(const double* rgba, int n, const ChannelPass& pass, float* out)
-{
-    for (int x = 0; x < n; ++x, rgba += 4, out += 4) {
-        double scale;
-        const double alpha = coverage(rgba[3], scale);
-        for (int c = 0; c < 3; ++c)
-            if (pass.colour[c])
-                out[c] = float(rgba[c] * scale + (1.0 - alpha) * out[c]);
-        if (pass.alpha)
-            out[3] = float(alpha + (1.0 - alpha) * out[3]);
-    }
-}
-
 /// Composites spread rows over the frame, back to front ("over" on the
 /// spread alpha), in the channels of one pass. Within one layer, pixels of
 /// different blur overlap additively, so where their coverage adds up past
@@ -128,10 +92,17 @@ public:
     void row(int y, int x_begin, int x_end, const double* rgba) override
     {
         float* out = static_cast<float*>(m_frame.pixeladdr(x_begin, y));
-        if (m_pass.colour[0] && m_pass.colour[1] && m_pass.colour[2] && m_pass.alpha)
-            over_row(rgba, x_end - x_begin, out);
-        else
-            over_row(rgba, x_end - x_begin, m_pass, out);
+        const ChannelPass pass = m_pass;
+        for (int x = x_begin; x < x_end; ++x, rgba += 4, out += 4) {
+            const double a = rgba[3];
+            const double scale = a > 1.0 ? 1.0 / a : 1.0;
+            const double alpha = a > 1.0 ? 1.0 : std::max(0.0, a);
+            for (int c = 0; c < 3; ++c)
+                if (pass.colour[c])
+                    out[c] = float(rgba[c] * scale + (1.0 - alpha) * out[c]);
+            if (pass.alpha)
+                out[3] = float(alpha + (1.0 - alpha) * out[3]);
+        }
     }
 
 private:
