@@ -465,12 +465,12 @@ void prepare_dense_row(const SpreadSource& src, SpreadMethod method, const Progr
     row.clear();
     color.resize(size_t(std::max(0, x1 - x0)) * 4);
     blend.resize(size_t(std::max(0, x1 - x0)));
-    float cached_radius = -1.0f;
-    ProgramBlend b { 0, 0.0f };
-    // Neighbours mostly share a radius: components() once per change.
-    float components_radius = NAN;
+    // Neighbours mostly share a radius: components() and pick() once per
+    // change.
+    float cached_radius = NAN;
     Component c[2];
     int components_count = 0;
+    ProgramBlend b { 0, 0.0f };
     int run_x = 0, n = 0, k = -1;
     for (int x = x0; x <= x1; ++x) {
         const float* v = x < x1 ? src.color + (base + x) * 4 : nullptr;
@@ -479,17 +479,15 @@ void prepare_dense_row(const SpreadSource& src, SpreadMethod method, const Progr
         if (v && !is_zero(v)) {
             r = src.radius[base + x];
             const bool keep = src.keep_exact && src.keep_exact[base + x];
-            if (keep || r != components_radius) {
+            if (keep || r != cached_radius) {
+                cached_radius = keep ? NAN : r;
                 components_count = components(method, r, keep, c);
-                components_radius = keep ? NAN : r;
+                if (c[0].level == 0 && r <= dense_limit)
+                    b = family.pick(r);
             }
             count = components_count;
         }
         const bool dense = count > 0 && c[0].level == 0 && r <= dense_limit;
-        if (dense && r != cached_radius) {
-            cached_radius = r;
-            b = family.pick(r);
-        }
         if (n > 0 && (!dense || b.k != k || run_x + n != x)) {
             add_run_colors(row, run_x, n, k, color.data(), blend.data());
             n = 0;
