@@ -621,31 +621,35 @@ public:
         m_first = first_block;
         m_sums.assign(size_t(blocks), Sum {});
         m_others.clear();
-        m_pending.k = -1;
     }
 
     /// Adds `value` to block `b` on program k, blending its sizes by t.
-    /// Along a row a block's pixels mostly come one after another on one
-    /// program and blend: they are summed first, and go to the block's sums
-    /// together.
     DEFOCUS_KERNEL void add(int b, int k, float t, const d4& value)
     {
-        if (m_pending.k == k && m_pending.b == b && m_pending.t == t) {
-            store4(m_pending.value, load4(m_pending.value) + value);
-            return;
+        Sum* sum = &m_sums[size_t(b - m_first)];
+        if (sum->k != k && sum->k >= 0) {  // rare: a block across a change of program
+            auto other = std::find_if(m_others.begin(), m_others.end(),
+                                      [&](const Sum& o) { return o.b == b && o.k == k; });
+            if (other == m_others.end()) {
+                m_others.push_back(Sum {});
+                other = m_others.end() - 1;
+            }
+            sum = &*other;
         }
-        add_pending();
-        m_pending.b = b;
-        m_pending.k = k;
-        m_pending.t = t;
-        store4(m_pending.value, value);
+        if (sum->k < 0) {
+            sum->b = b;
+            sum->k = k;
+            sum->t = t;
+        }
+        sum->blended |= sum->t != t;
+        store4(sum->smaller, load4(sum->smaller) + value * splat(1.0 - t));
+        store4(sum->larger, load4(sum->larger) + value * splat(t));
     }
 
     /// The row's blocks as runs of consecutive blocks on one program,
     /// folded when all of their pixels blend its sizes alike.
     ItemRow runs(const SpreadEngine::Sparse& level)
     {
-        add_pending();
         // Every block's first program, in block order; the few other
         // programs of blocks across a change of program, ordered by
         // program, after them; then all the runs by column.
@@ -670,42 +674,6 @@ private:
         bool blended = false;  ///< when they do not
         double smaller[4] = { 0, 0, 0, 0 }, larger[4] = { 0, 0, 0, 0 };
     };
-    /// Pixels of one block, program and blend not yet in the block's sums.
-    struct Pending {
-        int b = 0, k = -1;  ///< k < 0: none
-        float t = 0.0f;
-        double value[4];
-    };
-
-    /// Adds the pending pixels to their block's sums.
-    DEFOCUS_KERNEL void add_pending()
-    {
-        if (m_pending.k < 0)
-            return;
-        const int b = m_pending.b, k = m_pending.k;
-        const float t = m_pending.t;
-        const d4 value = load4(m_pending.value);
-        m_pending.k = -1;
-        Sum* sum = &m_sums[size_t(b - m_first)];
-        if (sum->k != k && sum->k >= 0) {  // rare: a block across a change of program
-            auto other = std::find_if(m_others.begin(), m_others.end(),
-                                      [&](const Sum& o) { return o.b == b && o.k == k; });
-            if (other == m_others.end()) {
-                m_others.push_back(Sum {});
-                other = m_others.end() - 1;
-            }
-            sum = &*other;
-        }
-        if (sum->k < 0) {
-            sum->b = b;
-            sum->k = k;
-            sum->t = t;
-        }
-        sum->blended |= sum->t != t;
-        store4(sum->smaller, load4(sum->smaller) + value * splat(1.0 - t));
-        store4(sum->larger, load4(sum->larger) + value * splat(t));
-    }
-
     /// Appends `sums` (ordered so that a run's blocks are neighbours) as
     /// runs of consecutive blocks on one program, folded when all of their
     /// pixels blend its sizes alike.
@@ -738,7 +706,6 @@ private:
     int m_first = 0;
     std::vector<Sum> m_sums;    ///< per block, its first program
     std::vector<Sum> m_others;  ///< other programs of a block
-    Pending m_pending;
 };
 
 /// What one pass over a layer finds: the largest radius on the dense path
@@ -793,11 +760,12 @@ void survey_rows(const SpreadSource& source, SpreadMethod method,
                     if (method != SpreadMethod::Box)
                         blend[i] = levels[c[i].level]->family->pick(r);
             }
-            // A pixel that goes whole to a block: the pixels after it in
-            // the block that go alike (this radius, not kept exact) are
-            // summed here, in registers, and added to the block once.
+            // Along a row a block's pixels mostly go alike (one radius,
+            // none kept exact): those after this one in its block (the
+            // smaller one of two sizes) are summed here, in registers, and
+            // go to the blocks once.
             d4 value = load4(v);
-            if (n == 1 && c[0].level > 0) {
+            if (c[0].level > 0) {
                 const int block_end =
                     std::min(roi.xend, (floor_shift(x, c[0].level) + 1) * (1 << c[0].level));
                 for (size_t q = p + 1; x + 1 < block_end; ++q, ++x) {
