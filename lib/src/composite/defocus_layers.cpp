@@ -85,10 +85,16 @@ std::vector<ChannelPass> channel_passes(const Camera& camera)
 /// different blur overlap additively, so where their coverage adds up past
 /// 1 the layer is scaled back to full coverage there (the overlapping
 /// parts average instead of adding), keeping alpha within [0, 1]; rounding
-/// residue of the prefix sums below 0 is cleared.
+/// residue of the prefix sums below 0 is cleared. `onto_black`: the
+/// frame's pixels in reach are unset and count as black (the back-most
+/// layer), so the frame need not be cleared there first; dark rows are
+/// cleared here.
 class Over final : public RowSink {
 public:
-    Over(ImageBuf& frame, const ChannelPass& pass) : m_frame(frame), m_pass(pass) {}
+    Over(ImageBuf& frame, const ChannelPass& pass, bool onto_black)
+        : m_frame(frame), m_pass(pass), m_onto_black(onto_black)
+    {
+    }
     void row(int y, int x_begin, int x_end, const double* rgba) override
     {
         float* out = static_cast<float*>(m_frame.pixeladdr(x_begin, y));
@@ -97,17 +103,29 @@ public:
             const double a = rgba[3];
             const double scale = a > 1.0 ? 1.0 / a : 1.0;
             const double alpha = a > 1.0 ? 1.0 : std::max(0.0, a);
+            auto under = [&](int c) { return m_onto_black ? 0.0f : out[c]; };
             for (int c = 0; c < 3; ++c)
                 if (pass.colour[c])
-                    out[c] = float(rgba[c] * scale + (1.0 - alpha) * out[c]);
+                    out[c] = float(rgba[c] * scale + (1.0 - alpha) * under(c));
             if (pass.alpha)
-                out[3] = float(alpha + (1.0 - alpha) * out[3]);
+                out[3] = float(alpha + (1.0 - alpha) * under(3));
         }
+    }
+    void dark(int y, int x_begin, int x_end) override
+    {
+        if (!m_onto_black)
+            return;
+        float* out = static_cast<float*>(m_frame.pixeladdr(x_begin, y));
+        for (int x = x_begin; x < x_end; ++x, out += 4)
+            for (int c = 0; c < 4; ++c)
+                if (c < 3 ? m_pass.colour[c] : m_pass.alpha)
+                    out[c] = 0.0f;
     }
 
 private:
     ImageBuf& m_frame;
     const ChannelPass m_pass;
+    const bool m_onto_black;
 };
 
 /// A layer spread on its own, as an image: the hybrid method (highlights
@@ -203,7 +221,7 @@ void composite_magnified(ImageBuf& frame, const ImageBuf& spread, int c, double 
 {
     ChannelPass pass { CocChannel::Green, { false, false, false }, false };
     pass.colour[c] = true;
-    Over over(frame, pass);
+    Over over(frame, pass, false);
     const ROI out = frame.roi(), in = spread.roi();
     const FloatPixels pixels(spread, in);
     auto at = [&](int x, int y, int ch) {
@@ -252,7 +270,7 @@ void composite_image(ImageBuf& frame, const ImageBuf& layer, const ChannelPass& 
                      int nthreads)
 {
     const ROI both = roi_intersection(frame.roi(), layer.roi());
-    Over over(frame, pass);
+    Over over(frame, pass, false);
     parallel_for(both.ybegin, both.yend, [&](int y) {
         std::vector<double> row(size_t(std::max(0, both.width())) * 4);
         for (int x = both.xbegin; x < both.xend; ++x)
@@ -390,8 +408,19 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
                                                           : scene.spec.roi();
     window.chbegin = 0;
     window.chend = 4;
+    // The back-most layer, when it is spread in one pass, lands on a black
+    // frame: it is stored rather than composited, and only the frame
+    // beyond its reach is cleared first.
+    const LayerPass* back = nullptr;
+    for (const LayerSpreads& l : layers)
+        if (!l.passes.empty()) {
+            if (l.passes.size() == 1 && l.passes[0].engine && !l.passes[0].channels.magnified)
+                back = &l.passes[0];
+            break;
+        }
     ImageBuf frame;
-    reset_zeroed(frame, result_spec(scene.spec, window, TypeFloat), nthreads);
+    reset_zeroed_except(frame, result_spec(scene.spec, window, TypeFloat),
+                        back ? back->engine->extent() : ROI(), nthreads);
     // Where a magnified pass's light can come from: the window, grown by
     // the largest displacement lateral aberration gives within it.
     const double farthest = std::max({ std::abs(window.xbegin - centre.x),
@@ -421,7 +450,7 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
                 composite_magnified(frame, p.apart, 0, 1.0 + camera.lateral_ca, centre, nthreads);
                 composite_magnified(frame, p.apart, 2, 1.0 - camera.lateral_ca, centre, nthreads);
             } else if (p.engine) {
-                Over over(frame, p.channels);
+                Over over(frame, p.channels, &p == back);
                 p.engine->run(window, over, nthreads);
             } else if (p.apart.initialized()) {
                 composite_image(frame, p.apart, p.channels, nthreads);
