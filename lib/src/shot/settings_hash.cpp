@@ -6,6 +6,8 @@
 #include <OpenImageIO/hash.h>
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/version.h>
+
 namespace defocus {
 
 namespace {
@@ -24,7 +26,8 @@ std::string absolute_path(const std::string& path)
 std::string settings_hash(const Shot& shot, int frame)
 {
     // One line per value, in the settings table's order: a canonical text.
-    std::string text = OIIO::Strutil::fmt::format("frame={}\n", frame);
+    // Another version of defocus may render the same settings differently.
+    std::string text = OIIO::Strutil::fmt::format("version={}\nframe={}\n", version(), frame);
     for (const std::string& input : shot.inputs)
         text += "input=" + absolute_path(input) + "\n";
     for (const ShotSetting& s : shot_settings()) {
