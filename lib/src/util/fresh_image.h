@@ -28,20 +28,21 @@ inline void reset_zeroed_except(OIIO::ImageBuf& image, const OIIO::ImageSpec& sp
 {
     reset_for_overwrite(image, spec, nthreads);
     const OIIO::ROI all = image.roi();
-    const OIIO::ROI kept = unset.defined() && spec.depth == 1 ? OIIO::roi_intersection(unset, all)
-                                                              : OIIO::ROI(0, 0, 0, 0);
+    const OIIO::ROI untouched = unset.defined() && spec.depth == 1
+                                    ? OIIO::roi_intersection(unset, all)
+                                    : OIIO::ROI(0, 0, 0, 0);
     char* pixels = static_cast<char*>(image.localpixels());
     const size_t row_bytes = spec.scanline_bytes(), pixel_bytes = spec.pixel_bytes();
     OIIO::parallel_for(int64_t(0), int64_t(spec.height) * spec.depth, [&](int64_t row) {
         char* p = pixels + size_t(row) * row_bytes;
         const int y = all.ybegin + int(row);
-        if (kept.width() <= 0 || y < kept.ybegin || y >= kept.yend) {
+        if (untouched.width() <= 0 || y < untouched.ybegin || y >= untouched.yend) {
             std::memset(p, 0, row_bytes);
             return;
         }
-        std::memset(p, 0, size_t(kept.xbegin - all.xbegin) * pixel_bytes);
-        std::memset(p + size_t(kept.xend - all.xbegin) * pixel_bytes, 0,
-                    size_t(all.xend - kept.xend) * pixel_bytes);
+        std::memset(p, 0, size_t(untouched.xbegin - all.xbegin) * pixel_bytes);
+        std::memset(p + size_t(untouched.xend - all.xbegin) * pixel_bytes, 0,
+                    size_t(all.xend - untouched.xend) * pixel_bytes);
     }, by_rows(nthreads));
 }
 
