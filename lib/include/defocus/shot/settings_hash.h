@@ -11,10 +11,10 @@ namespace defocus {
 
 /// 16 hex digits over the defocus version, the shot's inputs (as absolute
 /// paths), the value of every setting (given or defaulted; paths
-/// absolute), and the frame. The
-/// frame list and the memory limit are left out: they do not change a
-/// frame's pixels. The same settings give the same hash however they were
-/// given (options, a .dof in any key order, the Python module).
+/// absolute), and the frame. The frame list and the memory limit are left
+/// out: they do not change a frame's pixels. The same settings give the
+/// same hash however they were given (options, a .dof in any key order,
+/// the Python module).
 std::string settings_hash(const Shot& shot, int frame);
 
 }  // namespace defocus
