@@ -21,6 +21,10 @@
 //    except on highlights, whose bokeh shows its outline, so those are
 //    spread exactly, on their own (the paper's hybrid idea: the exact
 //    shape only where it shows).
+//    Blocks of 4 and larger are spread on a half-resolution grid (blocks
+//    half as wide, the shape at half the radius) whose integrated rows are
+//    interpolated into the rows (see first_half_level): they cost a
+//    quarter of the deltas and of the sums.
 //    Radii near a change of block size are spread both ways, blended, so
 //    footprints change continuously.
 // The work per pixel is bounded whatever the blur. Rows are handed to a
