@@ -22,10 +22,12 @@ constexpr int max_level = 5;               ///< blocks of up to 32 x 32 pixels
 constexpr double transition = 1.0 / 16.0;  ///< relative radius range spread at two sizes
 
 /// The radius from which blocks of s = 2^level pixels take over (shared
-/// with the level below just before it). Blocks up to max_box wide spread
-/// a uniform block's exact footprint, which keeps the fidelity bars from
-/// r = 4 s; larger ones spread the shape from their centre, moving
-/// light by up to s / 2, and wait until r = 8 s.
+/// with the level below just before it). Blocks up to max_box pixels wide
+/// spread a uniform block's exact footprint, which keeps the fidelity bars
+/// from r = 4 s. Larger ones wait until r = 8 s: they average light over
+/// more pixels, and from 16 pixels (wider than max_box on the
+/// half-resolution grid too) they spread the shape from their centre,
+/// moving light by up to s / 2.
 constexpr double level_start(int level)
 {
     return ((1 << level) <= max_box ? 4.0 : 8.0) * (1 << level);

@@ -15,12 +15,12 @@
 //    a row just before it is integrated. Blocks of up to 4 (from r = 4 s)
 //    spread the footprint of a uniform block (every pixel's shape on its
 //    own centre, summed), so a uniform area comes out as exact spreading
-//    makes it; larger ones (from r = 8 s) a slightly softened shape from
-//    their centre (see level_start). Light varying within a block is
-//    spread as if even over it, which under such blurs is invisible
-//    except on highlights, whose bokeh shows its outline, so those are
-//    spread exactly, on their own (the paper's hybrid idea: the exact
-//    shape only where it shows).
+//    makes it; larger ones wait until r = 8 s, and from 16 spread a
+//    slightly softened shape from their centre (see level_start). Light
+//    varying within a block is spread as if even over it, which under
+//    such blurs is invisible except on highlights, whose bokeh shows its
+//    outline, so those are spread exactly, on their own (the paper's
+//    hybrid idea: the exact shape only where it shows).
 //    Blocks of 4 and larger are spread on a half-resolution grid (blocks
 //    half as wide, the shape at half the radius) whose integrated rows are
 //    interpolated into the rows (see first_half_level): they cost a
