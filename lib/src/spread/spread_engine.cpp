@@ -176,8 +176,7 @@ struct ItemRow {
 /// pixels.
 struct SpreadEngine::Sparse {
     using Row = ItemRow;
-    int block = 1;  ///< pixels across a block: 2^level
-    int level = 0;
+    int level = 0;  ///< blocks of 2^level pixels
     bool half = false;
     const ProgramFamily* family = nullptr;  ///< of blocks of grid_block() grid pixels
     int first_block_row = 0;
@@ -185,7 +184,7 @@ struct SpreadEngine::Sparse {
     Reach reach { 0, -1, 0, -1 };  ///< of its programs, from the anchor, in grid pixels
 
     /// Grid pixels across a block, and columns between blocks: 2^grid_shift().
-    int grid_block() const { return half ? block / 2 : block; }
+    int grid_block() const { return 1 << grid_shift(); }
     int grid_shift() const { return half ? level - 1 : level; }
     /// The program of a pixel of (full-resolution) CoC radius r.
     ProgramBlend pick(double r) const { return family->pick(half ? 0.5 * r : r); }
@@ -891,7 +890,6 @@ SpreadEngine::SpreadEngine(const SpreadSource& source, SpreadMethod method,
     LayerSurvey found;
     for (int l = 0; method != SpreadMethod::Box && l <= max_level; ++l) {
         auto level = std::make_unique<Sparse>();
-        level->block = 1 << l;
         level->level = l;
         level->half = l >= first_half_level;
         level->family = l == 0 ? &shape->pixels() : &shape->blocks(level->grid_shift());
@@ -943,7 +941,7 @@ SpreadEngine::SpreadEngine(const SpreadSource& source, SpreadMethod method,
         level->rows = std::move(found.block_rows[l]);
         // Programs of larger radii reach at least as far.
         level->reach = program_reach(level->family->program(level->pick(found.sparse_max[l]).k));
-        const int s = level->block;
+        const int s = 1 << level->level;
         const int first = level->first_block_row, last = first + int(level->rows.size()) - 1;
         const ROI anchors(level->anchor(floor_div(roi.xbegin, s)),
                           level->anchor(floor_div(roi.xend - 1, s)) + 1, level->anchor(first),
@@ -1079,12 +1077,17 @@ void SpreadEngine::run(const ROI& window_in, RowSink& sink, int nthreads) const
                 }
                 continue;
             }
-            // Full-resolution rows no footprint reaches are their carry.
+            // Full-resolution rows no footprint reaches are their carry;
+            // half-resolution ones that no footprint reaches and no light
+            // from the left crosses add nothing.
             if (lit[0])
                 ws.rows.assign(size_t(y_end - y_begin) * row_size, 0.0);
             else
                 ws.rows.resize(size_t(y_end - y_begin) * row_size);
-            if (half)
+            const bool add_half =
+                half && (lit[1] || !std::all_of(ws.half_row_carry.begin(), ws.half_row_carry.end(),
+                                                [](double v) { return v == 0.0; }));
+            if (add_half)
                 ws.half_rows.assign(size_t(half_tile.y_end - half_tile.y_begin) * half_row_size, 0.0);
             item_rows([&](const ProgramFamily& family, int shift, const Reach& reach,
                           const ItemRow& items, int anchor, bool at_half) {
@@ -1094,7 +1097,7 @@ void SpreadEngine::run(const ROI& window_in, RowSink& sink, int nthreads) const
                     scatter_items(family, shift, reach, items, anchor, ws.rows.data(), tile);
                 return true;
             });
-            if (half) {
+            if (add_half) {
                 // The next tile's half-resolution pixels start left of this
                 // one's end: its carry is the sum left of them.
                 const bool last = tile.x_end == window.xend;
@@ -1112,7 +1115,7 @@ void SpreadEngine::run(const ROI& window_in, RowSink& sink, int nthreads) const
                 double* carry = ws.row_carry.data() + size_t(y - y_begin) * 4;
                 if (lit[0])
                     finish_row(row, nullptr, carry, tile.cells());
-                if (half) {
+                if (add_half) {
                     const auto [j, wy] = half_rows_of(y);
                     const double* h0 = ws.half_rows.data() + size_t(j) * half_row_size;
                     add_interpolated(row + 4, h0, h0 + half_row_size, wy, tile.x_begin, tile.x_end,
