@@ -18,6 +18,7 @@
 #include "util/float_pixels.h"
 #include "util/fresh_image.h"
 #include "util/parallel_rows.h"
+#include "util/simd.h"
 
 namespace defocus {
 
@@ -80,6 +81,27 @@ std::vector<ChannelPass> channel_passes(const Camera& camera)
     return { green_and_alpha, red_and_blue };
 }
 
+/// Which of a pixel's four channels: all bits set, or none.
+using Lanes = int64_t __attribute__((vector_size(32)));
+
+/// "Over" (see Over) of n spread pixels onto the frame's, in the channels
+/// `written`; `onto_black`: the frame's pixels count as black.
+DEFOCUS_CLONES
+void composite_over(float* out, const double* rgba, int n, const Lanes& written,
+                    bool onto_black)
+{
+    for (int x = 0; x < n; ++x, rgba += 4, out += 4) {
+        d4 spread = load4(rgba);
+        const double a = spread[3];
+        const double scale = a > 1.0 ? 1.0 / a : 1.0;
+        const double alpha = a > 1.0 ? 1.0 : std::max(0.0, a);
+        spread *= splat(scale);
+        spread[3] = alpha;
+        const d4 under = onto_black ? splat(0.0) : load4(out);
+        store4(out, written ? spread + splat(1.0 - alpha) * under : under);
+    }
+}
+
 /// Composites spread rows over the frame, back to front ("over" on the
 /// spread alpha), in the channels of one pass. Within one layer, pixels of
 /// different blur overlap additively, so where their coverage adds up past
@@ -92,24 +114,17 @@ std::vector<ChannelPass> channel_passes(const Camera& camera)
 class Over final : public RowSink {
 public:
     Over(ImageBuf& frame, const ChannelPass& pass, bool onto_black)
-        : m_frame(frame), m_pass(pass), m_onto_black(onto_black)
+        : m_frame(frame)
+        , m_pass(pass)
+        , m_written { pass.colour[0] ? -1 : 0, pass.colour[1] ? -1 : 0, pass.colour[2] ? -1 : 0,
+                      pass.alpha ? -1 : 0 }
+        , m_onto_black(onto_black)
     {
     }
     void row(int y, int x_begin, int x_end, const double* rgba) override
     {
-        float* out = static_cast<float*>(m_frame.pixeladdr(x_begin, y));
-        const ChannelPass pass = m_pass;
-        for (int x = x_begin; x < x_end; ++x, rgba += 4, out += 4) {
-            const double a = rgba[3];
-            const double scale = a > 1.0 ? 1.0 / a : 1.0;
-            const double alpha = a > 1.0 ? 1.0 : std::max(0.0, a);
-            auto under = [&](int c) { return m_onto_black ? 0.0f : out[c]; };
-            for (int c = 0; c < 3; ++c)
-                if (pass.colour[c])
-                    out[c] = float(rgba[c] * scale + (1.0 - alpha) * under(c));
-            if (pass.alpha)
-                out[3] = float(alpha + (1.0 - alpha) * under(3));
-        }
+        composite_over(static_cast<float*>(m_frame.pixeladdr(x_begin, y)), rgba,
+                       x_end - x_begin, m_written, m_onto_black);
     }
     void dark(int y, int x_begin, int x_end) override
     {
@@ -125,6 +140,7 @@ public:
 private:
     ImageBuf& m_frame;
     const ChannelPass m_pass;
+    const Lanes m_written;  ///< the channels the pass writes
     const bool m_onto_black;
 };
 

@@ -46,6 +46,12 @@ DEFOCUS_KERNEL d4 load4(const float* p)
     return __builtin_convertvector(v, d4);
 }
 
+DEFOCUS_KERNEL void store4(float* p, const d4& v)
+{
+    const f4 f = __builtin_convertvector(v, f4);
+    std::memcpy(p, &f, sizeof f);
+}
+
 DEFOCUS_KERNEL d4 splat(double w)
 {
     return d4 { w, w, w, w };
