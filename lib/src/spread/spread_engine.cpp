@@ -700,14 +700,17 @@ public:
     DEFOCUS_KERNEL void add(int b, int k, float t, const d4& value)
     {
         Sum* sum = &m_sums[size_t(b - m_first)];
-        if (sum->k != k && sum->k >= 0) {  // rare: a block across a change of program
-            auto other = std::find_if(m_others.begin(), m_others.end(),
-                                      [&](const Sum& o) { return o.b == b && o.k == k; });
-            if (other == m_others.end()) {
-                m_others.push_back(Sum {});
-                other = m_others.end() - 1;
+        // A block across a change of program keeps a sum per program,
+        // chained from its first: rows where every block changes program
+        // (the radius changing down the rows) find them in a step or two.
+        while (sum->k >= 0 && sum->k != k) {
+            if (sum->next < 0) {
+                sum->next = int(m_others.size());
+                m_others.emplace_back();
+                sum = &m_others.back();
+                break;
             }
-            sum = &*other;
+            sum = &m_others[size_t(sum->next)];
         }
         if (sum->k < 0) {
             sum->b = b;
@@ -743,6 +746,7 @@ public:
 private:
     struct Sum {
         int b = 0, k = -1;     ///< block and program; k < 0: no pixel yet
+        int next = -1;         ///< the block's next sum in m_others, if any
         float t = 0.0f;        ///< the blend of its pixels, when they all share one
         bool blended = false;  ///< when they do not
         double smaller[4] = { 0, 0, 0, 0 }, larger[4] = { 0, 0, 0, 0 };
