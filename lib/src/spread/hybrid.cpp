@@ -225,7 +225,7 @@ std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius
     // two bands) stay few.
     const int bands = std::max(1, std::min(4 * threads.maxthreads(), h / std::max(1, 4 * reach)));
     const int band_rows = (h + bands - 1) / bands;
-    parallel_for(0, bands, [&](int band) {
+    parallel_for_each_item(0, bands, [&](int64_t band) {
         const int y_begin = band * band_rows, y_end = std::min(h, y_begin + band_rows);
         std::vector<double> table(size_t(ring) * (w + 1));
         auto boundary = [&](int j) { return table.data() + size_t(j % ring) * (w + 1); };
@@ -252,7 +252,7 @@ std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius
                      { tops.data(), bottoms.data(), reach, y, h }, test.threshold,
                      selected.data() + size_t(y) * w);
         }
-    }, by_rows(nthreads));
+    }, nthreads);
     return selected;
 }
 

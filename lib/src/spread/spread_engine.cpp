@@ -907,11 +907,11 @@ SpreadEngine::SpreadEngine(const SpreadSource& source, SpreadMethod method,
     const int first_stripe = floor_shift(roi.ybegin, max_level);
     const int stripes = floor_shift(roi.yend - 1, max_level) - first_stripe + 1;
     std::mutex merge;
-    OIIO::parallel_for(int64_t(0), int64_t(stripes), [&](int64_t i) {
+    parallel_for_each_item(0, stripes, [&](int64_t i) {
         const int y0 = std::max(roi.ybegin, (first_stripe + int(i)) * stripe);
         const int y1 = std::min(roi.yend, (first_stripe + int(i) + 1) * stripe);
         survey_rows(source, method, levels, y0, y1, found, merge);
-    }, by_rows(nthreads));
+    }, nthreads);
     m_dense.max_radius = found.dense_max;
 
     // The last column of a footprint's deltas (and for the box the last
@@ -978,7 +978,7 @@ void SpreadEngine::run(const ROI& window_in, RowSink& sink, int nthreads) const
     const int band_rows = std::clamp(box_tile_reaches * box_reach, tile_rows, box_tile_limit);
     const int tile_width = std::clamp(box_tile_reaches * box_reach, tile_columns, box_tile_limit);
     const int bands = (window.height() + band_rows - 1) / band_rows;
-    OIIO::parallel_for(int64_t(0), int64_t(bands), [&](int64_t band) {
+    parallel_for_each_item(0, bands, [&](int64_t band) {
         thread_local Workspace ws;
         const int y_begin = window.ybegin + int(band) * band_rows;
         const int y_end = std::min(window.yend, y_begin + band_rows);
@@ -1128,7 +1128,7 @@ void SpreadEngine::run(const ROI& window_in, RowSink& sink, int nthreads) const
                 sink.row(y, tile.x_begin, tile.x_end, row + 4);
             }
         }
-    }, by_rows(nthreads));
+    }, nthreads);
 }
 
 }  // namespace defocus

@@ -15,4 +15,18 @@ inline OIIO::paropt by_rows(int nthreads)
     return OIIO::paropt(nthreads).minitems(1);
 }
 
+/// Runs task(i) for every i in [begin, end), each item a task of its own,
+/// taken by whichever thread is free: for loops over a few dozen items of
+/// uneven work (bands of a layer that is blurred more at the bottom).
+/// OIIO's parallel_for hands out runs of neighbouring items, so one thread
+/// can be left with a costly run while the others wait.
+template<typename Task>
+void parallel_for_each_item(int64_t begin, int64_t end, Task&& task, int nthreads)
+{
+    OIIO::parallel_for_chunked(begin, end, 1, [&](int64_t first, int64_t last) {
+        for (int64_t i = first; i < last; ++i)
+            task(i);
+    }, by_rows(nthreads));
+}
+
 }  // namespace defocus
