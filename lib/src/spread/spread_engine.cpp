@@ -789,6 +789,7 @@ private:
 /// and on each sparse level, and the sparse levels' block rows, summed.
 struct LayerSurvey {
     float dense_max = -1.0f;
+    std::vector<uint8_t> dense_rows;  ///< per source row: any pixel on the dense path
     std::vector<float> sparse_max;
     std::vector<std::vector<ItemRow>> block_rows;  ///< per level, per block row
 };
@@ -857,6 +858,7 @@ void survey_rows(const SpreadSource& source, SpreadMethod method,
                 const int l = c[i].level;
                 if (method == SpreadMethod::Box || (l == 0 && r <= dense_limit)) {
                     dense = std::max(dense, r);
+                    found.dense_rows[size_t(y - roi.ybegin)] = 1;
                     continue;
                 }
                 sparse[l] = std::max(sparse[l], r);
@@ -902,6 +904,7 @@ SpreadEngine::SpreadEngine(const SpreadSource& source, SpreadMethod method,
         levels.push_back(std::move(level));
     }
     found.sparse_max.assign(levels.size(), -1.0f);
+    found.dense_rows.assign(size_t(roi.height()), 0);
     // One pass, in stripes of whole block rows of every level.
     const int stripe = 1 << max_level;
     const int first_stripe = floor_shift(roi.ybegin, max_level);
@@ -913,6 +916,7 @@ SpreadEngine::SpreadEngine(const SpreadSource& source, SpreadMethod method,
         survey_rows(source, method, levels, y0, y1, found, merge);
     }, nthreads);
     m_dense.max_radius = found.dense_max;
+    m_dense_rows = std::move(found.dense_rows);
 
     // The last column of a footprint's deltas (and for the box the last
     // row) only ends it: the pixels it lights stop one before. Interpolated
@@ -994,9 +998,13 @@ void SpreadEngine::run(const ROI& window_in, RowSink& sink, int nthreads) const
         if (dense && !box) {
             if (ws.dense.size() < size_t(std::max(0, sy1 - sy0)))
                 ws.dense.resize(sy1 - sy0);
-            for (int sy = sy0; sy < sy1; ++sy)
-                prepare_dense_row(m_source, m_method, m_shape->pixels(), sy, sx0, sx1,
-                                  ws.dense[sy - sy0], ws.color, ws.blend);
+            for (int sy = sy0; sy < sy1; ++sy) {
+                if (m_dense_rows[size_t(sy - roi.ybegin)])
+                    prepare_dense_row(m_source, m_method, m_shape->pixels(), sy, sx0, sx1,
+                                      ws.dense[sy - sy0], ws.color, ws.blend);
+                else
+                    ws.dense[sy - sy0].clear();
+            }
         }
         for (int x_begin = window.xbegin; x_begin < window.xend; x_begin += tile_width) {
             const Tile tile { y_begin, y_end, x_begin, std::min(window.xend, x_begin + tile_width),

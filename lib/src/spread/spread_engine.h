@@ -117,6 +117,7 @@ private:
     SpreadMethod m_method;
     const ShapePrograms* m_shape;
     Dense m_dense;
+    std::vector<uint8_t> m_dense_rows;  ///< per source row: any pixel on the dense path
     std::vector<std::unique_ptr<Sparse>> m_sparse;  ///< per level: highlights, then blocks
     OIIO::ROI m_extent;
 };
