@@ -42,15 +42,38 @@ void luminance_row(const float* c, int channels, int w, const Imath::V3d& luma, 
         luminance_row(c, channels, w, luma, out);
 }
 
-/// The boundary below a row of luminance `l` in a summed-area table,
-/// from the boundary above it.
-void next_boundary(const double* above, const double* l, int w, double* below)
+/// The boundaries below N consecutive rows of luminance `l[0..N)` in a
+/// summed-area table, from the boundary above the first. Each row's
+/// running sum is a chain of dependent additions; N rows side by side keep
+/// the adders busy, with each sum made in the same order as row by row.
+template<int N>
+DEFOCUS_KERNEL void next_boundaries(const double* above, const double* const* l, int w,
+                                    double* const* below)
 {
-    double sum = 0.0;
-    below[0] = 0.0;
+    double sum[N];
+    for (int j = 0; j < N; ++j) {
+        sum[j] = 0.0;
+        below[j][0] = 0.0;
+    }
     for (int x = 0; x < w; ++x) {
-        sum += l[x];
-        below[x + 1] = above[x + 1] + sum;
+        double boundary = above[x + 1];
+        for (int j = 0; j < N; ++j) {
+            sum[j] += l[j][x];
+            boundary += sum[j];
+            below[j][x + 1] = boundary;
+        }
+    }
+}
+
+DEFOCUS_CLONES
+void next_boundaries(const double* above, const double* const* l, int n, int w,
+                     double* const* below)
+{
+    switch (n) {
+    case 1: next_boundaries<1>(above, l, w, below); break;
+    case 2: next_boundaries<2>(above, l, w, below); break;
+    case 3: next_boundaries<3>(above, l, w, below); break;
+    default: next_boundaries<4>(above, l, w, below); break;
     }
 }
 
@@ -218,7 +241,9 @@ std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius
     // is a difference of boundaries, whatever they are relative to. The
     // ring stays in cache, so the pixels are read from memory about once,
     // where a table of the whole layer would be written and read again.
-    const int ring = std::min(h + 1, 2 * reach + 2);
+    // Rows are summed up to `batch` at a time, ahead of the row tested.
+    constexpr int batch = 4;
+    const int ring = std::min(h + 1, 2 * reach + 1 + batch);
     paropt threads = by_rows(nthreads);
     threads.resolve();
     // Bands of at least a few reaches, so that the rows summed twice (by
@@ -230,19 +255,28 @@ std::vector<uint8_t> visible_bokeh(const ImageBuf& color, const ImageBuf& radius
         std::vector<double> table(size_t(ring) * (w + 1));
         auto boundary = [&](int j) { return table.data() + size_t(j % ring) * (w + 1); };
         // The luminance of the rows summed and not yet tested: rows y to
-        // y + reach.
-        std::vector<double> luminances(size_t(reach + 1) * w);
-        auto luminance_of = [&](int j) { return luminances.data() + size_t(j % (reach + 1)) * w; };
+        // y + reach, and those summed ahead.
+        const int kept = reach + batch;
+        std::vector<double> luminances(size_t(kept) * w);
+        auto luminance_of = [&](int j) { return luminances.data() + size_t(j % kept) * w; };
         // The boundaries k rows above and k + 1 below the row tested, by k.
         std::vector<const double*> tops(size_t(reach) + 1), bottoms(size_t(reach) + 1);
         // The boundaries up to `made` are in the ring.
         int made = std::max(0, y_begin - reach);
         std::fill(boundary(made), boundary(made) + w + 1, 0.0);
         for (int y = y_begin; y < y_end; ++y) {
-            for (; made < std::min(h, y + reach + 1); ++made) {
-                luminance_row(pixels(roi.xbegin, roi.ybegin + made), pixels.nchannels(), w,
-                              test.luma, luminance_of(made));
-                next_boundary(boundary(made), luminance_of(made), w, boundary(made + 1));
+            while (made < std::min(h, y + reach + 1)) {
+                const int n = std::min(batch, h - made);
+                const double* rows[batch];
+                double* below[batch];
+                for (int j = 0; j < n; ++j) {
+                    luminance_row(pixels(roi.xbegin, roi.ybegin + made + j), pixels.nchannels(),
+                                  w, test.luma, luminance_of(made + j));
+                    rows[j] = luminance_of(made + j);
+                    below[j] = boundary(made + j + 1);
+                }
+                next_boundaries(boundary(made), rows, n, w, below);
+                made += n;
             }
             for (int k = 0; k <= reach; ++k) {
                 tops[k] = boundary(std::max(0, y - k));
