@@ -145,6 +145,28 @@ TEST_CASE("layers are composited back to front whatever their file order")
     CHECK(report[0].coc_min == Approx(100.0 / 3.0 * 0.9).epsilon(1e-6));
 }
 
+TEST_CASE("a frame rendered into the last frame's image comes out as into a new one, in its "
+          "buffer")
+{
+    const Camera camera = synthetic_camera(far_z);
+    Scene scene = two_layer_scene();
+    SECTION("the back layer covers the frame") {}
+    SECTION("the back layer covers part of it") { scene.layers.pop_back(); }
+    const LayeredScene layers = layered_scene(scene, camera);
+    ImageBuf fresh;
+    REQUIRE(defocus_layers(fresh, layers, camera));
+    // The last frame's image: the same layout, every value stale.
+    ImageBuf last(fresh.spec());
+    OIIO::ImageBufAlgo::fill(last, { NAN, NAN, NAN, NAN });
+    const void* buffer = last.localpixels();
+    REQUIRE(defocus_layers(last, layers, camera));
+    CHECK(last.localpixels() == buffer);
+    const OIIO::ImageBufAlgo::CompareResults diff =
+        OIIO::ImageBufAlgo::compare(last, fresh, 0.0f, 0.0f);
+    CHECK(diff.nfail == 0);
+    CHECK(diff.maxerror == 0.0);
+}
+
 TEST_CASE("the focus map shows in-focus green, in front red, behind blue")
 {
     auto colour_at = [](const ImageBuf& map, int x, int y, float rgba[4]) {

@@ -372,6 +372,10 @@ int main(int argc, const char* argv[])
         const std::string label = sequence ? format("frame {}", frames[i]) : "";
         Timer timer;
         FrameResult frame;
+        // Each thread renders into the image it wrote last: a sequence's
+        // frames skip a new frame's fresh pages (see defocus_layers).
+        thread_local ImageBuf last_image;
+        frame.image.swap(last_image);
         std::string error;
         const bool ok = [&] {
             if (!render_frame(shot, frames[i], assets, frame, error,
@@ -401,6 +405,7 @@ int main(int argc, const char* argv[])
             progress.error(label.empty() ? error : label + ": " + error);
         }
         progress.frame_over();
+        last_image.swap(frame.image);
         return ok;
     };
     const ScheduleResult run = run_frames(int(frames.size()), cl.threads,

@@ -434,7 +434,11 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
                 back = &l.passes[0];
             break;
         }
+    // dst's pixels, when it has them in the frame's layout, are reused
+    // (swapped, not moved: dst stays valid for an error).
     ImageBuf frame;
+    if (holds_pixels_like(dst, result_spec(scene.spec, window, TypeFloat)))
+        frame.swap(dst);
     reset_zeroed_except(frame, result_spec(scene.spec, window, TypeFloat),
                         back ? back->engine->extent() : ROI(), nthreads);
     // Where a magnified pass's light can come from: the window, grown by

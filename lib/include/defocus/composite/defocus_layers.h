@@ -38,7 +38,9 @@ struct SpreadTimings {
 /// front: the defocused, flattened premultiplied RGBA over `window`, in the
 /// scene's display window, without metadata. `report`, when given, lists
 /// the layers' reports in that order, with the pixels the hybrid method
-/// spread with its PSF image.
+/// spread with its PSF image. When `dst` already holds float RGBA pixels
+/// of that window (the last frame of a sequence), they are overwritten in
+/// place rather than allocated afresh.
 bool defocus_layers(OIIO::ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
                     const SpreadOptions& spread = {}, const ApertureImages& images = {},
                     OutputWindow window = OutputWindow::Input,
