@@ -732,8 +732,14 @@ public:
         std::sort(m_others.begin(), m_others.end(), [](const Sum& a, const Sum& e) {
             return a.k != e.k ? a.k < e.k : a.b < e.b;
         });
+        // Room for the lit blocks' sums when their runs are folded (4
+        // values a block), as most are; blended ones grow it. The rows
+        // live as long as the engine, so room for the most they can take
+        // (8 values for every block of the row) was mostly held unused.
+        const auto lit = [](const Sum& e) { return e.k >= 0; };
         ItemRow row;
-        row.color.reserve((m_sums.size() + m_others.size()) * 8);
+        row.color.reserve(4 * size_t(std::count_if(m_sums.begin(), m_sums.end(), lit)
+                                     + std::count_if(m_others.begin(), m_others.end(), lit)));
         add_runs(m_sums, level, row);
         if (m_others.empty())
             return row;
