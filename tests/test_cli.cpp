@@ -659,6 +659,17 @@ TEST_CASE("sequences: frame patterns in and out, keyframes, per-frame metadata")
     CHECK(attribute(dir + "/out.1003.exr", "defocus:focusDistance") == 4.0f);
     CHECK(attribute(dir + "/out.1002.exr", "defocus:fNumber") == Approx(1.0 / (0.5 / 2 + 0.5 / 4)));
     CHECK(attribute(dir + "/out.1002.exr", "defocus:frame") == 1002.0f);
+    // A thread renders its frames into one image (frame 1003 into 1002's):
+    // each comes out as rendered alone.
+    REQUIRE(run_defocus(dir + "/in.#.exr -o " + dir + "/one_thread.#.exr --focal 50"
+                            + " --fstop 1001:2,1003:4 --focus 1001:1,1003:4 --frames 1001-1003"
+                            + " --threads 1 -q",
+                        log) == 0);
+    REQUIRE(run_defocus(dir + "/in.1003.exr -o " + dir + "/alone.exr --focal 50 --fstop 4 --focus 4 -q",
+                        log) == 0);
+    CHECK(ImageBufAlgo::compare(read_image(dir + "/one_thread.1003.exr"),
+                                read_image(dir + "/alone.exr"), 0.0f, 0.0f)
+              .maxerror == 0.0);
 
     // The input's own frames by default; '@' and %0Nd patterns; -q is silent.
     REQUIRE(run_defocus(dir + "/in.%04d.exr -o " + dir + "/b.@@@@.exr" + camera + " -q", log) == 0);
