@@ -373,7 +373,10 @@ int main(int argc, const char* argv[])
         Timer timer;
         FrameResult frame;
         // Each thread renders into the image it wrote last: a sequence's
-        // frames skip a new frame's fresh pages (see defocus_layers).
+        // frames skip a new frame's fresh pages (see defocus_layers). The
+        // first frame's thread renders no other (see run_frames), so its
+        // image is not kept past it: the memory of the frames in flight
+        // stays theirs.
         thread_local ImageBuf last_image;
         frame.image.swap(last_image);
         std::string error;
@@ -405,7 +408,8 @@ int main(int argc, const char* argv[])
             progress.error(label.empty() ? error : label + ": " + error);
         }
         progress.frame_over();
-        last_image.swap(frame.image);
+        if (i > 0)
+            last_image.swap(frame.image);
         return ok;
     };
     const ScheduleResult run = run_frames(int(frames.size()), cl.threads,

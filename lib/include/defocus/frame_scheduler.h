@@ -16,9 +16,10 @@ struct ScheduleResult {
     int run = 0;              ///< frames attempted
 };
 
-/// Runs frames 0..count-1 in order of starting. The first runs alone; its
-/// peak memory then sets how many frames may run at once (up to one per
-/// core, within `memory_limit` bytes in all). One frame alone rarely
+/// Runs frames 0..count-1 in order of starting. The first runs alone, on
+/// the calling thread; its peak memory then sets how many frames may run
+/// at once (up to one per core, within `memory_limit` bytes in all), each
+/// worker thread taking frame after frame. One frame alone rarely
 /// fills the cores (checking, reading and writing EXR are largely serial);
 /// frames side by side do. Every frame uses all of the shared thread pool,
 /// so that no core idles while the last frames finish. With
