@@ -1,6 +1,7 @@
 #include "spread/spread_engine.h"
 
 #include <algorithm>
+#include <array>
 #include <climits>
 #include <cmath>
 #include <mutex>
@@ -31,6 +32,21 @@ constexpr double transition = 1.0 / 16.0;  ///< relative radius range spread at 
 constexpr double level_start(int level)
 {
     return ((1 << level) <= max_box ? 4.0 : 8.0) * (1 << level);
+}
+
+/// 1 / level_start(level) for every level. The starts are powers of two,
+/// so r times the inverse is r over the start, bit for bit, without a
+/// division.
+constexpr std::array<double, max_level + 1> inverse_level_starts()
+{
+    std::array<double, max_level + 1> inverse {};
+    for (int level = 0; level <= max_level; ++level) {
+        const long start = long(level_start(level));
+        if (double(start) != level_start(level) || (start & (start - 1)) != 0)
+            throw "level_start() must be a power of two";  // fails compilation
+        inverse[size_t(level)] = 1.0 / level_start(level);
+    }
+    return inverse;
 }
 
 /// The largest radius a bounded spread takes on the dense path: where
@@ -85,10 +101,11 @@ int components(SpreadMethod method, float r, bool keep_exact, Component out[2])
         out[0] = { 0, 1.0f };
         return 1;
     }
+    static constexpr std::array<double, max_level + 1> inverse_start = inverse_level_starts();
     int level = 1;
-    while (level < max_level && r >= level_start(level + 1) * (1.0 - transition))
+    while (level < max_level && r * inverse_start[level + 1] >= 1.0 - transition)
         ++level;
-    const double u = (r / level_start(level) - (1.0 - transition)) / transition;
+    const double u = (r * inverse_start[level] - (1.0 - transition)) / transition;
     if (u <= 0.0) {  // where the transition starts: the smaller size alone
         out[0] = { level - 1, 1.0f };
         return 1;
