@@ -34,18 +34,25 @@ constexpr double level_start(int level)
     return ((1 << level) <= max_box ? 4.0 : 8.0) * (1 << level);
 }
 
-/// 1 / level_start(level) for every level. The starts are powers of two,
-/// so r times the inverse is r over the start, bit for bit, without a
-/// division.
-constexpr std::array<double, max_level + 1> inverse_level_starts()
+constexpr bool level_starts_are_powers_of_two()
 {
-    std::array<double, max_level + 1> inverse {};
     for (int level = 0; level <= max_level; ++level) {
         const long start = long(level_start(level));
         if (double(start) != level_start(level) || (start & (start - 1)) != 0)
-            throw "level_start() must be a power of two";  // fails compilation
-        inverse[size_t(level)] = 1.0 / level_start(level);
+            return false;
     }
+    return true;
+}
+// So r times 1 / level_start() is r over it, bit for bit, without a
+// division (components()).
+static_assert(level_starts_are_powers_of_two(), "inverse_level_starts() must stay exact");
+
+/// 1 / level_start(level) for every level.
+constexpr std::array<double, max_level + 1> inverse_level_starts()
+{
+    std::array<double, max_level + 1> inverse {};
+    for (int level = 0; level <= max_level; ++level)
+        inverse[size_t(level)] = 1.0 / level_start(level);
     return inverse;
 }
 
@@ -264,6 +271,14 @@ HalfSpan half_span(int begin, int end)
 inline double upper_weight(int x)
 {
     return (x & 1) ? 0.25 : 0.75;
+}
+
+/// Half-resolution values h0 and h1 of the rows above and below a pixel,
+/// h1 of weight wy, as the pixel takes them: a half-resolution pixel holds
+/// the light of four pixels.
+DEFOCUS_KERNEL d4 between_rows(const double* h0, const double* h1, double wy)
+{
+    return splat(0.25 * (1.0 - wy)) * load4(h0) + splat(0.25 * wy) * load4(h1);
 }
 
 /// The most taps of a cluster added in one pass over a run's items. A
@@ -676,17 +691,15 @@ void finish_row(double* row, double* column_carry, double* row_carry, int cells)
 /// Adds to cells [x_begin, x_end) of a row (`row` at x_begin) the
 /// integrated half-resolution rows h0 and h1 below it, bilinearly
 /// interpolated: h1 of weight wy, their cells from half-resolution column
-/// `first` on. A half-resolution pixel holds the light of four pixels.
-/// With `constant`, the row is that value, unset before.
+/// `first` on. With `constant`, the row is that value, unset before.
 DEFOCUS_CLONES
 void add_interpolated(double* row, const double* h0, const double* h1, double wy, int x_begin,
                       int x_end, int first, const double* constant)
 {
     const d4 base = constant ? load4(constant) : splat(0.0);
-    const d4 w0 = splat(0.25 * (1.0 - wy)), w1 = splat(0.25 * wy);
     auto column = [&](int i) {
         const size_t c = size_t(i - first) * 4;
-        return w0 * load4(h0 + c) + w1 * load4(h1 + c);
+        return between_rows(h0 + c, h1 + c, wy);
     };
     int i = floor_div(x_begin - 1, 2);
     d4 left = column(i), right = column(i + 1);
@@ -939,7 +952,7 @@ SpreadEngine::SpreadEngine(const SpreadSource& source, SpreadMethod method,
         survey_rows(source, method, levels, y0, y1, found, merge);
     }, nthreads);
     m_dense.max_radius = found.dense_max;
-    m_dense_rows = std::move(found.dense_rows);
+    m_dense.rows = std::move(found.dense_rows);
 
     // The last column of a footprint's deltas (and for the box the last
     // row) only ends it: the pixels it lights stop one before. Interpolated
@@ -1022,7 +1035,7 @@ void SpreadEngine::run(const ROI& window_in, RowSink& sink, int nthreads) const
             if (ws.dense.size() < size_t(std::max(0, sy1 - sy0)))
                 ws.dense.resize(sy1 - sy0);
             for (int sy = sy0; sy < sy1; ++sy) {
-                if (m_dense_rows[size_t(sy - roi.ybegin)])
+                if (m_dense.rows[size_t(sy - roi.ybegin)])
                     prepare_dense_row(m_source, m_method, m_shape->pixels(), sy, sx0, sx1,
                                       ws.dense[sy - sy0], ws.color, ws.blend);
                 else
@@ -1098,7 +1111,7 @@ void SpreadEngine::run(const ROI& window_in, RowSink& sink, int nthreads) const
                     if (half) {
                         const auto [j, wy] = half_rows_of(y);
                         const double* h = ws.half_row_carry.data() + size_t(j) * 4;
-                        carry += splat(0.25 * (1.0 - wy)) * load4(h) + splat(0.25 * wy) * load4(h + 4);
+                        carry += between_rows(h, h + 4, wy);
                     }
                     double value[4];
                     store4(value, carry);

@@ -111,13 +111,13 @@ private:
     struct Dense {
         float max_radius = -1.0f;  ///< of the pixels on this path; < 0: none
         int first_row = 0, last_row = 0, first_column = 0, last_column = 0;
+        std::vector<uint8_t> rows;  ///< per source row: any pixel on this path
     };
 
     SpreadSource m_source;
     SpreadMethod m_method;
     const ShapePrograms* m_shape;
     Dense m_dense;
-    std::vector<uint8_t> m_dense_rows;  ///< per source row: any pixel on the dense path
     std::vector<std::unique_ptr<Sparse>> m_sparse;  ///< per level: highlights, then blocks
     OIIO::ROI m_extent;
 };
