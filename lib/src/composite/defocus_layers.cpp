@@ -115,7 +115,6 @@ class Over final : public RowSink {
 public:
     Over(ImageBuf& frame, const ChannelPass& pass, bool onto_black)
         : m_frame(frame)
-        , m_pass(pass)
         , m_written { pass.colour[0] ? -1 : 0, pass.colour[1] ? -1 : 0, pass.colour[2] ? -1 : 0,
                       pass.alpha ? -1 : 0 }
         , m_onto_black(onto_black)
@@ -133,13 +132,12 @@ public:
         float* out = static_cast<float*>(m_frame.pixeladdr(x_begin, y));
         for (int x = x_begin; x < x_end; ++x, out += 4)
             for (int c = 0; c < 4; ++c)
-                if (c < 3 ? m_pass.colour[c] : m_pass.alpha)
+                if (m_written[c])
                     out[c] = 0.0f;
     }
 
 private:
     ImageBuf& m_frame;
-    const ChannelPass m_pass;
     const Lanes m_written;  ///< the channels the pass writes
     const bool m_onto_black;
 };
@@ -436,11 +434,11 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
         }
     // dst's pixels, when it has them in the frame's layout, are reused
     // (swapped, not moved: dst stays valid for an error).
+    const ImageSpec frame_spec = result_spec(scene.spec, window, TypeFloat);
     ImageBuf frame;
-    if (holds_pixels_like(dst, result_spec(scene.spec, window, TypeFloat)))
+    if (holds_pixels_like(dst, frame_spec))
         frame.swap(dst);
-    reset_zeroed_except(frame, result_spec(scene.spec, window, TypeFloat),
-                        back ? back->engine->extent() : ROI(), nthreads);
+    reset_zeroed_except(frame, frame_spec, back ? back->engine->extent() : ROI(), nthreads);
     // Where a magnified pass's light can come from: the window, grown by
     // the largest displacement lateral aberration gives within it.
     const double farthest = std::max({ std::abs(window.xbegin - centre.x),
