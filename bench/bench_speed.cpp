@@ -8,7 +8,9 @@
 // the radius 128 / radius 4 ratio per aperture; the memory floor of
 // spreading four 4096x2160 layers against spreading and compositing them;
 // the read stage against a plain OpenEXR decode; whole frames of the garden
-// scene and the 4K example (`defocus` as a process) and their peak memory.
+// scene and the 4K example (`defocus` as a process) and their peak memory;
+// reading large scene files (a million keyframes, ten thousand inputs, a
+// frame list of huge steps).
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -38,7 +40,9 @@
 #include <defocus/composite/defocus_layers.h>
 #include <defocus/color/color.h>
 #include <defocus/io/aperture_files.h>
+#include <defocus/io/frames.h>
 #include <defocus/io/scene_io.h>
+#include <defocus/shot/shot_file.h>
 #include <defocus/spread/spread.h>
 
 #include "memory_floor.h"
@@ -423,6 +427,40 @@ int main(int argc, const char* argv[])
                                 unused);
         });
 
+    // Scene files at the scale of a long shot: each must read in linear
+    // time (target: under 2 s each).
+    const std::string input_name = Filesystem::filename(scene4k);
+    std::string keyframes_text, inputs_text;
+    for (int frame = 1; frame <= 1000000; ++frame)
+        keyframes_text += format("{}\"{}\": {}", frame == 1 ? "" : ", ", frame,
+                                 1.0 + frame * 1e-6);
+    keyframes_text = format("{{\"version\": 1, \"inputs\": [\"{}\"], \"scene\": {{\"frames\": "
+                            "\"1-1000000\"}}, \"camera\": {{\"focus\": {{{}}}}}}}",
+                            input_name, keyframes_text);
+    for (int i = 0; i < 10000; ++i)
+        inputs_text += format("{}\"{}\"", i == 0 ? "" : ", ", input_name);
+    inputs_text = format("{{\"version\": 1, \"inputs\": [{}], \"camera\": {{\"focus\": 3}}}}",
+                         inputs_text);
+    const std::string huge_steps = "{\"version\": 1, \"inputs\": [\"" + input_name
+                                   + "\"], \"scene\": {\"frames\": \"1-2147483647x2147483646,"
+                                     "-1000000000-1000000000x999999999\"}}";
+    const std::vector<std::pair<std::string, std::string>> scene_files = {
+        { "1,000,000 keyframes", keyframes_text },
+        { "10,000 inputs", inputs_text },
+        { "frames of huge steps", huge_steps },
+    };
+    for (const auto& [name, text] : scene_files)
+        add("scene file " + name, [&, text = text] {
+            return seconds([&] {
+                defocus::Shot shot;
+                std::vector<int> frames;
+                std::string why;
+                return defocus::parse_shot(text, Filesystem::parent_path(scene4k), "bench.dof",
+                                           shot, why)
+                       && defocus::shot_frames(shot, frames, why);
+            });
+        });
+
     if (!only.empty())
         measures.erase(std::remove_if(measures.begin(), measures.end(),
                                       [&](const Measure& m) {
@@ -486,6 +524,9 @@ int main(int argc, const char* argv[])
     for (const auto& [name, flags] : effects)
         std::printf("  %-28s %8.3f s  %5.2fx the plain disc\n", name.c_str(),
                     median["effect " + name], median["effect " + name] / plain_disc);
+    std::printf("\nscene files, read and their frames listed (target: under 2 s each)\n");
+    for (const auto& [name, text] : scene_files)
+        std::printf("  %-24s %8.3f s\n", name.c_str(), median["scene file " + name]);
     Filesystem::remove_all(scratch);
     return 0;
 }

@@ -22,6 +22,19 @@ namespace {
 
 using defocus::Shot;
 
+/// How many .dof files this thread is opening or rendering, one inside
+/// another: a .dof's inputs open through this plugin too. load_shot()
+/// refuses cycles among the files a .dof names; this bounds what only
+/// shows at run time (a frame pattern of .dof files), which would
+/// otherwise recurse until the host's stack overflows.
+thread_local int nesting = 0;
+
+struct Nesting {
+    Nesting() { ++nesting; }
+    ~Nesting() { --nesting; }
+    bool too_deep() const { return nesting > defocus::max_shot_file_nesting; }
+};
+
 class DofInput final : public ImageInput {
 public:
     const char* format_name() const override { return "dof"; }
@@ -99,6 +112,10 @@ bool DofInput::open(const std::string& name, ImageSpec& newspec, const ImageSpec
                                                 ? message : name + ": " + message));
         return false;
     };
+    const Nesting nested;
+    if (nested.too_deep())
+        return fail(Strutil::fmt::format("scene files nested more than {} deep",
+                                         defocus::max_shot_file_nesting));
     try {
         if (!defocus::load_shot(name, m_shot, error))
             return fail(error);
@@ -138,6 +155,12 @@ bool DofInput::close()
 /// Renders the frame into m_pixels. False with `error` the problem.
 bool DofInput::render(std::string& error)
 {
+    const Nesting nested;
+    if (nested.too_deep()) {
+        error = Strutil::fmt::format("{}: scene files nested more than {} deep", m_filename,
+                                     defocus::max_shot_file_nesting);
+        return false;
+    }
     try {
         defocus::FrameResult frame;
         if (!defocus::render_frame(m_shot, m_frame, m_assets, frame, error))

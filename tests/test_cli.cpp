@@ -1326,7 +1326,7 @@ TEST_CASE("hostile .dof files: deep nesting, 100 MB, and inputs that are loops, 
     Filesystem::create_directory(dir + "/folder.exr");
     const std::pair<std::string, std::string> cases[] = {
         { nested, "nested.dof: arrays and objects nested more than 32 deep: not a scene file" },
-        { dir + "/big.dof", "big.dof: 100 MB is too large for a .dof scene file (at most 16 MB)" },
+        { dir + "/big.dof", "big.dof: 100 MB is too large for a .dof scene file (at most 64 MB)" },
         { dof("loop.dof", "\"loop_a.exr\""), "loop.dof: inputs:" },
         { dof("folder.dof", "\"folder.exr\""), "folder.exr: is a directory, not an image" },
         { dof("zero.dof", "\"/dev/zero\""), "/dev/zero: not a regular file" },

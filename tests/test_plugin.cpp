@@ -3,7 +3,10 @@
 #define CATCH_CONFIG_RUNNER
 #include <catch2/catch.hpp>
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <map>
 #include <thread>
 
 #include <OpenImageIO/filesystem.h>
@@ -310,6 +313,65 @@ TEST_CASE("every damaged EXR behind a .dof is an error, never a crash of the hos
         CHECK_FALSE(in->read_image(0, 0, 0, in->spec().nchannels, TypeFloat, pixels.data()));
         CHECK(Strutil::contains(in->geterror(), Filesystem::filename(file)));
     }
+}
+
+TEST_CASE("a .dof that reaches itself is an error in every host, never a stack overflow")
+{
+    const std::string dir = scratch_dir("plugin_cycles");
+    std::string log;
+    REQUIRE(run(format("{} {}/scene.exr --width 64 --height 36", MAKE_EXAMPLE_SCENE_BIN, dir),
+                log) == 0);
+    auto write = [&](const std::string& name, const std::string& body) {
+        REQUIRE(Filesystem::write_text_file(dir + "/" + name,
+                                            "{\"version\": 1, " + body + "}"));
+    };
+    write("self.dof", R"("inputs": ["self.dof"], "camera": {"focus": 3})");
+    write("a.dof", R"("inputs": ["b.dof"], "camera": {"focus": 3})");
+    write("b.dof", R"("inputs": ["a.dof"], "camera": {"focus": 3})");
+    write("mask.dof", R"("inputs": ["scene.exr"], "camera": {"focus": 3},
+                         "aperture": {"shape": "mask", "mask": "mask.dof"})");
+    write("psf.dof", R"("inputs": ["scene.exr"], "camera": {"focus": 3},
+                        "aperture": {"psf_image": "psf.dof"})");
+    // Another name of a.dof: cycles are found by file identity.
+    REQUIRE(symlink("a.dof", (dir + "/alias.dof").c_str()) == 0);
+    write("c.dof", R"("inputs": ["alias.dof"], "camera": {"focus": 3})");
+    // A chain of distinct files deeper than scene files may nest.
+    for (int i = 1; i <= 10; ++i)
+        write(format("n{}.dof", i), format(R"("inputs": ["n{}.dof"])", i + 1));
+    write("n11.dof", R"("inputs": ["scene.exr"], "camera": {"focus": 3})");
+    // A .dof frame pattern that leads back to itself only shows at run time.
+    write("p.0001.dof", R"("inputs": ["p.#.dof"], "scene": {"frames": "1"})");
+
+    const std::map<std::string, std::string> expected = {
+        { "self.dof", "self.dof: refers to itself" },
+        { "a.dof", "a.dof: refers to itself through b.dof" },
+        { "mask.dof", "mask.dof: refers to itself" },
+        { "psf.dof", "psf.dof: refers to itself" },
+        { "c.dof", "alias.dof: refers to itself through b.dof" },
+        { "n1.dof", "scene files nested more than 8 deep" },
+        { "p.0001.dof", "scene files nested more than 8 deep" },
+    };
+    for (const auto& [dof, message] : expected) {
+        INFO(dof);
+        const std::string path = dir + "/" + dof;
+        for (const std::string& command :
+             { format("{}{} --info {}", with_plugin, OIIOTOOL_BIN, path),
+               format("{}{} {} -o {}/out.exr", with_plugin, OIIOTOOL_BIN, path, dir),
+               format("{}{} {} -o {}/out.exr --focus 3", with_plugin, DEFOCUS_BIN, path, dir) }) {
+            INFO(command);
+            const int status = run(command, log);
+            INFO(log);
+            CHECK(status != 0);
+            CHECK(status < 128);  // not ended by a signal
+            CHECK(Strutil::contains(Strutil::replace(log, dir + "/", "", true), message));
+        }
+        // The library's own reading says the same, without the plugin.
+        ImageBuf image(path);
+        CHECK_FALSE(image.read());
+        CHECK(Strutil::contains(Strutil::replace(image.geterror(), dir + "/", "", true),
+                                message));
+    }
+    CHECK_FALSE(Filesystem::exists(dir + "/out.exr"));
 }
 
 int main(int argc, char* argv[])

@@ -22,54 +22,99 @@ namespace {
 /// A shot renders at most this many frames: a day of 24 fps is 2 million,
 /// no sequence is longer than a few hundred thousand, and a typo such as
 /// 1-2000000000 would otherwise take gigabytes before the first frame.
+/// (OpenImageIO's enumerate_sequence, not used here, reads
+/// "1001-11001040:2" as eleven million frames and walks every frame of a
+/// range, however large its step.)
 constexpr int64_t max_frames = 1000000;
 
-/// The number of frames a list such as "1-10x2,15,20-30" names, counted
-/// before OpenImageIO enumerates it; -1 when a part is not "A", "A-B",
-/// "A-BxN" (every Nth) or "A-ByN" (all but every Nth). OpenImageIO reads
-/// more than that: "1001-11001040:2" as eleven million frames.
-int64_t frame_count(const std::string& list)
-{
-    int64_t total = 0;
-    for (const std::string& part : OIIO::Strutil::splits(list, ",")) {
+/// One part of a frame list: "A", "A-B", "A-BxN" (every Nth frame) or
+/// "A-ByN" (all but every Nth), in oiiotool's meaning: from A towards B
+/// (downwards when B < A; a negative N walks from B towards A instead).
+struct FrameRange {
+    int64_t first = 0, last = 0, step = 1;
+    bool all_but = false;
+
+    bool parse(const std::string& part)
+    {
         OIIO::string_view rest(part);
-        int a = 0, b = 0, step = 1;
+        int a = 0, b = 0, n = 1;
         if (!OIIO::Strutil::parse_int(rest, a))
-            return -1;
+            return false;
         b = a;
         if (OIIO::Strutil::parse_char(rest, '-') && !OIIO::Strutil::parse_int(rest, b))
-            return -1;
-        const bool all_but = rest.size() && rest[0] == 'y';
+            return false;
+        all_but = rest.size() && rest[0] == 'y';
         if ((OIIO::Strutil::parse_char(rest, 'x') || OIIO::Strutil::parse_char(rest, 'y'))
-            && !OIIO::Strutil::parse_int(rest, step))
-            return -1;
-        if (!rest.empty() || step == 0)
-            return -1;
-        const int64_t span = std::abs(int64_t(b) - int64_t(a));
-        const int64_t stepped = span / std::abs(int64_t(step)) + 1;
-        total += all_but ? span + 1 - stepped : stepped;
+            && !OIIO::Strutil::parse_int(rest, n))
+            return false;
+        if (!rest.empty() || n == 0)
+            return false;
+        first = n > 0 ? a : b;
+        last  = n > 0 ? b : a;
+        step  = std::abs(int64_t(n));
+        return true;
     }
-    return total;
-}
+    int64_t span() const { return std::abs(last - first) + 1; }
+    /// The frames it names, counted, not walked.
+    int64_t count() const
+    {
+        const int64_t stepped = (span() - 1) / step + 1;
+        return all_but ? span() - stepped : stepped;
+    }
+    /// Appends its frames in order, in time proportional to their number
+    /// (a step of two billion names two frames).
+    void append_to(std::vector<int>& frames) const
+    {
+        const int64_t direction = last >= first ? 1 : -1;
+        const int64_t end = last + direction;
+        for (int64_t base = first; base != end && (base - end) * direction < 0;
+             base += direction * step) {
+            if (!all_but) {
+                frames.push_back(int(base));
+                continue;
+            }
+            for (int64_t f = base + direction; f != base + direction * step && f != end; f += direction)
+                frames.push_back(int(f));
+        }
+    }
+};
 
-/// OpenImageIO's enumerate_sequence, refusing lists of more than
-/// max_frames frames before enumerating them.
+/// Reads a frame list ("1-10x2,15,20-30") into `frames`, in its order.
+/// At most max_frames frames, counted before any is listed, and none
+/// twice (a frame listed twice would be rendered and written twice).
 bool enumerate_frames(const std::string& list, std::vector<int>& frames, std::string& error,
                       const std::string& what)
 {
-    const int64_t count = frame_count(list);
-    if (count < 0) {
-        error = format("{}: '{}' is not a frame list (e.g. 1001-1100, 1-99x2, 1,5,9-12)", what,
-                       list);
-        return false;
+    std::vector<FrameRange> ranges;
+    int64_t count = 0;
+    for (const std::string& part : OIIO::Strutil::splits(list, ",")) {
+        FrameRange range;
+        if (!range.parse(part)) {
+            error = format("{}: '{}' is not a frame list (e.g. 1001-1100, 1-99x2, 1,5,9-12)",
+                           what, list);
+            return false;
+        }
+        ranges.push_back(range);
+        count += range.count();
     }
     if (count > max_frames) {
         error = format("{}: '{}' names {} frames; a shot renders at most {}", what, list, count,
                        max_frames);
         return false;
     }
-    if (!Filesystem::enumerate_sequence(list, frames) || frames.empty()) {
+    frames.clear();
+    frames.reserve(size_t(count));
+    for (const FrameRange& range : ranges)
+        range.append_to(frames);
+    if (frames.empty()) {
         error = format("{}: '{}' names no frames", what, list);
+        return false;
+    }
+    std::vector<int> sorted = frames;
+    std::sort(sorted.begin(), sorted.end());
+    const auto twice = std::adjacent_find(sorted.begin(), sorted.end());
+    if (twice != sorted.end()) {
+        error = format("{}: '{}' names frame {} more than once", what, list, *twice);
         return false;
     }
     return true;

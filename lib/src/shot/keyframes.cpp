@@ -1,5 +1,7 @@
 #include <defocus/shot/keyframes.h>
 
+#include <algorithm>
+
 #include <OpenImageIO/strutil.h>
 
 #include <defocus/shot/option_value.h>
@@ -66,11 +68,11 @@ Keyframes::Value Keyframes::at(double frame, Interpolation interpolation) const
         return m_keys.front().value;
     if (frame >= m_keys.back().frame)
         return m_keys.back().value;
-    size_t i = 1;
-    while (m_keys[i].frame < frame)
-        ++i;
-    const Key& a   = m_keys[i - 1];
-    const Key& b   = m_keys[i];
+    // The first key at or after the frame; keys are in increasing frames.
+    const auto after = std::lower_bound(m_keys.begin(), m_keys.end(), frame,
+                                        [](const Key& key, double f) { return key.frame < f; });
+    const Key& a   = *(after - 1);
+    const Key& b   = *after;
     const double t = (frame - a.frame) / double(b.frame - a.frame);
     Value v {};
     for (int c = 0; c < m_arity; ++c) {

@@ -1,8 +1,7 @@
 #include <defocus/shot/option_value.h>
 
-#include <cerrno>
+#include <charconv>
 #include <cmath>
-#include <cstdlib>
 
 #include <OpenImageIO/strutil.h>
 
@@ -13,12 +12,15 @@ using OIIO::Strutil::fmt::format;
 bool parse_number(const std::string& option, const std::string& text, double lo,
                   double hi, double& value, std::string& error)
 {
-    const char* begin = text.c_str();
-    char* end         = nullptr;
-    errno             = 0;
-    const double v    = std::strtod(begin, &end);
-    if (text.empty() || end == begin || *end != '\0' || errno == ERANGE
-        || !std::isfinite(v)) {
+    // Decimal only, all of the text: strtod also takes hex floats
+    // ("0x1p3"), "inf", leading blanks and the locale's decimal point.
+    const char* begin = text.data();
+    const char* end   = begin + text.size();
+    if (begin != end && *begin == '+' && begin + 1 != end && begin[1] != '-')
+        ++begin;
+    double v = 0.0;
+    const auto [stop, status] = std::from_chars(begin, end, v, std::chars_format::general);
+    if (text.empty() || status != std::errc() || stop != end || !std::isfinite(v)) {
         error = format("{}: '{}' is not a number", option, text);
         return false;
     }

@@ -337,6 +337,16 @@ bool check_shot(const Shot& shot, std::string& error)
     return true;
 }
 
+std::vector<std::string> shot_files(const Shot& shot)
+{
+    std::vector<std::string> files = shot.inputs;
+    for (const std::string* file : { &shot.read.depth, &shot.spread.aperture.mask_file,
+                                     &shot.spread.psf_image, &shot.color_config })
+        if (!file->empty())
+            files.push_back(*file);
+    return files;
+}
+
 bool is_animated(const Shot& shot)
 {
     return shot.focus.animated() || shot.focus_at.animated()

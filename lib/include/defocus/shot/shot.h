@@ -120,6 +120,11 @@ std::string setting_origin(const Shot& shot, const std::string& name);
 /// reason it cannot. Reads no file.
 bool check_shot(const Shot& shot, std::string& error);
 
+/// The files a shot names: its inputs, the depth file (when the setting
+/// names one rather than a channel), the aperture mask, the PSF image and
+/// the colour config, as given (frame patterns unfilled).
+std::vector<std::string> shot_files(const Shot& shot);
+
 /// True when a setting changes over frames.
 bool is_animated(const Shot& shot);
 

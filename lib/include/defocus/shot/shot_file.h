@@ -27,10 +27,17 @@ namespace defocus {
 /// and older.
 constexpr int shot_file_version = 1;
 
+/// How deep .dof files may nest: a .dof whose inputs (or depth, mask or
+/// PSF image) are .dof files, whose own are, ...
+constexpr int max_shot_file_nesting = 8;
+
 /// Reads a .dof file into `shot`, over its current values. False with
 /// `error` a one-line message naming the file, the key and the problem:
-/// bad JSON, an unknown key, a wrong type, a value out of range, a missing
-/// file.
+/// bad JSON, a key given twice, an unknown key, a wrong type, a value out
+/// of range, a missing file. The .dof files it names (as inputs, depth,
+/// mask or PSF image) are read too, and theirs, by file identity: a file
+/// that reaches itself is an error ("a.dof: refers to itself through
+/// b.dof"), as is nesting deeper than max_shot_file_nesting.
 bool load_shot(const std::string& filename, Shot& shot, std::string& error);
 
 /// The same from text, with relative paths resolved against `directory`;
