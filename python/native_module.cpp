@@ -27,7 +27,7 @@
 #include <defocus/io/frames.h>
 #include <defocus/io/image_output.h>
 #include <defocus/render_frame.h>
-#include <defocus/shot/settings_hash.h>
+#include <defocus/io/settings_hash.h>
 #include <defocus/shot/shot_file.h>
 #include <defocus/version.h>
 
@@ -183,8 +183,7 @@ void render_to_file(const Shot& shot, const std::string& path, std::optional<int
     std::string error;
     check(check_output(path, shot.compression, error), error);
     const int at = frame_or_first(shot, frame);
-    check(overwritten_input(frame_inputs(shot, at), { path }).empty(),
-          path + ": the output would overwrite the input");
+    check(check_overwrites(files_read(shot, { at }), { path }, error), error);
     render_one(shot, at, [&](const FrameResult& result, const std::atomic<bool>& cancelled) {
         if (cancelled)
             throw Cancelled();
@@ -208,15 +207,11 @@ std::vector<std::string> render_sequence(const Shot& shot, const std::string& pa
     else
         check(shot_frames(shot, frames, error), error);
     check(!frames.empty(), "render_sequence: no frames to render");
-    std::vector<std::string> outputs, read;
+    std::vector<std::string> outputs;
     check(frame_outputs("output", pattern, frames, outputs, error), error);
-    for (size_t i = 0; i < frames.size(); ++i) {
+    for (size_t i = 0; i < frames.size(); ++i)
         check(check_output(outputs[i], shot.compression, error), error);
-        for (const std::string& file : frame_inputs(shot, frames[i]))
-            read.push_back(file);
-    }
-    const std::string overwritten = overwritten_input(read, outputs);
-    check(overwritten.empty(), overwritten + ": the output would overwrite the input");
+    check(check_overwrites(files_read(shot, frames), outputs, error), error);
     const ShotAssets assets = read_assets(shot);
 
     std::vector<std::string> errors(frames.size());

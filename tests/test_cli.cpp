@@ -35,28 +35,10 @@ namespace {
 const std::string defocus_bin = DEFOCUS_BIN;
 const std::string camera = " --focal 50 --fstop 1.8 --focus 4";
 
-std::string example_scene()
-{
-    static std::string path;
-    if (path.empty()) {
-        path = scratch_dir("example") + "/scene.exr";
-        std::string log;
-        REQUIRE(run(std::string(MAKE_EXAMPLE_SCENE_BIN) + " " + path
-                        + " --width 320 --height 180", log) == 0);
-    }
-    return path;
-}
-
 /// Runs defocus; the output and exit status.
 int run_defocus(const std::string& args, std::string& output)
 {
     return run(defocus_bin + " " + args, output);
-}
-
-/// True when the text is one line (ending in a newline) mentioning `what`.
-bool one_line_naming(const std::string& text, const std::string& what)
-{
-    return Strutil::contains(text, what) && text.find('\n') == text.size() - 1;
 }
 
 size_t count_of(const std::string& text, const std::string& what)

@@ -9,7 +9,7 @@
 
 #include <defocus/io/frames.h>
 #include <defocus/io/image_output.h>
-#include <defocus/shot/settings_hash.h>
+#include <defocus/io/settings_hash.h>
 #include <defocus/shot/shot_file.h>
 
 #include "test_support.h"

@@ -134,11 +134,23 @@ TEST_CASE("frame patterns in oiiotool's syntax")
         OIIO::Filesystem::write_text_file(dir + "/seq." + std::to_string(f) + ".exr", "");
     shot.frames = "";
     shot.inputs = { dir + "/seq.@.exr" };
-    REQUIRE(shot_frames(shot, frames, error));
+    // A gap among them is a missing frame, not one frame less.
+    CHECK_FALSE(shot_frames(shot, frames, error));
+    CHECK(contains(error, dir + "/seq.5.exr: no such file; frames with input files missing: 5"));
+    std::vector<int> missing;
+    REQUIRE(set_shot_setting(shot, "missing-frames", "skip", error));
+    REQUIRE(shot_frames(shot, frames, error, &missing));
     CHECK(frames == std::vector<int> { 3, 4, 6 });
-    shot.inputs = { dir + "/seq.2-3@.exr" };
+    CHECK(missing == std::vector<int> { 5 });
+    REQUIRE(set_shot_setting(shot, "missing-frames", "hold", error));
     REQUIRE(shot_frames(shot, frames, error));
-    CHECK(frames == std::vector<int> { 2, 3 });
+    CHECK(frames == std::vector<int> { 3, 4, 5, 6 });
+    CHECK(frame_inputs(shot, 5) == std::vector<std::string> { dir + "/seq.4.exr" });
+    CHECK(frame_inputs(shot, 6) == std::vector<std::string> { dir + "/seq.6.exr" });
+    shot.inputs = { dir + "/seq.3-4@.exr" };
+    REQUIRE(shot_frames(shot, frames, error));
+    CHECK(frames == std::vector<int> { 3, 4 });
+    shot.missing_frames = MissingFrames::Error;
     shot.inputs = { dir + "/none.#.exr" };
     CHECK_FALSE(shot_frames(shot, frames, error));
     CHECK(contains(error, "no files match"));

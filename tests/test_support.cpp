@@ -205,6 +205,26 @@ int run(const std::string& command, std::string& output)
     return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
+std::string example_scene()
+{
+    static std::string path;
+    if (path.empty()) {
+        const std::string file = scratch_dir("example") + "/scene.exr";
+        std::string log;
+        if (run(std::string(MAKE_EXAMPLE_SCENE_BIN) + " " + file + " --width 320 --height 180",
+                log)
+            != 0)
+            throw std::runtime_error("make_example_scene failed: " + log);
+        path = file;
+    }
+    return path;
+}
+
+bool one_line_naming(const std::string& text, const std::string& what)
+{
+    return text.find(what) != std::string::npos && text.find('\n') == text.size() - 1;
+}
+
 std::string shared_data()
 {
     const char* env = std::getenv("DEFOCUS_SHARED_DATA");

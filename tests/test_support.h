@@ -80,6 +80,13 @@ double garden_psnr(const ImageBuf& result, const ImageBuf& truth, int dx = 0, in
 /// Runs a shell command, returns its exit status; stdout+stderr into `output`.
 int run(const std::string& command, std::string& output);
 
+/// The example scene (make_example_scene) at 320x180, made once per test
+/// program.
+std::string example_scene();
+
+/// True when the text is one line (ending in a newline) mentioning `what`.
+bool one_line_naming(const std::string& text, const std::string& what);
+
 /// Writes a scanline OpenEXR (half R,G,B,A,Z, zip) whose header declares a
 /// `width` x `height` data window, with its chunk table but one tiny
 /// chunk: what a damaged or hostile header looks like to a reader that

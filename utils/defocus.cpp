@@ -20,7 +20,7 @@
 #include <defocus/io/frames.h>
 #include <defocus/io/image_output.h>
 #include <defocus/render_frame.h>
-#include <defocus/shot/settings_hash.h>
+#include <defocus/io/settings_hash.h>
 #include <defocus/shot/shot_file.h>
 
 #include "cli_options.h"
@@ -35,6 +35,7 @@ namespace {
 struct CommandLine {
     Shot shot;
     std::string output, preview, display, display_view, save_scene, chunk;
+    std::string scene_file;  ///< the .dof read, if any
     bool verbose = false, quiet = false, stop_on_error = false, preview_alpha = false;
     bool skip_existing = false;
     int threads = 0;
@@ -153,6 +154,7 @@ bool parse_command_line(int argc, const char* argv[], CommandLine& cl, bool& hel
 
     const bool from_file = inputs.size() == 1 && Strutil::iends_with(inputs[0], ".dof");
     if (from_file) {
+        cl.scene_file = inputs[0];
         if (!load_shot(inputs[0], cl.shot, error))
             return false;
     } else {
@@ -308,9 +310,9 @@ int main(int argc, const char* argv[])
     if (!read_shot_assets(shot, assets, error))
         return fail(error);
 
-    std::vector<int> frames;
+    std::vector<int> frames, missing;
     std::vector<std::string> outputs, previews;
-    if (!shot_frames(shot, frames, error)
+    if (!shot_frames(shot, frames, error, &missing)
         || !frame_outputs("-o", cl.output, frames, outputs, error)
         || !frame_outputs("--preview", cl.preview, frames, previews, error))
         return fail(error);
@@ -338,17 +340,21 @@ int main(int argc, const char* argv[])
         if (same_path(outputs[i], previews[i]))
             return fail(outputs[i] + ": -o and --preview name the same file");
     }
-    // Nothing an input names may be overwritten: not by an image, a
-    // preview or the scene file.
-    std::vector<std::string> read, written = outputs;
-    for (int frame : frames)
-        for (const std::string& file : frame_inputs(shot, frame))
-            read.push_back(file);
+    // Nothing the run reads may be overwritten: no input, depth, mask, PSF
+    // image, config or scene file, by an image, a preview or a scene file.
+    std::vector<std::string> read = files_read(shot, frames), written = outputs;
+    read.push_back(cl.scene_file);
     written.insert(written.end(), previews.begin(), previews.end());
     written.push_back(cl.save_scene);
-    const std::string overwritten = overwritten_input(read, written);
-    if (!overwritten.empty())
-        return fail(overwritten + ": the output would overwrite the input");
+    if (!check_overwrites(read, written, error))
+        return fail(error);
+    if (!missing.empty() && !cl.quiet)
+        Strutil::print(stderr, "defocus: warning: frames with input files missing {}: {}\n",
+                       shot.missing_frames == MissingFrames::Skip
+                           ? "are not rendered (--missing-frames skip)"
+                           : "are rendered from the nearest earlier frame's (--missing-frames "
+                             "hold)",
+                       frame_ranges(missing));
     if (!cl.save_scene.empty()) {
         if (!save_shot(shot, cl.save_scene, error))
             return fail(error);

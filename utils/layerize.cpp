@@ -13,6 +13,7 @@
 #include <OpenImageIO/strutil.h>
 
 #include <defocus/error_line.h>
+#include <defocus/io/frames.h>
 #include <defocus/io/image_output.h>
 #include <defocus/io/scene_io.h>
 #include <defocus/render_frame.h>
@@ -91,8 +92,8 @@ int main(int argc, const char* argv[])
         return fail("layerize renders no frames: give the camera without keyframes");
     if (info == !output.empty())
         return fail("give either -o OUTPUT.exr or --info");
-    if (!overwritten_input(inputs, { output }).empty())
-        return fail("{}: the output would overwrite the input", output);
+    if (!check_overwrites(files_read(shot, { 0 }), { output }, error))
+        return fail("{}", error);
     if (!output.empty() && !check_output(output, "", error))
         return fail("{}", error);
     OIIO::attribute("threads", threads);

@@ -9,7 +9,7 @@
 #include <defocus/io/scene_io.h>
 #include <defocus/layers/edges.h>
 #include <defocus/layers/layering.h>
-#include <defocus/shot/settings_hash.h>
+#include <defocus/io/settings_hash.h>
 #include <defocus/version.h>
 
 namespace defocus {

@@ -195,6 +195,26 @@ std::vector<int> scan_frames(const FrameNumbering& pattern)
     return frames;
 }
 
+/// Whether a folder has an entry of this name. What the entry is does not
+/// matter here: a symbolic link loop or a folder where a frame should be is
+/// that frame's error when it is read, not a missing frame.
+bool has_entry(const std::string& path)
+{
+    std::error_code ec;
+    return std::filesystem::exists(std::filesystem::symlink_status(path, ec));
+}
+
+/// The frames of a pattern found on disk, in order ({} for a name that
+/// is not a pattern).
+std::vector<int> frames_on_disk(const std::string& pattern)
+{
+    std::string normalized, range;
+    FrameNumbering numbering;
+    if (!parse_frame_pattern(pattern, normalized, range) || !numbering.parse(normalized))
+        return {};
+    return scan_frames(numbering);
+}
+
 }  // namespace
 
 bool is_frame_pattern(const std::string& path)
@@ -214,17 +234,69 @@ std::string frame_path(const std::string& path, int frame)
 
 std::vector<std::string> frame_inputs(const Shot& shot, int frame)
 {
+    const int source = source_frame(shot, frame);
     std::vector<std::string> files;
     for (const std::string& input : shot.inputs)
-        files.push_back(frame_path(input, frame));
+        files.push_back(frame_path(input, source));
     return files;
 }
 
 ReadOptions frame_read_options(const Shot& shot, int frame)
 {
     ReadOptions options = shot.read;
-    options.depth       = frame_path(options.depth, frame);
+    options.depth       = frame_path(options.depth, source_frame(shot, frame));
     return options;
+}
+
+bool frame_inputs_exist(const Shot& shot, int frame)
+{
+    for (const std::string& file : sequence_files(shot))
+        if (!has_entry(frame_path(file, frame)))
+            return false;
+    return true;
+}
+
+int source_frame(const Shot& shot, int frame)
+{
+    if (shot.missing_frames != MissingFrames::Hold || frame_inputs_exist(shot, frame))
+        return frame;
+    // The frames on disk of the first pattern, nearest earlier first, then
+    // nearest later.
+    const std::vector<std::string> patterns = sequence_files(shot);
+    if (patterns.empty())
+        return frame;
+    std::vector<int> candidates = frames_on_disk(patterns.front());
+    const auto after = std::upper_bound(candidates.begin(), candidates.end(), frame);
+    std::reverse(candidates.begin(), after);
+    for (int candidate : candidates)
+        if (candidate != frame && frame_inputs_exist(shot, candidate))
+            return candidate;
+    return frame;
+}
+
+std::vector<std::string> sequence_files(const Shot& shot)
+{
+    std::vector<std::string> patterns;
+    for (const std::string& file : shot.inputs)
+        if (is_frame_pattern(file))
+            patterns.push_back(file);
+    if (is_frame_pattern(shot.read.depth))
+        patterns.push_back(shot.read.depth);
+    return patterns;
+}
+
+std::vector<std::string> files_read(const Shot& shot, const std::vector<int>& frames)
+{
+    std::vector<std::string> files;
+    for (const std::string& file : shot_files(shot)) {
+        if (!is_frame_pattern(file)) {
+            files.push_back(file);
+            continue;
+        }
+        for (int frame : frames)
+            files.push_back(frame_path(file, source_frame(shot, frame)));
+    }
+    return files;
 }
 
 bool is_sequence(const Shot& shot)
@@ -237,31 +309,90 @@ bool is_sequence(const Shot& shot)
     return false;
 }
 
-bool shot_frames(const Shot& shot, std::vector<int>& frames, std::string& error)
+std::string frame_ranges(const std::vector<int>& frames)
+{
+    std::vector<int> sorted = frames;
+    std::sort(sorted.begin(), sorted.end());
+    std::vector<std::string> ranges;
+    for (size_t i = 0; i < sorted.size();) {
+        size_t j = i;
+        while (j + 1 < sorted.size() && int64_t(sorted[j + 1]) == int64_t(sorted[j]) + 1)
+            ++j;
+        ranges.push_back(j == i ? std::to_string(sorted[i])
+                                : format("{}-{}", sorted[i], sorted[j]));
+        i = j + 1;
+    }
+    constexpr size_t shown = 12;
+    if (ranges.size() > shown) {
+        const size_t more = ranges.size() - shown;
+        ranges.resize(shown);
+        ranges.push_back(format("and {} more range(s)", more));
+    }
+    return Strutil::join(ranges, ", ");
+}
+
+bool shot_frames(const Shot& shot, std::vector<int>& frames, std::string& error,
+                 std::vector<int>* missing_frames)
 {
     frames.clear();
-    if (!shot.frames.empty())
-        return enumerate_frames(shot.frames, frames, error, "--frames");
-    for (const std::string& input : shot.inputs) {
-        std::string normalized, range;
-        if (!parse_frame_pattern(input, normalized, range))
-            continue;
-        if (!range.empty())
-            return enumerate_frames(range, frames, error, input);
-        FrameNumbering numbering;
-        if (numbering.parse(normalized))
-            frames = scan_frames(numbering);
-        if (frames.empty()) {
-            error = format("{}: no files match (give --frames to name them)", input);
+    if (missing_frames)
+        missing_frames->clear();
+    const std::vector<std::string> patterns = sequence_files(shot);
+    const auto first_input_pattern =
+        std::find_if(shot.inputs.begin(), shot.inputs.end(), is_frame_pattern);
+    if (!shot.frames.empty()) {
+        if (!enumerate_frames(shot.frames, frames, error, "--frames"))
+            return false;
+    } else if (first_input_pattern == shot.inputs.end()) {
+        if (is_animated(shot)) {
+            error = "the camera has keyframes but the input is one image: give --frames";
             return false;
         }
-        return true;
+        frames = { 1 };
+    } else {
+        // The range embedded in the first input's pattern, else the span of
+        // its frames on disk: a gap in it is a missing frame, not one less.
+        const std::string& first = *first_input_pattern;
+        std::string normalized, range;
+        parse_frame_pattern(first, normalized, range);
+        if (range.empty()) {
+            const std::vector<int> found = frames_on_disk(first);
+            if (found.empty()) {
+                error = format("{}: no files match (give --frames to name them)", first);
+                return false;
+            }
+            range = found.front() == found.back() ? std::to_string(found.front())
+                                                  : format("{}-{}", found.front(), found.back());
+        }
+        if (!enumerate_frames(range, frames, error, first))
+            return false;
     }
-    if (is_animated(shot)) {
-        error = "the camera has keyframes but the input is one image: give --frames";
+    if (patterns.empty())
+        return true;
+
+    std::vector<int> missing, present;
+    for (int frame : frames)
+        (frame_inputs_exist(shot, frame) ? present : missing).push_back(frame);
+    if (missing.empty())
+        return true;
+    if (missing_frames)
+        *missing_frames = missing;
+    std::string first_missing;
+    for (const std::string& file : patterns)
+        if (first_missing.empty() && !has_entry(frame_path(file, missing.front())))
+            first_missing = frame_path(file, missing.front());
+    const std::string which = format("{}: no such file; frames with input files missing: {}",
+                                     first_missing, frame_ranges(missing));
+    if (shot.missing_frames == MissingFrames::Error) {
+        error = which + " (--missing-frames skip or hold renders the shot without them)";
         return false;
     }
-    frames = { 1 };
+    if (present.empty()) {
+        error = which + ": the shot has no frame to render";
+        return false;
+    }
+    if (shot.missing_frames == MissingFrames::Skip)
+        frames = std::move(present);
     return true;
 }
 

@@ -19,6 +19,7 @@
 
 #include "io/half_pixels.h"
 #include "io/temporary_files.h"
+#include "util/file_identity.h"
 
 namespace defocus {
 
@@ -70,19 +71,24 @@ bool write_bytes(const std::string& path, const std::vector<unsigned char>& byte
 
 }  // namespace
 
-std::string overwritten_input(const std::vector<std::string>& read,
-                              const std::vector<std::string>& written)
+bool check_overwrites(const std::vector<std::string>& read,
+                      const std::vector<std::string>& written, std::string& error)
 {
-    std::set<std::pair<dev_t, ino_t>> inputs;
-    struct stat st {};
+    std::map<FileIdentity, const std::string*> inputs;
     for (const std::string& file : read)
-        if (::stat(file.c_str(), &st) == 0)
-            inputs.emplace(st.st_dev, st.st_ino);
-    for (const std::string& file : written)
-        if (!file.empty() && ::stat(file.c_str(), &st) == 0
-            && inputs.count({ st.st_dev, st.st_ino }))
-            return file;
-    return "";
+        if (const std::optional<FileIdentity> id = FileIdentity::of(file))
+            inputs.emplace(*id, &file);
+    for (const std::string& file : written) {
+        const std::optional<FileIdentity> id = file.empty() ? std::nullopt
+                                                            : FileIdentity::of(file);
+        const auto input = id ? inputs.find(*id) : inputs.end();
+        if (input != inputs.end()) {
+            error = Strutil::fmt::format("{}: would overwrite the input {}", file,
+                                         *input->second);
+            return false;
+        }
+    }
+    return true;
 }
 
 bool same_path(const std::string& a, const std::string& b)

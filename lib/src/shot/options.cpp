@@ -20,6 +20,22 @@ const char* edge_mode_name(EdgeMode mode)
     return "?";
 }
 
+bool parse_missing_frames(const std::string& name, MissingFrames& missing)
+{
+    return parse_name(name, { MissingFrames::Error, MissingFrames::Skip, MissingFrames::Hold },
+                      missing_frames_name, missing);
+}
+
+const char* missing_frames_name(MissingFrames missing)
+{
+    switch (missing) {
+    case MissingFrames::Error: return "error";
+    case MissingFrames::Skip: return "skip";
+    case MissingFrames::Hold: return "hold";
+    }
+    return "?";
+}
+
 bool parse_output_window(const std::string& name, OutputWindow& window)
 {
     return parse_name(name, { OutputWindow::Input, OutputWindow::Display, OutputWindow::Grown },

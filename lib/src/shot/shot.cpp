@@ -103,6 +103,9 @@ const std::vector<SettingRule>& rules()
     using K = ShotValueKind;
     static const std::vector<SettingRule> table = {
         text({ "frames", "scene", "frames", K::Text }, [](auto& s) -> auto& { return s.frames; }),
+        choice({ "missing-frames", "scene", "missing_frames", K::Text },
+               [](auto& s) -> auto& { return s.missing_frames; }, parse_missing_frames,
+               missing_frames_name, "value", "error, skip or hold"),
         text({ "view", "scene", "view", K::Text }, [](auto& s) -> auto& { return s.read.view; }),
         text({ "layer", "scene", "layer", K::Text }, [](auto& s) -> auto& { return s.read.layer; }),
         number({ "layers", "scene", "layers", K::Number },

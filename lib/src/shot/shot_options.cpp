@@ -9,6 +9,11 @@ const std::vector<ShotOption>& shot_options()
         { G::Sequences, "--frames LIST", "frames",
           "Frames to render: 1001-1100, 1-99x2 (every other), 1,5,9-12 "
           "(default: the frames the input pattern finds on disk)" },
+        { G::Sequences, "--missing-frames error|skip|hold", "missing-frames",
+          "Frames whose input files are missing (a gap in the sequence on disk, or a "
+          "frame of --frames): error refuses the shot, naming them; skip renders the "
+          "others; hold renders each from the nearest earlier frame's inputs "
+          "(default: error)" },
 
         { G::Camera, "--focus DIST", "focus",
           "Focus distance in metres, e.g. 3 or 1001:3,1040:1.2 (required, or --focus-at, "

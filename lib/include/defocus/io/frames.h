@@ -19,21 +19,50 @@ bool is_frame_pattern(const std::string& path);
 std::string frame_path(const std::string& path, int frame);
 
 /// The files a shot reads for `frame`: its inputs with their patterns
-/// filled in.
+/// filled in, at the frame's source_frame().
 std::vector<std::string> frame_inputs(const Shot& shot, int frame);
 
-/// The read options of `frame`: a --depth file pattern filled in.
+/// The read options of `frame`: a --depth file pattern filled in, at the
+/// frame's source_frame().
 ReadOptions frame_read_options(const Shot& shot, int frame);
+
+/// The frame patterns a shot reads: its inputs and depth file that are
+/// patterns.
+std::vector<std::string> sequence_files(const Shot& shot);
+
+/// True when every file of the shot's frame patterns exists for `frame`.
+bool frame_inputs_exist(const Shot& shot, int frame);
+
+/// The frame whose input files `frame` reads: itself, unless they are
+/// missing and the shot holds missing frames (MissingFrames::Hold): then
+/// the nearest earlier frame on disk whose files are all there, else the
+/// nearest later one.
+int source_frame(const Shot& shot, int frame);
+
+/// Every file a shot reads to render `frames`: their inputs and depth
+/// files (frame patterns filled in at each frame's source_frame()), the
+/// aperture mask, the PSF image and the colour config.
+std::vector<std::string> files_read(const Shot& shot, const std::vector<int>& frames);
 
 /// True when a shot is a sequence: it has a frame list or a frame pattern
 /// among its inputs.
 bool is_sequence(const Shot& shot);
 
 /// The frames a shot renders, in order: its frame list; else the range
-/// embedded in an input pattern; else the frames of the first input
-/// pattern found on disk; else one frame (a still). False with `error` when the list is malformed,
-/// a pattern finds no files, or a still has keyframes (they need frames).
-bool shot_frames(const Shot& shot, std::vector<int>& frames, std::string& error);
+/// embedded in an input pattern; else the span of the frames of the first
+/// input pattern found on disk (a gap in it is a missing frame); else one
+/// frame (a still). Frames whose input files are missing are an error
+/// naming them, unless the shot skips them (left out, and listed in
+/// `missing` when given) or holds them (kept: they read an earlier frame's
+/// files, see source_frame). False with `error` when the list is
+/// malformed, a pattern finds no files, frames are missing, or a still has
+/// keyframes (they need frames).
+bool shot_frames(const Shot& shot, std::vector<int>& frames, std::string& error,
+                 std::vector<int>* missing = nullptr);
+
+/// Frames as ranges for messages: "1001-1003, 1007, 1010-1012" (sorted;
+/// the first dozen ranges).
+std::string frame_ranges(const std::vector<int>& frames);
 
 /// Parses "K/N" (1 <= K <= N), the K-th of N chunks, into `k` and `n`; else
 /// false with `error` naming `option`.

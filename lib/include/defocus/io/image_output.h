@@ -34,11 +34,13 @@ void remove_temporaries_on_interrupt();
 bool check_output(const std::string& filename, const std::string& compression,
                   std::string& error);
 
-/// The first of `written` that is the same file as one of `read` (by device
-/// and inode, so links count), or "" when none would overwrite an input.
-/// Empty names and files that do not exist yet are skipped.
-std::string overwritten_input(const std::vector<std::string>& read,
-                              const std::vector<std::string>& written);
+/// Whether the files a run writes leave every file it reads alone: false
+/// when one of `written` is one of `read`, by file identity (device and
+/// inode, so symbolic and hard links count), with `error` naming both
+/// ("out.exr: would overwrite the input in.exr"). Empty names and files
+/// that do not exist yet are skipped.
+bool check_overwrites(const std::vector<std::string>& read,
+                      const std::vector<std::string>& written, std::string& error);
 
 /// Whether two names, existing or not, lead to the same file.
 bool same_path(const std::string& a, const std::string& b);

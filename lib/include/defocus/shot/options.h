@@ -67,6 +67,17 @@ enum class EdgeMode {
 bool parse_edge_mode(const std::string& name, EdgeMode& mode);
 const char* edge_mode_name(EdgeMode mode);
 
+/// What a sequence does about frames whose input files are missing.
+enum class MissingFrames {
+    Error,  ///< refuse the shot, naming the missing frames
+    Skip,   ///< render only the frames whose inputs are there
+    Hold,   ///< a missing frame reads the nearest earlier frame's inputs
+};
+
+/// "error", "skip" or "hold"; false for any other name.
+bool parse_missing_frames(const std::string& name, MissingFrames& missing);
+const char* missing_frames_name(MissingFrames missing);
+
 /// The data window of a result.
 enum class OutputWindow {
     Input,    ///< the input's data window, as oiiotool's filters keep it

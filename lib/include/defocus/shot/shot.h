@@ -28,6 +28,8 @@ struct Shot {
     /// Frames to render, e.g. "1001-1100", "1-99x2", "1,5,9-12" ("" = the
     /// frames the input patterns find on disk, or one frame for stills).
     std::string frames;
+    /// Frames of a sequence whose input files are missing.
+    MissingFrames missing_frames = MissingFrames::Error;
     ReadOptions read;
     LayeringOptions layering;
 

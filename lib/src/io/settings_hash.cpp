@@ -1,4 +1,4 @@
-#include <defocus/shot/settings_hash.h>
+#include <defocus/io/settings_hash.h>
 
 #include <filesystem>
 
@@ -6,6 +6,7 @@
 #include <OpenImageIO/hash.h>
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/io/frames.h>
 #include <defocus/version.h>
 
 namespace defocus {
@@ -28,6 +29,10 @@ std::string settings_hash(const Shot& shot, int frame)
     // One line per value, in the settings table's order: a canonical text.
     // Another version of defocus may render the same settings differently.
     std::string text = OIIO::Strutil::fmt::format("version={}\nframe={}\n", version(), frame);
+    // A frame held from another (its own inputs missing) is rendered again
+    // once its inputs are there.
+    if (const int source = source_frame(shot, frame); source != frame)
+        text += OIIO::Strutil::fmt::format("read from frame={}\n", source);
     for (const std::string& input : shot.inputs)
         text += "input=" + absolute_path(input) + "\n";
     for (const ShotSetting& s : shot_settings()) {

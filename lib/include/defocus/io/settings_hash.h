@@ -11,7 +11,8 @@ namespace defocus {
 
 /// 16 hex digits over the defocus version, the shot's inputs (as absolute
 /// paths), the value of every setting (given or defaulted; paths
-/// absolute), and the frame. The frame list and the memory limit are left
+/// absolute), the frame, and the frame it reads when it holds another's
+/// inputs (source_frame). The frame list and the memory limit are left
 /// out: they do not change a frame's pixels. The same settings give the
 /// same hash however they were given (options, a .dof in any key order,
 /// the Python module).

@@ -1,0 +1,138 @@
+// Hostile and careless use of the tools (round 3 of hostile testing): what
+// a run reads is never destroyed, a sequence never drops a frame quietly.
+#include <catch2/catch.hpp>
+
+#include <unistd.h>
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/strutil.h>
+
+#include "test_support.h"
+
+using namespace defocus_test;
+using namespace OIIO;
+using Strutil::fmt::format;
+
+namespace {
+
+const std::string defocus_bin = DEFOCUS_BIN;
+
+std::string file_bytes(const std::string& path)
+{
+    std::string bytes;
+    Filesystem::read_text_file(path, bytes);
+    return bytes;
+}
+
+/// A 16x16 image of the given channels, every pixel `pixel`.
+void write_flat(const std::string& path, const std::vector<std::string>& channels,
+                const std::vector<float>& pixel)
+{
+    ImageSpec spec(16, 16, int(channels.size()), TypeFloat);
+    spec.channelnames = channels;
+    ImageBuf image(spec);
+    ImageBufAlgo::fill(image, pixel);
+    REQUIRE(image.write(path));
+}
+
+bool same_pixels(const std::string& a, const std::string& b)
+{
+    const ImageBuf x = read_image(a), y = read_image(b);
+    return x.initialized() && y.initialized()
+           && ImageBufAlgo::compare(x, y, 0.0f, 0.0f).nfail == 0;
+}
+
+}  // namespace
+
+TEST_CASE("no run overwrites a file it reads: depth, mask, PSF, scene file, by any name")
+{
+    const std::string dir = scratch_dir("hostile_overwrite");
+    REQUIRE(Filesystem::copy(example_scene(), dir + "/scene.exr"));
+    REQUIRE(Filesystem::copy(std::string(EXAMPLES_DIR) + "/psf/blades7.exr", dir + "/mask.exr"));
+    REQUIRE(Filesystem::copy(std::string(EXAMPLES_DIR) + "/psf/disc_rim.exr", dir + "/psf.exr"));
+    write_flat(dir + "/rgba.exr", { "R", "G", "B", "A" }, { 0.5f, 0.5f, 0.5f, 1.0f });
+    write_flat(dir + "/depth.exr", { "Z" }, { 3.0f });
+    REQUIRE(link((dir + "/scene.exr").c_str(), (dir + "/hardlink.exr").c_str()) == 0);
+    REQUIRE(symlink("scene.exr", (dir + "/symlink.exr").c_str()) == 0);
+    std::string log;
+    REQUIRE(run(format("cd {} && {} scene.exr --focus 4 --save-scene shot.dof", dir, defocus_bin),
+                log) == 0);
+
+    const std::string cam = " --focal 50 --fstop 2 --focus 3";
+    const struct {
+        std::string command, written, read;
+    } cases[] = {
+        { defocus_bin + " rgba.exr --depth depth.exr -o depth.exr" + cam, "depth.exr", "depth.exr" },
+        { defocus_bin + " scene.exr --aperture mask:mask.exr -o mask.exr" + cam, "mask.exr",
+          "mask.exr" },
+        { defocus_bin + " scene.exr --psf-image psf.exr -o psf.exr" + cam, "psf.exr", "psf.exr" },
+        { defocus_bin + " shot.dof --save-scene shot.dof", "shot.dof", "shot.dof" },
+        { defocus_bin + " shot.dof -o out.exr --save-scene ./shot.dof", "./shot.dof",
+          "shot.dof" },
+        { defocus_bin + " scene.exr -o out.exr --preview scene.exr" + cam, "scene.exr",
+          "scene.exr" },
+        { defocus_bin + " scene.exr -o hardlink.exr" + cam, "hardlink.exr", "scene.exr" },
+        { defocus_bin + " symlink.exr -o scene.exr" + cam, "scene.exr", "symlink.exr" },
+        { std::string(LAYERIZE_BIN) + " scene.exr -o hardlink.exr" + cam, "hardlink.exr",
+          "scene.exr" },
+        { std::string(LAYERIZE_BIN) + " rgba.exr --depth depth.exr -o depth.exr" + cam,
+          "depth.exr", "depth.exr" },
+    };
+    for (const auto& c : cases) {
+        INFO(c.command);
+        const std::string before = file_bytes(dir + "/" + c.read);
+        CHECK(run("cd " + dir + " && " + c.command, log) != 0);
+        INFO(log);
+        CHECK(one_line_naming(log, format("{}: would overwrite the input {}", c.written, c.read)));
+        CHECK(file_bytes(dir + "/" + c.read) == before);
+        CHECK_FALSE(Filesystem::exists(dir + "/out.exr"));
+    }
+}
+
+TEST_CASE("a sequence with a frame missing is refused, or skips or holds it when told")
+{
+    const std::string dir = scratch_dir("hostile_missing_frames");
+    for (int frame : { 1001, 1002, 1004 })
+        REQUIRE(Filesystem::copy(example_scene(), format("{}/plate.{}.exr", dir, frame)));
+    const std::string cam = " --focal 50 --fstop 2 --focus 3 -q";
+    std::string log;
+    // Without --frames the span on disk is 1001-1004, and 1003 is a gap;
+    // with them, 1003 is named and not there.
+    for (const std::string& frames : { "", " --frames 1001-1004" }) {
+        INFO(frames);
+        CHECK(run(format("cd {} && {} plate.#.exr -o out.#.exr{}{}", dir, defocus_bin, frames, cam),
+                  log)
+              == 1);
+        CHECK(one_line_naming(log, "plate.1003.exr: no such file; frames with input files "
+                                   "missing: 1003"));
+        CHECK_FALSE(Filesystem::exists(dir + "/out.1001.exr"));
+    }
+    // Told to skip: the others are written, and the run says which it left.
+    REQUIRE(run(format("cd {} && {} plate.#.exr -o skip.#.exr --missing-frames skip --focal 50 "
+                       "--fstop 2 --focus 3",
+                       dir, defocus_bin),
+                log)
+            == 0);
+    CHECK(Strutil::contains(log, "frames with input files missing are not rendered "
+                                 "(--missing-frames skip): 1003"));
+    CHECK(Strutil::contains(log, "3 of 3 frames written"));
+    CHECK(Filesystem::exists(dir + "/skip.1004.exr"));
+    CHECK_FALSE(Filesystem::exists(dir + "/skip.1003.exr"));
+    // Told to hold, through a .dof: frame 1003 is frame 1002's plate.
+    REQUIRE(Filesystem::write_text_file(
+        dir + "/hold.dof", "{\"version\": 1, \"inputs\": [\"plate.#.exr\"], \"scene\": "
+                           "{\"missing_frames\": \"hold\"}, \"camera\": {\"focal\": 50, "
+                           "\"fstop\": 2, \"focus\": 3}}"));
+    REQUIRE(run(format("cd {} && {} hold.dof -o hold.#.exr -q", dir, defocus_bin), log) == 0);
+    CHECK(same_pixels(dir + "/hold.1003.exr", dir + "/hold.1002.exr"));
+    CHECK(same_pixels(dir + "/hold.1004.exr", dir + "/skip.1004.exr"));
+    // Once the frame is there, a rerun does not take the held frame for it.
+    REQUIRE(Filesystem::copy(example_scene(), dir + "/plate.1003.exr"));
+    REQUIRE(run(format("cd {} && {} hold.dof -o hold.#.exr --skip-existing -v", dir, defocus_bin),
+                log)
+            == 0);
+    CHECK(Strutil::contains(log, "rendering again: hold.1003.exr"));
+    CHECK(Strutil::contains(log, "skipped: hold.1002.exr"));
+}
