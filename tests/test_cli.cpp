@@ -1229,7 +1229,9 @@ TEST_CASE("an interrupted run leaves its targets as they were and no temporary f
         args.insert(args.end(), slow.begin(), slow.end());
         return start_defocus(args);
     };
-    for (const int signal_number : { SIGINT, SIGTERM }) {
+    // A closed terminal and a reader gone from a pipe end a run as Ctrl-C
+    // does: they used to leave the temporary file behind.
+    for (const int signal_number : { SIGINT, SIGTERM, SIGHUP, SIGPIPE }) {
         INFO("signal " << signal_number);
         const pid_t pid = slow_run({ scene, "-o", target });
         usleep(400000);
@@ -1363,23 +1365,35 @@ TEST_CASE("a full disk: a one-line error, no partial file, the old output and ot
         {mount}
         D='{defocus}'
         $D small.exr -o disk/old.exr --focus 3 -q || echo "setup failed"
+        $D small.exr -o disk/old.sgi --focus 3 -q || echo "setup failed"
+        $D small.exr --focus 3 --save-scene disk/shot.dof -q || echo "setup failed"
         cp disk/old.exr old_copy.exr
+        cp disk/old.sgi old_copy.sgi
+        cp disk/shot.dof shot_copy.dof
         trap '' XFSZ
         {limit}
-        for out in old.exr new.png new.jpg; do
+        for out in old.exr new.png new.jpg old.sgi; do
             $D big.exr -o disk/$out --focus 3 -q 2>err.txt; echo "$out exit $?"; cat err.txt
         done
         $D big.exr -o disk/preview.exr --preview disk/preview.png --focus 3 -q 2>err.txt
         echo "preview exit $?"; cat err.txt
         cmp -s disk/old.exr old_copy.exr && echo "old output intact"
+        cmp -s disk/old.sgi old_copy.sgi && echo "old SGI intact"
         rm -f disk/preview.exr
+        {fill}
+        $D small.exr --focus 3 --fstop 2 --save-scene disk/shot.dof -q 2>err.txt
+        echo "scene exit $?"; cat err.txt
+        cmp -s disk/shot.dof shot_copy.dof && echo "old scene intact"
+        rm -f disk/fill
         $D 'f.#.exr' -o 'disk/seq.#.exr' --focus 3 -q 2>err.txt; echo "sequence exit $?"
         cat err.txt
         ls -a disk | tr '\n' ' '; echo
     )",
         fmt::arg("dir", dir), fmt::arg("defocus", defocus_bin),
         fmt::arg("mount", namespaces ? "mount -t tmpfs -o size=16k tmpfs disk || exit 1" : ""),
-        fmt::arg("limit", namespaces ? "" : "ulimit -f 16"));
+        fmt::arg("limit", namespaces ? "" : "ulimit -f 16"),
+        // A full disk for a small text file; past a size limit it fits.
+        fmt::arg("fill", namespaces ? "cat big.exr > disk/fill 2>/dev/null" : ""));
     REQUIRE(Filesystem::copy(small, dir + "/small.exr"));
     REQUIRE(Filesystem::copy(small, dir + "/f.0001.exr"));
     REQUIRE(Filesystem::copy(dir + "/big.exr", dir + "/f.0002.exr"));
@@ -1387,16 +1401,22 @@ TEST_CASE("a full disk: a one-line error, no partial file, the old output and ot
     REQUIRE(run((namespaces ? "unshare -rm bash " : "bash ") + dir + "/full.sh", log) == 0);
     INFO(log);
     CHECK_FALSE(Strutil::contains(log, "setup failed"));
-    for (const char* out : { "old.exr", "new.png", "new.jpg" }) {
+    for (const char* out : { "old.exr", "new.png", "new.jpg", "old.sgi" }) {
         CHECK(Strutil::contains(log, std::string(out) + " exit 1\ndefocus: disk/" + out
                                          + ": cannot write"));
     }
     CHECK(Strutil::contains(log, "preview exit 1\ndefocus: disk/preview.png: cannot write"));
     CHECK(Strutil::contains(log, "old output intact"));
+    CHECK(Strutil::contains(log, "old SGI intact"));
+    if (namespaces) {
+        // The scene file used to be truncated to nothing, with exit 0.
+        CHECK(Strutil::contains(log, "scene exit 1\ndefocus: disk/shot.dof: cannot write"));
+        CHECK(Strutil::contains(log, "old scene intact"));
+    }
     CHECK(Strutil::contains(log, "sequence exit 1\n"));
     CHECK(Strutil::contains(log, "1 of 2 frames written; failed: 2"));
     // Nothing half-written: the old output, frame 1, and no temporary.
-    CHECK(Strutil::contains(log, ". .. old.exr seq.0001.exr \n"));
+    CHECK(Strutil::contains(log, ". .. old.exr old.sgi seq.0001.exr shot.dof \n"));
 }
 
 TEST_CASE("two processes writing one output leave one complete file, never a mix")

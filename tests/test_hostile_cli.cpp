@@ -2,6 +2,7 @@
 // a run reads is never destroyed, a sequence never drops a frame quietly.
 #include <catch2/catch.hpp>
 
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <OpenImageIO/filesystem.h>
@@ -135,4 +136,93 @@ TEST_CASE("a sequence with a frame missing is refused, or skips or holds it when
             == 0);
     CHECK(Strutil::contains(log, "rendering again: hold.1003.exr"));
     CHECK(Strutil::contains(log, "skipped: hold.1002.exr"));
+}
+
+namespace {
+
+std::string this_host()
+{
+    char name[256] = {};
+    gethostname(name, sizeof name - 1);
+    return Strutil::replace(name, ".", "_", true);
+}
+
+/// Runs `argv` in `dir` as a process that first plants, where a temporary
+/// file of `target` was once named (".TARGET.HOST.PID.tmp.EXT", which its
+/// own process id made predictable), a symbolic link to `victim`. Its exit
+/// status.
+int run_with_planted_link(const std::string& dir, const std::string& target,
+                          const std::string& victim, std::vector<std::string> argv)
+{
+    const std::string prefix = format("{}/.{}.{}.", dir, target, this_host());
+    const std::string suffix = ".tmp" + Filesystem::extension(target);
+    std::vector<char*> args;
+    for (std::string& a : argv)
+        args.push_back(a.data());
+    args.push_back(nullptr);
+    const pid_t pid = fork();
+    if (pid == 0) {
+        // Only async-signal-safe calls between fork and exec.
+        char link_path[4096];
+        char digits[16];
+        int n = 0;
+        for (pid_t p = getpid(); p > 0; p /= 10)
+            digits[n++] = char('0' + p % 10);
+        size_t at = 0;
+        for (char c : prefix)
+            link_path[at++] = c;
+        while (n > 0)
+            link_path[at++] = digits[--n];
+        for (char c : suffix)
+            link_path[at++] = c;
+        link_path[at] = '\0';
+        if (symlink(victim.c_str(), link_path) != 0 || chdir(dir.c_str()) != 0)
+            _exit(126);
+        execv(args[0], args.data());
+        _exit(127);
+    }
+    int status = 0;
+    waitpid(pid, &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+}  // namespace
+
+TEST_CASE("a symbolic link planted where a temporary file goes is never written through")
+{
+    const std::string dir = scratch_dir("hostile_planted_link");
+    REQUIRE(Filesystem::copy(example_scene(), dir + "/scene.exr"));
+    const std::string victim = dir + "/victim.txt";
+    for (const std::string& target : { "out.exr", "out.png", "out.tif", "out.sgi", "shot.dof" }) {
+        INFO(target);
+        REQUIRE(Filesystem::write_text_file(victim, "another user's precious file"));
+        std::vector<std::string> argv = { defocus_bin, "scene.exr", "--focus", "3", "-q" };
+        if (target == "shot.dof")
+            argv.insert(argv.end(), { "--save-scene", target });
+        else
+            argv.insert(argv.end(), { "-o", target });
+        CHECK(run_with_planted_link(dir, target, victim, argv) == 0);
+        CHECK(file_bytes(victim) == "another user's precious file");
+        // The target is a file of its own, complete.
+        CHECK(Filesystem::is_regular(dir + "/" + target));
+        if (target != "shot.dof")
+            CHECK(read_image(dir + "/" + target).initialized());
+    }
+}
+
+TEST_CASE("past the file size limit a write is a one-line error, and leaves no temporary file")
+{
+    const std::string dir = scratch_dir("hostile_file_size_limit");
+    REQUIRE(Filesystem::copy(example_scene(), dir + "/scene.exr"));
+    std::string log;
+    // SIGXFSZ used to end the process, its temporary file left behind.
+    CHECK(run(format("cd {} && ulimit -f 16 && {} scene.exr -o out.exr --focus 3 "
+                     "--compression none -q",
+                     dir, defocus_bin),
+              log)
+          == 1);
+    CHECK(one_line_naming(log, "out.exr: cannot write"));
+    std::vector<std::string> entries;
+    Filesystem::get_directory_entries(dir, entries);
+    CHECK(entries.size() == 1);  // the scene alone
 }

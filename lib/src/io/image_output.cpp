@@ -1,7 +1,5 @@
 #include <defocus/io/image_output.h>
 
-#include <fcntl.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -9,13 +7,14 @@
 #include <cstring>
 #include <filesystem>
 #include <map>
-#include <set>
 #include <vector>
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
+
+#include <defocus/io/image_input.h>
 
 #include "io/half_pixels.h"
 #include "io/temporary_files.h"
@@ -39,34 +38,6 @@ const std::map<std::string, std::vector<std::string>>& compressions()
         { "jpeg", { "jpeg" } },
     };
     return names;
-}
-
-/// Writes `bytes` to `path`, every write checked; false with `error` the
-/// system's reason (a full disk, a file size limit).
-bool write_bytes(const std::string& path, const std::vector<unsigned char>& bytes,
-                 std::string& error)
-{
-    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
-    if (fd < 0) {
-        error = std::strerror(errno);
-        return false;
-    }
-    for (size_t done = 0; done < bytes.size();) {
-        const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n <= 0) {
-            error = std::strerror(n < 0 ? errno : ENOSPC);
-            ::close(fd);
-            return false;
-        }
-        done += size_t(n);
-    }
-    if (::close(fd) != 0) {
-        error = std::strerror(errno);
-        return false;
-    }
-    return true;
 }
 
 }  // namespace
@@ -164,7 +135,29 @@ bool write_atomic(const std::string& filename,
                   const std::function<bool(ImageOutput&, const std::string&)>& write,
                   std::string& error)
 {
-    TemporaryFile temporary(filename);
+    auto out = ImageOutput::create(filename);
+    if (!out) {
+        const std::string why = OIIO::geterror();  // geterror() clears it: read once
+        error = Strutil::fmt::format("{}: {}", filename,
+                                     why.empty() ? "no format writes this file type" : why);
+        return false;
+    }
+    // OpenEXR writes into the file created for it. OpenImageIO's other
+    // writers do not report a failed write (on a full disk PNG left a
+    // truncated file and said nothing, and libjpeg ended the process), so
+    // those that take an IOProxy encode in memory, written here with every
+    // write checked. TIFF (whose IOProxy output OpenImageIO 2.4 writes
+    // without its image length) and the writers without one write by name,
+    // in a folder of their own; TIFF reports a failed write, the others'
+    // files are read back whole.
+    const std::string format = out->format_name();
+    const bool by_name = format == "tiff" || !out->supports("ioproxy");
+    TemporaryFile temporary(filename, by_name ? TemporaryFile::Kind::InFolder
+                                              : TemporaryFile::Kind::File);
+    if (!temporary.created()) {
+        error = temporary.creation_error();
+        return false;
+    }
     const std::string& tmp = temporary.path();
     // Errors name the user's file, never the temporary one.
     auto fail = [&](const std::string& why) {
@@ -173,28 +166,45 @@ bool write_atomic(const std::string& filename,
             Strutil::replace(Strutil::replace(why, tmp, filename, true), "\n", " ", true));
         return false;
     };
-    auto out = ImageOutput::create(filename);
-    if (!out) {
-        const std::string why = OIIO::geterror();  // geterror() clears it: read once
-        return fail(why.empty() ? "no format writes this file type" : why);
-    }
-    // OpenEXR and TIFF report a write that fails. OpenImageIO's other
-    // writers do not: on a full disk PNG left a truncated file and said
-    // nothing, and libjpeg ended the process. Those files (small, 8 or 16
-    // bits) are encoded in memory and written here, every write checked.
-    const std::string format = out->format_name();
-    Filesystem::IOVecOutput memory;
-    const bool in_memory =
-        format != "openexr" && format != "tiff" && out->supports("ioproxy")
-        && out->set_ioproxy(&memory);
-    if (!write(*out, tmp) || !out->close()) {
+    auto written = [&]() {
+        if (write(*out, tmp) && out->close())
+            return true;
         const std::string why = out->geterror();
         return fail(why.empty() ? "cannot write" : why);
-    }
-    out.reset();
+    };
     std::string why;
-    if (in_memory && !write_bytes(tmp, memory.buffer(), why))
-        return fail("cannot write: " + why);
+    if (format == "openexr") {
+        FILE* file = ::fdopen(::dup(temporary.descriptor()), "wb");
+        if (!file)
+            return fail("cannot write: " + std::string(std::strerror(errno)));
+        bool ok = false;
+        {
+            Filesystem::IOFile io(file, Filesystem::IOProxy::Write);
+            ok = out->set_ioproxy(&io) && written();
+            out.reset();
+        }
+        const bool flushed = std::fflush(file) == 0 && !std::ferror(file);
+        const std::string flush_error = flushed ? "" : std::strerror(errno);
+        std::fclose(file);
+        if (!ok)
+            return false;
+        if (!flushed)
+            return fail("cannot write: " + flush_error);
+    } else if (!by_name) {
+        Filesystem::IOVecOutput memory;
+        if (!out->set_ioproxy(&memory) || !written())
+            return false;
+        out.reset();
+        if (!temporary.write(memory.buffer().data(), memory.buffer().size(), why))
+            return fail("cannot write: " + why);
+    } else {
+        if (!written())
+            return false;
+        out.reset();
+        ImageBuf back;
+        if (format != "tiff" && !read_image_file(tmp, "the file written", back, why))
+            return fail("cannot write: it does not read back complete");
+    }
     return temporary.commit(error);
 }
 
@@ -202,8 +212,13 @@ bool write_text_atomic(const std::string& filename, const std::string& text,
                        std::string& error)
 {
     TemporaryFile temporary(filename);
-    if (!Filesystem::write_text_file(temporary.path(), text)) {
-        error = filename + ": cannot write";
+    std::string why;
+    if (!temporary.created()) {
+        error = temporary.creation_error();
+        return false;
+    }
+    if (!temporary.write(text.data(), text.size(), why)) {
+        error = filename + ": cannot write: " + why;
         return false;
     }
     return temporary.commit(error);
