@@ -421,6 +421,10 @@ PYBIND11_MODULE(_defocus, m)
         const bool current = written_with_settings(path, hash, why);
         return py::make_tuple(current, why);
     });
+    m.def("write_text_atomic", [](const std::string& path, const std::string& text) {
+        std::string error;
+        check(write_text_atomic(path, text, error), error);
+    });
     m.def("render", &render);
     m.def("focus_map", &focus_map);
     m.def("render_to_file", &render_to_file);

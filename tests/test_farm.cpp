@@ -127,3 +127,38 @@ TEST_CASE("an output is current only when it records the same settings hash")
     CHECK_FALSE(written_with_settings(dir + "/broken.exr", "0123456789abcdef", why));
     CHECK(OIIO::Strutil::contains(why, "cannot be read"));
 }
+
+TEST_CASE("an output cut short is not current, whatever its header says")
+{
+    const std::string dir = scratch_dir("farm_incomplete");
+    const std::string hash = "0123456789abcdef";
+    OIIO::ImageBuf image(OIIO::ImageSpec(64, 64, 4, OIIO::TypeFloat));
+    image.specmod().attribute("defocus:settingsHash", hash);
+    std::string error, why;
+    // Scanline and tiled EXRs (with every mipmap level), and a PNG.
+    OIIO::ImageBuf tiled = image;
+    tiled.specmod().tile_width = tiled.specmod().tile_height = 16;
+    tiled.specmod().attribute("openexr:levelmode", 1);
+    REQUIRE(write_image_atomic(image, dir + "/lines.exr", OIIO::TypeHalf, "none", error));
+    REQUIRE(tiled.write(dir + "/tiles.exr"));
+    REQUIRE(write_image_atomic(image, dir + "/image.png", OIIO::TypeUInt8, "", error));
+    for (const std::string name : { "lines.exr", "tiles.exr", "image.png" }) {
+        INFO(name);
+        const std::string path = dir + "/" + name;
+        REQUIRE(written_with_settings(path, hash, why));
+        std::string bytes;
+        REQUIRE(OIIO::Filesystem::read_text_file(path, bytes));
+        // A task killed as it copied the frame, or a file system that lost
+        // its end: the header is there, the last chunk is not whole. (An
+        // EXR's chunks are checked against the file; other formats are
+        // read whole, and PNG reads complete without its last 12 bytes, the
+        // end marker.)
+        for (size_t cut : { size_t(13), size_t(100) }) {
+            REQUIRE(OIIO::Filesystem::write_text_file(path, bytes.substr(0, bytes.size() - cut)));
+            CHECK_FALSE(written_with_settings(path, hash, why));
+            // (PNG keeps its metadata at the end: cut, it may lose the hash.)
+            if (OIIO::Strutil::ends_with(name, ".exr"))
+                CHECK(OIIO::Strutil::starts_with(why, "is incomplete ("));
+        }
+    }
+}

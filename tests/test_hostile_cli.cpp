@@ -226,3 +226,20 @@ TEST_CASE("past the file size limit a write is a one-line error, and leaves no t
     Filesystem::get_directory_entries(dir, entries);
     CHECK(entries.size() == 1);  // the scene alone
 }
+
+TEST_CASE("a frame cut short is rendered again, not skipped as done")
+{
+    const std::string dir = scratch_dir("hostile_truncated_frame");
+    REQUIRE(Filesystem::copy(example_scene(), dir + "/scene.exr"));
+    const std::string args = " scene.exr --frames 1-3 -o out.#.exr --focus 1:3,3:4";
+    std::string log;
+    REQUIRE(run(format("cd {} && {}{} -q", dir, defocus_bin, args), log) == 0);
+    const std::string whole = file_bytes(dir + "/out.0002.exr");
+    // A farm task killed as it copied the frame: the header is all there.
+    REQUIRE(Filesystem::write_text_file(dir + "/out.0002.exr", whole.substr(0, whole.size() - 50)));
+    REQUIRE(run(format("cd {} && {}{} --skip-existing -v", dir, defocus_bin, args), log) == 0);
+    CHECK(Strutil::contains(log, "frame 2: rendering again: out.0002.exr is incomplete ("));
+    CHECK(Strutil::contains(log, "frame 1: skipped: out.0001.exr is written with these settings"));
+    CHECK(Strutil::contains(log, "1 of 1 frames written (2 more skipped"));
+    CHECK(file_bytes(dir + "/out.0002.exr") == whole);
+}

@@ -104,8 +104,8 @@ bool parse_command_line(int argc, const char* argv[], CommandLine& cl, bool& hel
         .action(shot_args.store_into(cl.chunk));
     ap.arg("--skip-existing")
         .help("Skip frames whose output was written with the same settings by this version "
-              "of defocus (the output records them: defocus:settingsHash); render the others, "
-              "-v says why")
+              "of defocus (the output records them: defocus:settingsHash) and is whole; "
+              "render the others, -v says why")
         .action([&](cspan<const char*>) { cl.skip_existing = true; });
     shot_args.add_options(ap, OptionGroup::Camera);
     shot_args.add_options(ap, OptionGroup::Aperture);

@@ -21,13 +21,15 @@ records a hash of its settings (defocus:settingsHash), so a task renders
 only what is missing.
 
 Memory per task is the first frame's measured peak times the frames a task
-runs at once (--cpus), unless --mem gives it. --dry-run prints the batch
-scripts instead of submitting them.
+runs at once (--cpus), unless --mem gives it. --dry-run prints what would
+be written and submitted, and writes, renders and submits nothing. A
+resubmitted chunk logs to chunk_K.attemptA.log, keeping its earlier logs.
 """
 import argparse
 import json
 import math
 import os
+import re
 import resource
 import shlex
 import subprocess
@@ -47,16 +49,36 @@ def fail(message):
     sys.exit(f"defocus-submit: {message}")
 
 
+def sbatch_value(value):
+    """A value as an #SBATCH line must hold it for Slurm to read it as
+    given: quoted when it has more than plain characters (Slurm reads
+    quotes and backslashes there, and an unquoted '#' starts a comment)."""
+    if re.fullmatch(r"[A-Za-z0-9._/:@+=,%-]+", value):
+        return value
+    return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def slurm_pattern(text):
+    """Text as itself in a Slurm file name pattern, where '%' is special."""
+    return text.replace("%", "%%")
+
+
 class Slurm:
     """Slurm through sbatch. A scheduler here is what submits an array job
     (one task per chunk, the task's chunk number in an environment
     variable) and a job that runs after it: OpenCue (a layer of frames
     1-CHUNKS, chunk size 1, #IFRAME# as K), Deadline (a job of frames
     1-CHUNKS, <STARTFRAME> as K) or Tractor (a task per chunk) take the same
-    two commands."""
+    two commands. Every value reaches the scripts quoted: for Slurm on the
+    #SBATCH lines (sbatch_value), for the shell in the commands
+    (shlex.quote), and none holds a control character (main refuses them)."""
 
     name = "slurm"
     task_variable = "$SLURM_ARRAY_TASK_ID"
+
+    def options(self, job):
+        lines = [f"#SBATCH --partition={sbatch_value(job['partition'])}"] if job["partition"] else []
+        return lines + ([f"#SBATCH --time={sbatch_value(job['time'])}"] if job["time"] else [])
 
     def array_script(self, job, tasks, command):
         lines = ["#!/bin/bash",
@@ -64,10 +86,8 @@ class Slurm:
                  f"#SBATCH --array={tasks}",
                  f"#SBATCH --cpus-per-task={job['cpus']}",
                  f"#SBATCH --mem={job['mem_mb']}M",
-                 f"#SBATCH --output={job['dir']}/chunk_%a.log"]
-        lines += [f"#SBATCH --partition={job['partition']}"] if job["partition"] else []
-        lines += [f"#SBATCH --time={job['time']}"] if job["time"] else []
-        return "\n".join(lines + ["set -eu", "exec " + command]) + "\n"
+                 f"#SBATCH --output={sbatch_value(slurm_pattern(job['dir']) + '/chunk_%a' + job['log_suffix'] + '.log')}"]
+        return "\n".join(lines + self.options(job) + ["set -eu", "exec " + command]) + "\n"
 
     def after_script(self, job, after_id, command):
         lines = ["#!/bin/bash",
@@ -75,9 +95,8 @@ class Slurm:
                  f"#SBATCH --dependency=afterany:{after_id}",
                  "#SBATCH --cpus-per-task=1",
                  "#SBATCH --mem=256M",
-                 f"#SBATCH --output={job['dir']}/check.log"]
-        lines += [f"#SBATCH --partition={job['partition']}"] if job["partition"] else []
-        return "\n".join(lines + ["exec " + command]) + "\n"
+                 f"#SBATCH --output={sbatch_value(slurm_pattern(job['dir']) + '/check.log')}"]
+        return "\n".join(lines + self.options(job) + ["exec " + command]) + "\n"
 
     def submit(self, script):
         run = subprocess.run(["sbatch", "--parsable"], input=script, text=True,
@@ -91,13 +110,14 @@ SCHEDULERS = {"slurm": Slurm}
 
 
 def parse_size_mb(text):
+    """A size such as 4G, 800M or 1.5T in MB (a bare number is MB, as Slurm
+    reads it): a positive decimal number, at most an exabyte."""
     units = {"": 1, "K": 1 / 1024, "M": 1, "G": 1024, "T": 1024 * 1024}
-    number, unit = text.rstrip("KMGTkmgtBb"), text[len(text.rstrip("KMGTkmgtBb")):].upper()
-    unit = unit.rstrip("B")
-    try:
-        return max(1, math.ceil(float(number) * units[unit]))
-    except (ValueError, KeyError):
+    size = re.fullmatch(r"([0-9]+(?:\.[0-9]*)?|\.[0-9]+)([KMGT]?)B?", text.strip(), re.IGNORECASE)
+    mb = float(size[1]) * units[size[2].upper()] if size else 0
+    if not 0 < mb <= 2 ** 40:
         fail(f"--mem: '{text}' is not a size (e.g. 4G, 800M)")
+    return max(1, math.ceil(mb))
 
 
 def first_frame_peak_mb(shot_file, frame, cpus):
@@ -136,8 +156,14 @@ def ranges(frames):
     return ",".join(out)
 
 
+def log_path(job, k):
+    """The log of chunk K's latest task."""
+    return job.get("logs", {}).get(str(k), os.path.join(job["dir"], f"chunk_{k}.log"))
+
+
 def check(job_dir):
-    """The final job: every frame there, written with the shot's settings."""
+    """The final job: every frame there, whole, written with the shot's
+    settings."""
     with open(os.path.join(job_dir, "job.json")) as f:
         job = json.load(f)
     shot = defocus.Shot.load(os.path.join(job_dir, "shot.dof"))
@@ -148,11 +174,33 @@ def check(job_dir):
     if not failed:
         print(f"defocus-submit: {summary}")
         return 0
-    chunks = ", ".join(f"chunk {k} (log {job_dir}/chunk_{k}.log): frames "
+    chunks = ", ".join(f"chunk {k} (log {log_path(job, k)}): frames "
                        f"{ranges([f for f, _ in v])}" for k, v in sorted(missing.items()))
     print(f"defocus-submit: {summary}; failed: {ranges(failed)} -- {chunks}; "
           f"resubmit them with defocus-submit --resume and the same arguments")
+    for frame, why in sorted(f for frames in missing.values() for f in frames)[:10]:
+        print(f"  frame {frame}: {defocus.frame_path(job['output'], frame)} {why}")
     return 1
+
+
+def refuse_control_characters(arguments):
+    """A newline in a value would start a line of its own in a batch script,
+    which the scheduler runs: no argument may hold a control character."""
+    for argument in arguments:
+        if any(ord(c) < 32 or ord(c) == 127 for c in argument):
+            fail(f"{argument!r}: an argument holds a control character")
+
+
+def job_name(given, output):
+    """The job's name, which also names its folder: letters, digits, '.',
+    '_' and '-', and not '.' or '..'."""
+    if given is not None:
+        if not re.fullmatch(r"[A-Za-z0-9._-]+", given) or set(given) == {"."}:
+            fail(f"--job-name: '{given}' is not a name of letters, digits, '.', '_' and '-' "
+                 "(it names the job's folder)")
+        return given
+    stem = os.path.basename(output).split(".")[0].strip("#@%")
+    return re.sub(r"[^A-Za-z0-9._-]", "_", stem).lstrip(".") or "defocus"
 
 
 def main():
@@ -177,7 +225,8 @@ def main():
                       help="the shot, logs and job description "
                            "(default: OUTPUT's folder/defocus-farm/JOB_NAME)")
     farm.add_argument("--dry-run", action="store_true",
-                      help="print the batch scripts instead of submitting them")
+                      help="print what would be written and submitted, the batch scripts "
+                           "included; write, render and submit nothing")
     farm.add_argument("--resume", action="store_true",
                       help="submit only the chunks with frames missing or written with "
                            "other settings")
@@ -185,6 +234,7 @@ def main():
                       help="check a submitted job's frames (what its final job runs)")
     farm.add_argument("-o", dest="output", metavar="OUTPUT", help="output frame pattern")
     farm.add_argument("--version", action="version", version=f"defocus-submit {defocus.__version__}")
+    refuse_control_characters(sys.argv[1:])
     args, shot_args = parser.parse_known_args()
 
     if args.check:
@@ -199,31 +249,44 @@ def main():
         fail("--cpus: at least 1")
     if not shot_args:
         fail("no input: give the inputs or a .dof and the defocus options")
+    mem_mb = parse_size_mb(args.mem) if args.mem else None
     output = os.path.abspath(args.output)
     if not os.path.isdir(os.path.dirname(output)):
         fail(f"{args.output}: the folder {os.path.dirname(output)} does not exist")
-    name = args.job_name or os.path.basename(output).split(".")[0].strip("#@%") or "defocus"
+    name = job_name(args.job_name, output)
     job_dir = os.path.abspath(args.job_dir or os.path.join(os.path.dirname(output),
                                                            "defocus-farm", name))
-    os.makedirs(job_dir, exist_ok=True)
-    shot_file = os.path.join(job_dir, "shot.dof")
-    run = subprocess.run([DEFOCUS, *shot_args, "--save-scene", shot_file, "-q"],
-                         capture_output=True, text=True)
-    if run.returncode != 0:
-        fail(run.stderr.strip().removeprefix("defocus: "))
-    shot = defocus.Shot.load(shot_file)
+    with tempfile.TemporaryDirectory() as scratch:
+        # defocus reads the options into the shot; a dry run keeps it aside.
+        shot_file = os.path.join(scratch if args.dry_run else job_dir, "shot.dof")
+        if not args.dry_run:
+            os.makedirs(job_dir, exist_ok=True)
+        run = subprocess.run([DEFOCUS, *shot_args, "--save-scene", shot_file, "-q"],
+                             capture_output=True, text=True)
+        if run.returncode != 0:
+            fail(run.stderr.strip().removeprefix("defocus: "))
+        # The frames, every one of whose inputs is there (the shot's
+        # missing-frames setting decides what a gap does).
+        shot = defocus.Shot.load(shot_file)
+        return submit(args, shot, os.path.join(job_dir, "shot.dof"), shot_file, name, job_dir,
+                      output, mem_mb)
+
+
+def submit(args, shot, shot_file, read_from, name, job_dir, output, mem_mb):
     frames = shot.frames_to_render()
-    # Refused here rather than by every task on the farm.
-    for frame in sorted({frames[0], frames[-1]}):
-        for pattern in shot.inputs:
-            path = defocus.frame_path(pattern, frame)
-            if not os.path.exists(path):
-                fail(f"{path}: no such file (frame {frame})")
     chunks = math.ceil(len(frames) / args.chunk_size)
     scheduler = SCHEDULERS[args.scheduler]()
+    job_file = os.path.join(job_dir, "job.json")
+    earlier = {}
+    if args.resume and os.path.exists(job_file):
+        with open(job_file) as f:
+            earlier = json.load(f)
+    attempt = earlier.get("attempt", 1) + 1 if args.resume else 1
     job = {"name": name, "dir": job_dir, "output": output, "frames": frames, "chunks": chunks,
            "cpus": args.cpus, "partition": args.partition, "time": args.time,
-           "scheduler": scheduler.name}
+           "scheduler": scheduler.name, "attempt": attempt,
+           "log_suffix": f".attempt{attempt}" if attempt > 1 else "",
+           "logs": dict(earlier.get("logs", {}))}
 
     tasks = list(range(1, chunks + 1))
     if args.resume:
@@ -231,28 +294,36 @@ def main():
         if not tasks:
             print(f"defocus-submit: nothing to resume: all {len(frames)} frames are written")
             return 0
+    # Each task's log is new: a resubmitted chunk keeps the logs of its
+    # earlier attempts.
+    for k in tasks:
+        job["logs"][str(k)] = os.path.join(job_dir, f"chunk_{k}{job['log_suffix']}.log")
     first = defocus.chunk_frames(frames, tasks[0], chunks)[0]
-    if args.mem:
-        job["mem_mb"] = parse_size_mb(args.mem)
+    if mem_mb:
+        job["mem_mb"] = mem_mb
+    elif args.dry_run:
+        job["mem_mb"] = f"<measured from frame {first}>"
     else:
         # Frames in flight each take about one frame's peak; a margin for the
         # process and the scheduler's own accounting.
-        peak = first_frame_peak_mb(shot_file, first, args.cpus)
+        peak = first_frame_peak_mb(read_from, first, args.cpus)
         job["mem_mb"] = math.ceil(peak * min(args.cpus, args.chunk_size) * 1.25 + 256)
-    with open(os.path.join(job_dir, "job.json"), "w") as f:
-        json.dump(job, f, indent=2)
 
     task_command = " ".join([
         shlex.quote(DEFOCUS), shlex.quote(shot_file), "-o", shlex.quote(output),
         "--chunk", f'"{scheduler.task_variable}/{chunks}"', "--skip-existing",
-        "--threads", str(args.cpus), "--memory-limit", f"{job['mem_mb']}M", "-v"])
+        "--threads", str(args.cpus), "--memory-limit", shlex.quote(f"{job['mem_mb']}M"), "-v"])
     check_command = " ".join([shlex.quote(os.path.join(HERE, "defocus-submit")), "--check",
                               "--job-dir", shlex.quote(job_dir)])
     array = scheduler.array_script(job, ",".join(map(str, tasks)), task_command)
     if args.dry_run:
+        print(f"defocus-submit: dry run: would write {shot_file} and {job_file}, and submit "
+              f"{len(tasks)} of {chunks} chunk(s) of at most {args.chunk_size} frames "
+              f"({len(frames)} frames):")
         print(array)
         print(scheduler.after_script(job, "<array job id>", check_command))
         return 0
+    defocus._defocus.write_text_atomic(job_file, json.dumps(job, indent=2) + "\n")
     array_id = scheduler.submit(array)
     check_id = scheduler.submit(scheduler.after_script(job, array_id, check_command))
     with open(os.path.join(job_dir, "submitted.log"), "a") as f:

@@ -10,8 +10,9 @@ stopped by their PIDs at the end. Then:
  2. it is submitted again, one chunk's task is cancelled (scancel) after its
     first frame, and the final job must report that chunk's missing frames;
     --resume must submit only that chunk, render only the missing frames
-    (its log and the files' mtimes say so) and leave every frame identical
-    to the single-machine run again.
+    (its new log, chunk_3.attempt2.log, and the files' mtimes say so), keep
+    every earlier log as it was, and leave every frame identical to the
+    single-machine run again.
 When Slurm cannot start here, the test prints why and exits 77 (skipped).
 
     slurm_test.py BIN_DIR SCRATCH_DIR    (PYTHONPATH: the defocus package)
@@ -234,7 +235,7 @@ def main():
     if f"{24 - len(missing)} of 24 frames written; failed: " not in check_log \
             or "chunk 3" not in check_log:
         fail(f"the final job did not report chunk 3's frames: {check_log}")
-    logs = {k: open(os.path.join(job2, f"chunk_{k}.log")).read() for k in (1, 2, 4)}
+    logs = {k: open(os.path.join(job2, f"chunk_{k}.log")).read() for k in (1, 2, 3, 4)}
     out, ids = submit("--resume", *args)
     if "1 of 4 chunk(s)" not in out:
         fail(f"--resume should submit chunk 3 alone: {out}")
@@ -244,7 +245,8 @@ def main():
     for f, mtime in written.items():
         if os.stat(os.path.join(farm2, f"f.{f:04d}.exr")).st_mtime_ns != mtime:
             fail(f"frame {f} was written before the cancel and rendered again")
-    log3 = open(os.path.join(job2, "chunk_3.log")).read()
+    # The resubmitted chunk logs anew; the cancelled attempt's log is kept.
+    log3 = open(os.path.join(job2, "chunk_3.attempt2.log")).read()
     rendered = sorted(int(m) for m in re.findall(r"frame (\d+)(?: \(\d+/\d+\))?: wrote", log3))
     skipped = sorted(int(m) for m in re.findall(r"frame (\d+): skipped", log3))
     if rendered != missing or skipped != [f for f in chunk3 if f not in missing]:
@@ -252,7 +254,7 @@ def main():
              f"missing were {missing}\n{log3}")
     for k, log in logs.items():
         if open(os.path.join(job2, f"chunk_{k}.log")).read() != log:
-            fail(f"chunk {k} ran again on --resume")
+            fail(f"chunk {k}'s log changed on --resume")
     same_frames(farm2, single, frames)
     print(f"chunk 3 cancelled with frames {missing} missing; --resume rendered only those: "
           "all 24 bit-identical to one machine")

@@ -108,12 +108,27 @@ def test_a_focus_pull_sequence_matches_the_commands_frames(example, tmp_path):
 def test_a_bad_frame_is_reported_after_the_others_are_written(tmp_path, example):
     for f in (1, 2, 4):
         os.symlink(example, tmp_path / f"in.{f:04d}.exr")
+    (tmp_path / "in.0003.exr").write_text("not an image")
     shot = defocus.Shot(inputs=[tmp_path / "in.#.exr"], frames="1-4", **CAMERA)
     with pytest.raises(defocus.Error, match=r"^3 of 4 frames written; failed: 3; frame 3: .*"
-                                            r"in\.0003\.exr: no such file"):
+                                            r"in\.0003\.exr: "):
         defocus.render_sequence(shot, tmp_path / "out.#.exr")
     assert sorted(os.listdir(tmp_path)) == sorted(
-        [f"in.{f:04d}.exr" for f in (1, 2, 4)] + [f"out.{f:04d}.exr" for f in (1, 2, 4)])
+        [f"in.{f:04d}.exr" for f in range(1, 5)] + [f"out.{f:04d}.exr" for f in (1, 2, 4)])
+
+
+def test_a_missing_frame_is_refused_before_any_is_rendered(tmp_path, example):
+    for f in (1, 2, 4):
+        os.symlink(example, tmp_path / f"in.{f:04d}.exr")
+    shot = defocus.Shot(inputs=[tmp_path / "in.#.exr"], **CAMERA)
+    with pytest.raises(defocus.Error, match=r"in\.0003\.exr: no such file; frames with input "
+                                            r"files missing: 3"):
+        defocus.render_sequence(shot, tmp_path / "out.#.exr")
+    assert not [f for f in os.listdir(tmp_path) if f.startswith("out")]
+    shot.missing_frames = "hold"
+    defocus.render_sequence(shot, tmp_path / "out.#.exr")
+    assert pixels(tmp_path / "out.0003.exr")[0].tobytes() == \
+        pixels(tmp_path / "out.0002.exr")[0].tobytes()
 
 
 def layered_arrays(width=96, height=64):
@@ -372,9 +387,7 @@ def test_defocus_submit_dry_run_prints_the_batch_scripts(example, tmp_path):
                  f"#SBATCH --output={tmp_path}/job/chunk_%a.log", '--chunk "$SLURM_ARRAY_TASK_ID/3"',
                  "--skip-existing", "#SBATCH --dependency=afterany:<array job id>", "--check"]:
         assert line in run.stdout, line
-    assert (tmp_path / "job" / "shot.dof").exists()
-    shot = defocus.Shot.load(tmp_path / "job" / "shot.dof")
-    assert shot.frames_to_render() == list(range(1, 25))
+    assert not (tmp_path / "job").exists()  # a dry run writes nothing
     run = subprocess.run([submit, "--chunk-size", "10", str(example), "--focus", "4",
                           "-o", str(tmp_path / "nowhere" / "f.#.exr")], capture_output=True,
                          text=True)
@@ -383,4 +396,5 @@ def test_defocus_submit_dry_run_prints_the_batch_scripts(example, tmp_path):
                           "1-24", "--focus", "4", "-o", str(tmp_path / "f.#.exr")],
                          capture_output=True, text=True)
     assert run.returncode != 0
-    assert run.stderr.strip() == f"defocus-submit: {tmp_path}/in.0001.exr: no such file (frame 1)"
+    assert run.stderr.startswith(f"defocus-submit: {tmp_path}/in.0001.exr: no such file; "
+                                 "frames with input files missing: 1-24")

@@ -167,6 +167,68 @@ bool ExrInput::open(const std::string& filename, std::string& error)
     return true;
 }
 
+bool ExrInput::complete(std::string& why) const
+{
+    exr_const_context_t file = m_context->file;
+    core_message.clear();
+    int parts = 0;
+    exr_get_count(file, &parts);
+    for (int part = 0; part < parts; ++part) {
+        exr_storage_t storage;
+        exr_attr_box2i_t dw;
+        if (exr_get_storage(file, part, &storage) != EXR_ERR_SUCCESS
+            || exr_get_data_window(file, part, &dw) != EXR_ERR_SUCCESS) {
+            why = core_message;
+            return false;
+        }
+        exr_chunk_info_t chunk;
+        if (storage == EXR_STORAGE_SCANLINE || storage == EXR_STORAGE_DEEP_SCANLINE) {
+            int32_t lines = 1;
+            if (exr_get_scanlines_per_chunk(file, part, &lines) != EXR_ERR_SUCCESS || lines < 1) {
+                why = core_message;
+                return false;
+            }
+            for (int64_t y = dw.min.y; y <= dw.max.y; y += lines)
+                if (exr_read_scanline_chunk_info(file, part, int(y), &chunk) != EXR_ERR_SUCCESS) {
+                    why = core_message;
+                    return false;
+                }
+            continue;
+        }
+        uint32_t tile_w = 0, tile_h = 0;
+        exr_tile_level_mode_t mode;
+        exr_tile_round_mode_t round;
+        int32_t levels_x = 0, levels_y = 0;
+        if (exr_get_tile_descriptor(file, part, &tile_w, &tile_h, &mode, &round) != EXR_ERR_SUCCESS
+            || exr_get_tile_levels(file, part, &levels_x, &levels_y) != EXR_ERR_SUCCESS) {
+            why = core_message;
+            return false;
+        }
+        for (int ly = 0; ly < levels_y; ++ly)
+            for (int lx = 0; lx < levels_x; ++lx) {
+                // Mipmaps have the levels of the diagonal only.
+                if (mode != EXR_TILE_RIPMAP_LEVELS && lx != ly)
+                    continue;
+                int32_t width = 0, height = 0, tw = 0, th = 0;
+                if (exr_get_level_sizes(file, part, lx, ly, &width, &height) != EXR_ERR_SUCCESS
+                    || exr_get_tile_sizes(file, part, lx, ly, &tw, &th) != EXR_ERR_SUCCESS
+                    || tw < 1 || th < 1) {
+                    why = core_message;
+                    return false;
+                }
+                const int32_t count_x = (width + tw - 1) / tw, count_y = (height + th - 1) / th;
+                for (int ty = 0; ty < count_y; ++ty)
+                    for (int tx = 0; tx < count_x; ++tx)
+                        if (exr_read_tile_chunk_info(file, part, tx, ty, lx, ly, &chunk)
+                            != EXR_ERR_SUCCESS) {
+                            why = core_message;
+                            return false;
+                        }
+            }
+    }
+    return true;
+}
+
 bool ExrInput::read(int part, const std::vector<ChannelTarget>& targets, std::string& error,
                     int nthreads) const
 {

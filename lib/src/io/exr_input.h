@@ -38,6 +38,13 @@ public:
     bool open(const std::string& filename, std::string& error);
     bool is_open() const { return m_context != nullptr; }
 
+    /// Whether every chunk of every part (every tile of every level) is in
+    /// the file whole: its offset in the chunk table and its data within
+    /// the file, as a finished write leaves them. A file cut short, or one
+    /// whose writer died before filling in its chunk table, is not. False
+    /// with `why`.
+    bool complete(std::string& why) const;
+
     /// Decodes the named channels of flat part `part` (scanline or tiled,
     /// its full-resolution level) into their targets, chunks in parallel.
     /// False with `error` when a chunk is damaged.

@@ -16,6 +16,7 @@
 
 #include <defocus/io/image_input.h>
 
+#include "io/exr_input.h"
 #include "io/half_pixels.h"
 #include "io/temporary_files.h"
 #include "util/file_identity.h"
@@ -90,6 +91,20 @@ bool written_with_settings(const std::string& filename, const std::string& hash,
     if (recorded != hash) {
         why = "was written with other settings (defocus:settingsHash " + recorded + ", now "
               + hash + ")";
+        return false;
+    }
+    // Its header alone does not say it is whole: a copy cut short, or a
+    // file system that lost its end, has the same header.
+    const bool openexr = std::string(in->format_name()) == "openexr";
+    in.reset();
+    std::string damage;
+    ExrInput exr;
+    ImageBuf pixels;
+    const bool whole = openexr
+                           ? exr.open(filename, damage) && exr.complete(damage)
+                           : read_image_file(filename, "the output", pixels, damage);
+    if (!whole) {
+        why = "is incomplete (" + Strutil::replace(damage, "\n", " ", true) + ")";
         return false;
     }
     return true;
