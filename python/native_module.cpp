@@ -26,8 +26,9 @@
 #include <defocus/frame_scheduler.h>
 #include <defocus/io/frames.h>
 #include <defocus/io/image_output.h>
-#include <defocus/render_frame.h>
+#include <defocus/io/scene_io.h>
 #include <defocus/io/settings_hash.h>
+#include <defocus/render_frame.h>
 #include <defocus/shot/shot_file.h>
 #include <defocus/version.h>
 
@@ -248,7 +249,7 @@ std::vector<std::string> render_sequence(const Shot& shot, const std::string& pa
                 }
             }
             return true;
-        });
+        }, [&](int i) { return declared_bytes(frame_inputs(shot, frames[i])); });
         if (cancelled)
             throw Cancelled();
     });

@@ -1121,6 +1121,19 @@ TEST_CASE("a deep pixel of two million samples renders, or is refused by the mem
     CHECK(one_line_naming(log, "dense.exr: 2000001 deep samples (up to 2000000 in one pixel) "
                                "needs"));
     CHECK_FALSE(Filesystem::exists(dir + "/p.exr"));
+    // The limit holds for the frame: one file fits in it (84 MB to read,
+    // 48 MB kept, 122 MB to cut into layers), two do not, and the second
+    // is refused before its samples are allocated (each file was checked
+    // alone, and only cutting the merged samples found the limit passed).
+    REQUIRE(Filesystem::copy(dir + "/dense.exr", dir + "/again.exr"));
+    REQUIRE(run_defocus(dir + "/dense.exr -o " + dir + "/q.exr --focus 2 --memory-limit 128M", log)
+            == 0);
+    REQUIRE(run_defocus(dir + "/dense.exr " + dir + "/again.exr -o " + dir
+                            + "/r.exr --focus 2 --memory-limit 128M",
+                        log)
+            == 1);
+    CHECK(one_line_naming(log, "leaves beside the frame's other inputs"));
+    CHECK(Strutil::contains(log, "again.exr: 2000001 deep samples"));
 }
 
 TEST_CASE("cutting into more layers than the memory limit holds is refused")
@@ -1535,6 +1548,32 @@ TEST_CASE("memory over a 16-frame sequence stays bounded by the frames in flight
     INFO("one frame " << one / 1024 << " MB, 16 frames " << sixteen / 1024 << " MB");
     CHECK(sixteen < 2.0 * one);
     CHECK(Filesystem::exists(dir + "/o.0016.exr"));
+}
+
+TEST_CASE("a sequence whose later frames are larger stays within --memory-limit")
+{
+    // A small first frame made the scheduler expect every frame to be as
+    // small, and run two of the large ones at once past the limit.
+    const std::string dir = scratch_dir("cli_sequence_growing");
+    std::string log;
+    REQUIRE(run(format("{} {}/f.0001.exr --width 320 --height 180", MAKE_EXAMPLE_SCENE_BIN, dir),
+                log) == 0);
+    REQUIRE(run(format("{} {}/f.0002.exr --width 2880 --height 1620", MAKE_EXAMPLE_SCENE_BIN, dir),
+                log) == 0);
+    for (int frame = 3; frame <= 4; ++frame)
+        REQUIRE(Filesystem::copy(dir + "/f.0002.exr", format("{}/f.{:04d}.exr", dir, frame)));
+    const Finished large = run_to_end({ dir + "/f.0002.exr", "-o", dir + "/one.exr", "--focus",
+                                        "4", "--threads", "2" });
+    // One large frame's images fit in the limit, two do not.
+    const std::string limit = format("{}M", int(large.peak_kb / 1024 * 0.9));
+    const Finished all = run_to_end({ dir + "/f.#.exr", "-o", dir + "/o.#.exr", "--focus", "4",
+                                      "--threads", "2", "--memory-limit", limit });
+    REQUIRE(large.exit_code == 0);
+    REQUIRE(all.exit_code == 0);
+    INFO("one large frame " << large.peak_kb / 1024 << " MB, the sequence " << all.peak_kb / 1024
+                            << " MB, limit " << limit);
+    CHECK(all.peak_kb < 1.5 * large.peak_kb);
+    CHECK(Filesystem::exists(dir + "/o.0004.exr"));
 }
 
 TEST_CASE("files the fuzzers found are refused quickly and cheaply")

@@ -19,6 +19,7 @@
 #include <defocus/frame_scheduler.h>
 #include <defocus/io/frames.h>
 #include <defocus/io/image_output.h>
+#include <defocus/io/scene_io.h>
 #include <defocus/render_frame.h>
 #include <defocus/io/settings_hash.h>
 #include <defocus/shot/shot_file.h>
@@ -418,9 +419,9 @@ int main(int argc, const char* argv[])
             last_image.swap(frame.image);
         return ok;
     };
-    const ScheduleResult run = run_frames(int(frames.size()), cl.threads,
-                                          shot.read.memory_limit.bytes(), cl.stop_on_error,
-                                          render_one);
+    const ScheduleResult run = run_frames(
+        int(frames.size()), cl.threads, shot.read.memory_limit.bytes(), cl.stop_on_error,
+        render_one, [&](int i) { return declared_bytes(frame_inputs(shot, frames[i])); });
     progress.finish();
     if (sequence) {
         const std::string summary = frames_written(run, frames, skipped);

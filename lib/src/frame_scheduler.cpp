@@ -3,7 +3,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
-#include <atomic>
+#include <condition_variable>
 #include <mutex>
 #include <thread>
 
@@ -24,7 +24,7 @@ size_t peak_resident_bytes()
 }  // namespace
 
 ScheduleResult run_frames(int count, int threads, size_t memory_limit, bool stop_on_error,
-                          const FrameJob& job)
+                          const FrameJob& job, const FrameSize& size)
 {
     ScheduleResult result;
     if (count <= 0)
@@ -32,6 +32,7 @@ ScheduleResult run_frames(int count, int threads, size_t memory_limit, bool stop
     const int cores = threads > 0 ? threads : int(OIIO::Sysutil::hardware_concurrency());
 
     const size_t before = OIIO::Sysutil::memory_used(true);
+    const double first_size = size ? size(0) : 0.0;
     result.run = 1;
     if (!job(0)) {
         result.failed.push_back(0);
@@ -40,32 +41,55 @@ ScheduleResult run_frames(int count, int threads, size_t memory_limit, bool stop
     }
     if (count == 1)
         return result;
-    const size_t peak      = peak_resident_bytes();
-    const size_t per_frame = std::max(peak > before ? peak - before : 0, size_t(64) << 20);
-    const int workers = int(std::clamp<size_t>(memory_limit / per_frame, 1,
-                                               size_t(std::min(cores, count - 1))));
+    const size_t peak = peak_resident_bytes();
+    const size_t first_peak = std::max(peak > before ? peak - before : 0, size_t(64) << 20);
+    auto expected = [&](int i) {
+        const double declared = size && first_size > 0.0 ? size(i) : 0.0;
+        if (declared <= 0.0)
+            return first_peak;
+        const double scaled = double(first_peak) * declared / first_size;
+        return size_t(std::clamp(scaled, double(size_t(64) << 20), double(memory_limit) + 1.0));
+    };
 
-    std::atomic<int> next { 1 };
-    std::atomic<bool> stop { false };
+    int next = 1;
+    size_t in_flight = 0;  ///< the expected peaks of the frames running
+    bool stop = false;
     std::mutex mutex;
+    std::condition_variable finished;
     auto work = [&] {
         for (;;) {
-            if (stop)
-                return;
-            const int i = next++;
-            if (i >= count)
-                return;
-            const bool ok = job(i);
-            std::lock_guard<std::mutex> lock(mutex);
-            ++result.run;
-            if (!ok) {
-                result.failed.push_back(i);
-                stop = stop_on_error;
+            int i = 0;
+            {
+                std::lock_guard<std::mutex> lock(mutex);
+                if (stop || next >= count)
+                    return;
+                i = next++;
             }
+            const size_t need = expected(i);  // reads headers: outside the lock
+            {
+                std::unique_lock<std::mutex> lock(mutex);
+                finished.wait(lock, [&] {
+                    return stop || in_flight == 0 || in_flight + need <= memory_limit;
+                });
+                if (stop)
+                    return;
+                in_flight += need;
+            }
+            const bool ok = job(i);
+            {
+                std::lock_guard<std::mutex> lock(mutex);
+                in_flight -= need;
+                ++result.run;
+                if (!ok) {
+                    result.failed.push_back(i);
+                    stop = stop || stop_on_error;
+                }
+            }
+            finished.notify_all();
         }
     };
     std::vector<std::thread> pool;
-    for (int w = 0; w < workers; ++w)
+    for (int w = 0; w < std::min(cores, count - 1); ++w)
         pool.emplace_back(work);
     for (std::thread& t : pool)
         t.join();

@@ -700,6 +700,23 @@ void scale_depth(Scene& scene, float scale)
         });
 }
 
+/// The bytes a scene's layers and deep samples take.
+double content_bytes(const Scene& scene)
+{
+    double bytes = 0.0;
+    for_each_content(scene,
+        [&](const Layer& layer) {
+            bytes += double(layer.color.spec().image_bytes()) + double(layer.depth.spec().image_bytes());
+            return true;
+        },
+        [&](const DeepImage& image) {
+            bytes += double(image.samples.size()) * sizeof(DeepSample)
+                     + double(image.offsets.size()) * sizeof(uint64_t);
+            return true;
+        });
+    return bytes;
+}
+
 /// Checks that there are inputs, and that a depth file is given to one.
 bool check_inputs(const std::vector<std::string>& filenames, const ReadOptions& options,
                   std::string& error)
@@ -718,6 +735,18 @@ bool check_inputs(const std::vector<std::string>& filenames, const ReadOptions& 
 }
 
 }  // namespace
+
+double declared_bytes(const std::vector<std::string>& filenames)
+{
+    double bytes = 0.0;
+    std::string ignored;
+    for (const std::string& filename : filenames) {
+        auto in = open_file(filename, nullptr, ignored);
+        for (int subimage = 0; in && in->seek_subimage(subimage, 0); ++subimage)
+            bytes += float_bytes(double(in->spec().image_pixels()), in->spec().nchannels);
+    }
+    return bytes;
+}
 
 bool read_scene_spec(const std::vector<std::string>& filenames, const ReadOptions& options,
                      ImageSpec& spec, std::string& error)
@@ -746,11 +775,15 @@ bool read_scene(const std::vector<std::string>& filenames, const ReadOptions& op
     scene = Scene();
     if (!check_inputs(filenames, options, error))
         return false;
+    // The limit holds for the frame: each file gets what the ones before it
+    // left (each file alone under it could still add up past it).
+    ReadOptions file_options = options;
     for (const std::string& filename : filenames) {
         Scene part;
         part.spec = scene.spec;
-        if (!read_file(filename, options, part, error))
+        if (!read_file(filename, file_options, part, error))
             return false;
+        file_options.memory_limit = file_options.memory_limit.spent(content_bytes(part));
         if (scene.source.empty())
             scene.spec = part.spec;
         // Several files are the layers of one scene: a flat file is a layer.

@@ -1,5 +1,6 @@
 #include <defocus/shot/memory_limit.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 
@@ -72,6 +73,12 @@ size_t MemoryLimit::bytes() const
 
 std::string MemoryLimit::exceeded(const std::string& what, double bytes) const
 {
+    if (m_spent > 0.0)
+        return OIIO::Strutil::fmt::format(
+            "{} needs {}, more than the {} the memory limit of {} (--memory-limit) leaves "
+            "beside the frame's other inputs",
+            what, readable(bytes), readable(std::max(0.0, double(this->bytes()) - m_spent)),
+            readable(double(this->bytes())));
     return OIIO::Strutil::fmt::format("{} needs {}, more than the memory limit of {} "
                                       "(--memory-limit)",
                                       what, readable(bytes), readable(double(this->bytes())));

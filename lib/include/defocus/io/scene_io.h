@@ -34,6 +34,12 @@ namespace defocus {
 bool read_scene(const std::vector<std::string>& filenames,
                 const ReadOptions& options, Scene& scene, std::string& error);
 
+/// What the files' headers declare, as float: every part's pixels times
+/// its channels (a deep part's samples are not in its header: one a pixel).
+/// A measure of how much reading them takes, before they are read; a file
+/// that cannot be opened counts nothing (reading it says why).
+double declared_bytes(const std::vector<std::string>& filenames);
+
 /// The spec read_scene() would give the scene (display window, metadata,
 /// the union of the data windows read), from the files' headers alone,
 /// without reading or vetting pixels.

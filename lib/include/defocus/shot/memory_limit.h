@@ -23,13 +23,23 @@ public:
     std::string to_string() const;
 
     size_t bytes() const;
-    bool allows(double bytes) const { return bytes <= double(this->bytes()); }
+    /// Whether `bytes` more fit, beside what is spent already.
+    bool allows(double bytes) const { return m_spent + bytes <= double(this->bytes()); }
+    /// The same limit with `bytes` more of it taken (by another input of
+    /// the frame): what is left for the rest.
+    MemoryLimit spent(double bytes) const
+    {
+        MemoryLimit less = *this;
+        less.m_spent += bytes;
+        return less;
+    }
     /// "<what> needs 800 GB, more than the memory limit of 12 GB
-    /// (--memory-limit)".
+    /// (--memory-limit)", and what other inputs took when they took some.
     std::string exceeded(const std::string& what, double bytes) const;
 
 private:
-    size_t m_bytes = 0;  ///< 0: the default
+    size_t m_bytes = 0;    ///< 0: the default
+    double m_spent = 0.0;  ///< taken already, of the limit
 };
 
 /// The bytes of `pixels` pixels of `channels` floats, as the checks
