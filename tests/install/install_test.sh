@@ -28,22 +28,33 @@ log=$(env -u OCIO "$prefix/bin/defocus" "$scratch/scene.exr" -o "$scratch/out.ex
       --focal 50 --fstop 1.8 --focus 4 -v)
 grep -q "config $prefix/share/defocus/config.ocio (shipped)" <<< "$log" \
     || fail "the installed defocus did not use the installed config: $log"
+# Run as a user runs it: found through PATH, and through a symbolic link
+# elsewhere (the loader then names the program "defocus", or the link).
+mkdir -p "$scratch/links"
+ln -s "$prefix/bin/defocus" "$scratch/links/defocus"
+for how in "env PATH=$prefix/bin:$PATH defocus" "$scratch/links/defocus"; do
+    log=$(cd "$scratch" && env -u OCIO $how scene.exr -o out.exr --focal 50 --fstop 1.8 --focus 4 -v)
+    grep -q "config $prefix/share/defocus/config.ocio (shipped)" <<< "$log" \
+        || fail "defocus run as '$how' did not find the installed config: $log"
+done
 
 cmake -S "$source/tests/install" -B "$scratch/downstream" -DCMAKE_PREFIX_PATH="$prefix" \
     > "$scratch/configure.log" 2>&1 || { cat "$scratch/configure.log"; fail "find_package(defocus)"; }
 cmake --build "$scratch/downstream" > "$scratch/build.log" 2>&1 \
     || { cat "$scratch/build.log"; fail "building against the installed package"; }
-"$scratch/downstream/downstream" | grep -q "loaded $prefix/share/defocus/config.ocio" \
-    || fail "defocus_OCIO_CONFIG does not name the installed config"
+# Another project's program, elsewhere, finds the config by itself.
+env -u OCIO "$scratch/downstream/downstream" | grep -q "loaded $prefix/share/defocus/config.ocio" \
+    || fail "a program built against the package does not find the installed config"
 
 # pkg-config: the same program built by hand (static library: --static).
 flags=$(PKG_CONFIG_PATH="$prefix/lib/pkgconfig" pkg-config --cflags --libs --static defocus) \
     || fail "pkg-config does not find defocus.pc"
-g++ -std=c++17 -DPACKAGE_OCIO_CONFIG="\"$prefix/share/defocus/config.ocio\"" \
+config=$(PKG_CONFIG_PATH="$prefix/lib/pkgconfig" pkg-config --variable=ocio_config defocus)
+g++ -std=c++17 -DDEFOCUS_PACKAGE_OCIO_CONFIG="\"$config\"" \
     "$source/tests/install/downstream.cpp" -o "$scratch/downstream_pc" $flags \
     || fail "building with pkg-config --cflags --libs --static defocus"
-"$scratch/downstream_pc" | grep -q "loaded $prefix/share/defocus/config.ocio" \
-    || fail "the program built with pkg-config did not run"
+env -u OCIO "$scratch/downstream_pc" | grep -q "loaded $prefix/share/defocus/config.ocio" \
+    || fail "the program built with pkg-config did not find the installed config"
 
 # The Python package, imported from the prefix (the module's RPATH finds
 # the library, the config is the installed one). A sanitized build names

@@ -1,8 +1,10 @@
 #include <defocus/color/color.h>
 
 #include <dlfcn.h>
+#include <link.h>
 
 #include <cstdlib>
+#include <filesystem>
 
 #include <OpenColorIO/OpenColorIO.h>
 #include <OpenImageIO/color.h>
@@ -21,14 +23,23 @@ using Strutil::fmt::format;
 
 namespace {
 
-/// The file this code was loaded from: the program that links the library,
-/// the OpenImageIO plugin or the Python module.
+/// The file this code was loaded from, links resolved: the OpenImageIO
+/// plugin, the Python module or a shared library (the file the loader
+/// opened), or else the program that links the library statically. The
+/// loader names a program as it was started (argv[0]: "defocus" when found
+/// through PATH, or a symbolic link), so the program is /proc/self/exe.
 std::string this_module_path()
 {
     Dl_info info {};
-    if (dladdr(reinterpret_cast<const void*>(&this_module_path), &info) && info.dli_fname)
-        return info.dli_fname;
-    return Sysutil::this_program_path();
+    struct link_map* map = nullptr;
+    std::string path = "/proc/self/exe";
+    if (dladdr1(reinterpret_cast<const void*>(&this_module_path), &info,
+                reinterpret_cast<void**>(&map), RTLD_DL_LINKMAP)
+        && map && map->l_name && map->l_name[0])  // the program's is ""
+        path = map->l_name;
+    std::error_code ec;
+    const std::filesystem::path resolved = std::filesystem::canonical(path, ec);
+    return ec ? Sysutil::this_program_path() : resolved.string();
 }
 
 /// The shipped config in share/defocus of the nearest folder above this
@@ -47,7 +58,21 @@ std::string shipped_config_beside_module()
     return "";
 }
 
+/// Set by set_package_ocio_config(), before main: a function's static, so
+/// that it exists before any other file's static initialisation uses it.
+std::string& package_config()
+{
+    static std::string path;
+    return path;
+}
+
 }  // namespace
+
+void set_package_ocio_config(const char* path)
+{
+    // pkg-config gives it from the .pc file's folder: .../lib/pkgconfig/../..
+    package_config() = path ? std::filesystem::path(path).lexically_normal().string() : "";
+}
 
 struct ColorManagement::Impl {
     OCIO::ConstConfigRcPtr ocio;  ///< for queries
@@ -69,10 +94,13 @@ bool ColorManagement::load(const std::string& explicit_file, std::string& error)
         m_path = env;
         m_origin = "$OCIO";
     } else {
-        // Beside the program, plugin or module (build tree or installed),
-        // else where it was installed, for programs of other projects.
-        m_path   = shipped_config_beside_module();
+        // Where the package a program was built against has it; else
+        // beside the program, plugin or module (build tree or installed);
+        // else where this library was to be installed.
+        m_path   = package_config();
         m_origin = "shipped";
+        if (m_path.empty())
+            m_path = shipped_config_beside_module();
         if (m_path.empty())
             m_path = DEFOCUS_INSTALLED_OCIO_CONFIG;
     }

@@ -15,6 +15,20 @@
 
 namespace defocus {
 
+/// Where the installed package's shipped config is, for a program that
+/// links the library statically and lives elsewhere (it cannot find the
+/// config beside itself). Such programs call it before main through this
+/// header: the installed CMake package defines DEFOCUS_PACKAGE_OCIO_CONFIG
+/// for them, from where it is installed (any prefix); with pkg-config,
+/// define it from `pkg-config --variable=ocio_config defocus`.
+void set_package_ocio_config(const char* path);
+
+#ifdef DEFOCUS_PACKAGE_OCIO_CONFIG
+namespace package_detail {
+inline const bool ocio_config_set = (set_package_ocio_config(DEFOCUS_PACKAGE_OCIO_CONFIG), true);
+}
+#endif
+
 /// A loaded OpenColorIO config.
 class ColorManagement {
 public:
@@ -24,10 +38,12 @@ public:
     ColorManagement& operator=(ColorManagement&&) noexcept;
 
     /// Loads the first of: `explicit_file` (when not empty), $OCIO, the
-    /// config shipped with defocus, found relative to the program, plugin or
-    /// Python module the library is part of (share/defocus/config.ocio in
-    /// the nearest of the four folders above it: the prefix, in the build
-    /// tree and installed).
+    /// config shipped with defocus: where the installed package a program
+    /// was built against has it (set_package_ocio_config), else relative to
+    /// the program, plugin or Python module the library is part of, links
+    /// resolved (share/defocus/config.ocio in the nearest of the four
+    /// folders above it: the prefix, in the build tree and installed), else
+    /// where this library was configured to install it.
     /// False with `error` saying which file failed and why.
     bool load(const std::string& explicit_file, std::string& error);
 
