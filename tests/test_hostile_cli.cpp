@@ -243,3 +243,75 @@ TEST_CASE("a frame cut short is rendered again, not skipped as done")
     CHECK(Strutil::contains(log, "1 of 1 frames written (2 more skipped"));
     CHECK(file_bytes(dir + "/out.0002.exr") == whole);
 }
+
+TEST_CASE("no part is dropped without a word, and 8-bit and sRGB-tagged images are sRGB")
+{
+    const std::string dir = scratch_dir("hostile_silent_drops");
+    std::string log;
+    // A layer with depth and a part with colour alone: the second used to
+    // vanish from the render.
+    ImageSpec layer(16, 16, 5, TypeFloat), beauty(16, 16, 4, TypeFloat);
+    layer.channelnames = { "R", "G", "B", "A", "Z" };
+    beauty.channelnames = { "R", "G", "B", "A" };
+    layer.attribute("name", "bg");
+    beauty.attribute("name", "fx");
+    {
+        auto out = ImageOutput::create(dir + "/parts.exr");
+        const ImageSpec specs[] = { layer, beauty };
+        REQUIRE(out->open(dir + "/parts.exr", 2, specs));
+        const std::vector<float> pixels(16 * 16 * 5, 1.0f);
+        REQUIRE(out->write_image(TypeFloat, pixels.data()));
+        REQUIRE(out->open(dir + "/parts.exr", beauty, ImageOutput::AppendSubimage));
+        REQUIRE(out->write_image(TypeFloat, pixels.data()));
+        REQUIRE(out->close());
+    }
+    CHECK(run(format("{} {}/parts.exr -o {}/o.exr --focus 3", defocus_bin, dir, dir), log) == 1);
+    CHECK(one_line_naming(log, "parts.exr: part 1 'fx' has colour but no depth (Z)"));
+
+    // 8- and 16-bit images in the sRGB encoding: tagged (PNG) or not (TIFF).
+    write_flat(dir + "/z.exr", { "Z" }, { 3.0f });
+    ImageBuf rgba = read_image(example_scene());
+    rgba = ImageBufAlgo::channels(rgba, 4, { 0, 1, 2, 3 });
+    rgba = ImageBufAlgo::cut(rgba, ROI(0, 16, 0, 16));
+    rgba.specmod().erase_attribute("oiio:ColorSpace");
+    REQUIRE(rgba.write(dir + "/tagged.png", TypeUInt8));
+    REQUIRE(rgba.write(dir + "/untagged8.tif", TypeUInt8));
+    REQUIRE(rgba.write(dir + "/untagged16.tif", TypeUInt16));
+    REQUIRE(rgba.write(dir + "/untagged_float.tif", TypeFloat));
+    const std::string cam = " --depth z.exr --focus 2 -v";
+    const struct {
+        std::string file, input;
+    } inputs[] = {
+        { "tagged.png", "input 'sRGB - Texture', spread in" },
+        { "untagged8.tif", "input 'sRGB - Texture' (a guess: an untagged 8-bit image taken as "
+                           "sRGB, as OpenImageIO does)" },
+        { "untagged16.tif", "input 'sRGB - Texture' (a guess: an untagged 16-bit image taken as "
+                            "sRGB" },
+        { "untagged_float.tif", "input 'ACEScg' (a guess: no colour space tag" },
+    };
+    for (const auto& in : inputs) {
+        INFO(in.file);
+        REQUIRE(run(format("cd {} && {} {} -o out_{}.exr{}", dir, defocus_bin, in.file, in.file,
+                           cam),
+                    log) == 0);
+        CHECK(Strutil::contains(log, in.input));
+    }
+    // The tag means what the space named explicitly means.
+    REQUIRE(run(format("cd {} && {} tagged.png -o explicit.exr --iscolorspace srgb_tx{}", dir,
+                       defocus_bin, cam),
+                log) == 0);
+    CHECK(same_pixels(dir + "/explicit.exr", dir + "/out_tagged.png.exr"));
+    // The names other configs and OpenImageIO give these spaces.
+    for (const auto& [alias, space] : std::vector<std::pair<std::string, std::string>> {
+             { "sRGB", "sRGB - Texture" }, { "srgb_texture", "sRGB - Texture" },
+             { "'Utility - sRGB - Texture'", "sRGB - Texture" },
+             { "lin_srgb", "Linear Rec.709 (sRGB)" }, { "Linear", "Linear Rec.709 (sRGB)" },
+             { "'Utility - Linear - sRGB'", "Linear Rec.709 (sRGB)" },
+             { "scene_linear", "ACEScg" }, { "'ACES - ACEScg'", "ACEScg" } }) {
+        INFO(alias);
+        REQUIRE(run(format("cd {} && {} untagged_float.tif -o a.exr --iscolorspace {}{}", dir,
+                           defocus_bin, alias, cam),
+                    log) == 0);
+        CHECK(Strutil::contains(log, "input '" + space + "', spread in"));
+    }
+}

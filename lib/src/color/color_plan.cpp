@@ -35,6 +35,12 @@ bool plan_color(ColorPlan& plan, std::shared_ptr<const ColorManagement> config,
         if (OIIO::Strutil::iequals(tag, "linear")) {
             plan.input = c.find_space("lin_rec709");
             plan.guess = format("the file's generic '{}' tag taken as linear Rec.709", tag);
+        } else if (tag.empty() && !input_spec.format.is_floating_point()) {
+            // 8- and 16-bit images are display-referred, as OpenImageIO
+            // takes them.
+            plan.input = c.find_space("srgb_tx");
+            plan.guess = format("an untagged {}-bit image taken as sRGB, as OpenImageIO does",
+                                input_spec.format.size() * 8);
         } else {
             plan.input = c.find_space(tag);
         }

@@ -440,6 +440,15 @@ bool choose_parts(ImageInput& in, const std::string& filename, const ReadOptions
     }
     for (size_t i : layout.complete)
         layout.data_window = roi_union(layout.data_window, parts[i].spec.roi());
+    // Beside layers with depth, a part with colour and no depth has no
+    // place among them: it used to be dropped without a word.
+    if (!layout.complete.empty() && !color_only.empty() && layout.depth_file.empty()) {
+        const Part& part = parts[color_only.front()];
+        error = format("{}: {} has colour but no depth ({}), unlike the file's other layers: "
+                       "give it a Z channel, or leave it out of the file",
+                       filename, part.label, missing_channel(part.spec, options.layer));
+        return false;
+    }
 
     if (!layout.depth_file.empty()) {
         // A beauty part, its depth in another file.
