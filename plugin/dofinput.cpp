@@ -2,9 +2,12 @@
 // the defocused image it describes. open() reports the spec from the
 // inputs' headers; the first read of pixels renders the frame, through the
 // same library call as the defocus command, and later reads reuse it.
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <cstring>
 #include <mutex>
+#include <vector>
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
@@ -56,6 +59,20 @@ private:
     bool apply_hints(const ImageSpec& config, bool& frame_given, std::string& error);
     bool render(std::string& error);
     bool render_once();
+    /// The first file the frame reads that is not as it was when the .dof
+    /// was opened, or "".
+    std::string changed_input() const;
+
+    /// A file as open() found it: a file replaced or rewritten since then
+    /// would give pixels the spec reported to the host does not describe.
+    struct Stamp {
+        std::string file;
+        dev_t device;
+        ino_t inode;
+        off_t size;
+        struct timespec modified;
+    };
+    static std::vector<Stamp> stamps(const std::vector<std::string>& files);
 
     std::string m_filename;
     Shot m_shot;
@@ -65,7 +82,36 @@ private:
     bool m_rendered = false;
     std::string m_render_error;
     ImageBuf m_pixels;  ///< the frame, in the spec's window and pixel type
+    std::vector<Stamp> m_inputs;  ///< the files the frame reads, as open() found them
 };
+
+std::vector<DofInput::Stamp> DofInput::stamps(const std::vector<std::string>& files)
+{
+    std::vector<Stamp> found;
+    for (const std::string& file : files) {
+        struct stat st {};
+        if (::stat(file.c_str(), &st) == 0)
+            found.push_back({ file, st.st_dev, st.st_ino, st.st_size, st.st_mtim });
+        else
+            found.push_back({ file, 0, 0, -1, {} });
+    }
+    return found;
+}
+
+std::string DofInput::changed_input() const
+{
+    std::vector<std::string> files;
+    for (const Stamp& s : m_inputs)
+        files.push_back(s.file);
+    const std::vector<Stamp> now = stamps(files);
+    for (size_t i = 0; i < now.size(); ++i) {
+        const Stamp &a = m_inputs[i], &b = now[i];
+        if (a.device != b.device || a.inode != b.inode || a.size != b.size
+            || a.modified.tv_sec != b.modified.tv_sec || a.modified.tv_nsec != b.modified.tv_nsec)
+            return a.file;
+    }
+    return "";
+}
 
 bool DofInput::valid_file(const std::string& filename) const
 {
@@ -133,6 +179,7 @@ bool DofInput::open(const std::string& name, ImageSpec& newspec, const ImageSpec
         }
         if (!defocus::frame_spec(m_shot, m_frame, m_assets, m_spec, error))
             return fail(error);
+        m_inputs = stamps(defocus::files_read(m_shot, { m_frame }));
     } catch (const std::exception& e) {
         return fail(e.what());
     }
@@ -149,6 +196,7 @@ bool DofInput::close()
     m_rendered = false;
     m_render_error.clear();
     m_pixels.reset();
+    m_inputs.clear();
     return true;
 }
 
@@ -162,6 +210,11 @@ bool DofInput::render(std::string& error)
         return false;
     }
     try {
+        if (const std::string changed = changed_input(); !changed.empty()) {
+            error = Strutil::fmt::format("{}: {} changed since the scene was opened: open it "
+                                         "again", m_filename, changed);
+            return false;
+        }
         defocus::FrameResult frame;
         if (!defocus::render_frame(m_shot, m_frame, m_assets, frame, error))
             return false;
@@ -199,6 +252,11 @@ bool DofInput::read_native_scanlines(int subimage, int miplevel, int ybegin, int
 {
     if (subimage != 0 || miplevel != 0) {
         errorfmt("{}: a .dof scene has one image", m_filename);
+        return false;
+    }
+    if (ybegin < m_spec.y || yend > m_spec.y + m_spec.height || ybegin >= yend) {
+        errorfmt("{}: rows {} to {} are outside the image's rows {} to {}", m_filename, ybegin,
+                 yend - 1, m_spec.y, m_spec.y + m_spec.height - 1);
         return false;
     }
     if (!render_once())

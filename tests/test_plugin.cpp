@@ -374,6 +374,44 @@ TEST_CASE("a .dof that reaches itself is an error in every host, never a stack o
     CHECK_FALSE(Filesystem::exists(dir + "/out.exr"));
 }
 
+TEST_CASE("the plugin reads no row outside the image, and no input changed since open")
+{
+    const std::string dir = scratch_dir("plugin_stale");
+    std::string log;
+    REQUIRE(run(format("{} {}/scene.exr --width 64 --height 36", MAKE_EXAMPLE_SCENE_BIN, dir),
+                log) == 0);
+    REQUIRE(Filesystem::write_text_file(
+        dir + "/shot.dof",
+        R"({"version": 1, "inputs": ["scene.exr"], "camera": {"focus": 3}})"));
+    auto in = ImageInput::open(dir + "/shot.dof");
+    REQUIRE(in);
+    const ImageSpec spec = in->spec();
+    std::vector<float> row(size_t(spec.width) * spec.nchannels, -7.0f);
+    // Rows past either end used to come back as whatever memory held.
+    for (int y : { spec.y - 1, spec.y + spec.height, spec.y + spec.height + 1000 }) {
+        INFO("row " << y);
+        CHECK_FALSE(in->read_scanline(y, 0, TypeFloat, row.data()));
+        CHECK(Strutil::contains(in->geterror(), "outside the image's rows"));
+    }
+    CHECK(in->read_scanline(spec.y, 0, TypeFloat, row.data()));
+    in->close();
+
+    // The input replaced by a larger render after open(): its pixels would
+    // come back under the spec of the old one.
+    in = ImageInput::open(dir + "/shot.dof");
+    REQUIRE(in);
+    REQUIRE(run(format("{} {}/bigger.exr --width 128 --height 72", MAKE_EXAMPLE_SCENE_BIN, dir),
+                log) == 0);
+    REQUIRE(Filesystem::rename(dir + "/bigger.exr", dir + "/scene.exr"));
+    std::vector<float> pixels(size_t(in->spec().image_pixels()) * in->spec().nchannels);
+    CHECK_FALSE(in->read_image(0, 0, 0, in->spec().nchannels, TypeFloat, pixels.data()));
+    CHECK(Strutil::contains(in->geterror(), "scene.exr changed since the scene was opened"));
+    // Opened again, it is the new scene.
+    in = ImageInput::open(dir + "/shot.dof");
+    REQUIRE(in);
+    CHECK(in->spec().full_width == 128);
+}
+
 int main(int argc, char* argv[])
 {
     // In this process the plugin is found through the searchpath attribute.
