@@ -1576,6 +1576,22 @@ TEST_CASE("a sequence whose later frames are larger stays within --memory-limit"
     CHECK(Filesystem::exists(dir + "/o.0004.exr"));
 }
 
+TEST_CASE("a strip a pixel high under a wide blur is not extended into gigabytes")
+{
+    // --edge auto repeated its row 257 times up and down: 7.6 GB, 20 s.
+    const std::string dir = scratch_dir("cli_strip");
+    ImageSpec spec(400000, 1, 5, TypeHalf);
+    spec.channelnames = { "R", "G", "B", "A", "Z" };
+    ImageBuf strip(spec);
+    ImageBufAlgo::fill(strip, { 1.0f, 1.0f, 1.0f, 1.0f, 2.0f });
+    REQUIRE(strip.write(dir + "/strip.exr"));
+    const Finished run = run_to_end({ dir + "/strip.exr", "-o", dir + "/o.exr", "--focus", "3" });
+    CHECK(run.exit_code == 0);
+    INFO("peak " << run.peak_kb / 1024 << " MB");
+    CHECK(run.peak_kb < 1024 * 1024);
+    CHECK(no_nan(read_image(dir + "/o.exr")));
+}
+
 TEST_CASE("files the fuzzers found are refused quickly and cheaply")
 {
     const std::string dir = scratch_dir("cli_fuzz_found");

@@ -315,3 +315,22 @@ TEST_CASE("no part is dropped without a word, and 8-bit and sRGB-tagged images a
         CHECK(Strutil::contains(log, "input '" + space + "', spread in"));
     }
 }
+
+TEST_CASE("a colour channel named as the depth is refused")
+{
+    const std::string dir = scratch_dir("hostile_depth_channel");
+    write_flat(dir + "/rgba.exr", { "R", "G", "B", "A" }, { 0.5f, 0.5f, 0.5f, 1.0f });
+    std::string log;
+    // Alpha as depth made every pixel 1 m away, or nowhere: a transparent
+    // frame, and exit 0.
+    for (const std::string& channel : { "A", "G" }) {
+        CHECK(run(format("cd {} && {} rgba.exr --depth {} -o out.exr --focus 3", dir, defocus_bin,
+                         channel),
+                  log)
+              == 1);
+        CHECK(one_line_naming(log, format("rgba.exr: --depth {}: that is the {} channel of part 0, "
+                                          "not a depth",
+                                          channel, channel == "A" ? "alpha" : "colour")));
+    }
+    CHECK_FALSE(Filesystem::exists(dir + "/out.exr"));
+}

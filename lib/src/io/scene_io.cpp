@@ -426,6 +426,13 @@ bool choose_parts(ImageInput& in, const std::string& filename, const ReadOptions
         Channels& c = part.channels;
         if (!options.depth.empty())
             c.depth = depth_is_channel ? part.spec.channelindex(options.depth) : -1;
+        // Alpha as depth gave a transparent frame and exit 0.
+        for (int k = 0; k < 4 && c.depth >= 0; ++k)
+            if (c.color[k] == c.depth) {
+                error = format("{}: --depth {}: that is the {} channel of {}, not a depth",
+                               filename, options.depth, k == 3 ? "alpha" : "colour", part.label);
+                return false;
+            }
         if (part.spec.deep && c.has_color() && !c.has_alpha()) {
             error = format("{}: {} is deep and has no A channel: deep samples need their "
                            "coverage", filename, part.label);

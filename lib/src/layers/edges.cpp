@@ -76,6 +76,12 @@ int extend_edges(LayeredScene& scene, const CircleOfConfusion& coc, EdgeMode mod
             continue;
         const ROI grown(own.xbegin - add[0], own.xend + add[1], own.ybegin - add[2],
                         own.yend + add[3]);
+        // Where the blur is wide against the layer (a strip a pixel high
+        // under a 512 px blur), what is repeated would outweigh what is
+        // there: auto leaves it (a 400000x1 strip grew to 206 million
+        // pixels, 7 GB).
+        if (mode == EdgeMode::Auto && double(grown.npixels()) > 4.0 * double(own.npixels()))
+            continue;
         layer.color = clamped_copy(layer.color, grown, nthreads);
         layer.depth = clamped_copy(layer.depth, grown, nthreads);
         scene.reports[i] = describe_layer(layer, coc, nthreads);

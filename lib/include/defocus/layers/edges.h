@@ -17,7 +17,9 @@ namespace defocus {
 /// render was cut off by the frame: on the sides where the data window
 /// reaches the display window but not that far past it (overscan); a data
 /// window inside the display window bounds the content, with nothing
-/// beyond. The extended layers are described again and the layers
+/// beyond; and not a layer the extension would make more than four times
+/// larger (the blur wide against it: what is repeated would outweigh what
+/// is there). The extended layers are described again and the layers
 /// reordered. Returns the most pixels added on any side (0: none).
 int extend_edges(LayeredScene& scene, const CircleOfConfusion& coc, EdgeMode mode,
                  int nthreads = 0);
