@@ -4,13 +4,13 @@
 # (default 60). Inputs that grow coverage collect in build-fuzz/corpus; a
 # crash, hang, leak or over-budget allocation stops the run, is saved in
 # build-fuzz/findings/ and fails the script.
-#   scripts/fuzz.sh [SECONDS] [HARNESS...]   harnesses: shot_file settings scene
+#   scripts/fuzz.sh [SECONDS] [HARNESS...]   harnesses: shot_file settings scene read
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds="${1:-60}"
 shift || true
 harnesses=("$@")
-[ ${#harnesses[@]} -gt 0 ] || harnesses=(shot_file settings scene)
+[ ${#harnesses[@]} -gt 0 ] || harnesses=(shot_file settings scene read)
 bash scripts/install-deps.sh fuzz
 cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DDEFOCUS_FUZZ=ON -DBUILD_TESTING=OFF -DDEFOCUS_BUILD_BENCHMARKS=OFF
@@ -23,9 +23,11 @@ mkdir -p build-fuzz/findings
 status=0
 for harness in "${harnesses[@]}"; do
     seeds=(tests/fuzz/corpus/"$harness")
+    # The readers alone start from every file and scene file the others do.
+    [ "$harness" = read ] && seeds+=(tests/fuzz/corpus/scene tests/fuzz/corpus/shot_file)
     # The whole Damaged corpus, when the shared data is here (the
     # repository keeps only its small files).
-    if [ "$harness" = scene ] && [ -d "$data/openexr-images/Damaged" ]; then
+    if [ "$harness" = scene ] || [ "$harness" = read ] && [ -d "$data/openexr-images/Damaged" ]; then
         seeds+=("$data/openexr-images/Damaged")
     fi
     mkdir -p build-fuzz/corpus/"$harness"
