@@ -20,39 +20,37 @@ using OIIO::Strutil::fmt::format;
 
 namespace {
 
-std::vector<int> frames_of(const std::string& list)
+/// The frames a list names (`ok`), or why it names none.
+struct FrameList {
+    bool ok;
+    std::vector<int> frames;
+    std::string error;
+};
+
+FrameList frame_list(const std::string& list)
 {
     Shot shot;
     shot.inputs = { "still.exr" };
     shot.frames = list;
-    std::vector<int> frames;
-    std::string error;
-    INFO(list);
-    REQUIRE(shot_frames(shot, frames, error));
-    return frames;
+    FrameList result;
+    result.ok = shot_frames(shot, result.frames, result.error);
+    return result;
+}
+
+std::vector<int> frames_of(const std::string& list)
+{
+    const FrameList result = frame_list(list);
+    INFO(list << ": " << result.error);
+    REQUIRE(result.ok);
+    return result.frames;
 }
 
 std::string frames_error(const std::string& list)
 {
-    Shot shot;
-    shot.inputs = { "still.exr" };
-    shot.frames = list;
-    std::vector<int> frames;
-    std::string error;
+    const FrameList result = frame_list(list);
     INFO(list);
-    CHECK_FALSE(shot_frames(shot, frames, error));
-    return error;
-}
-
-std::string dof_error(const std::string& text, const std::string& directory)
-{
-    Shot shot;
-    std::string error;
-    INFO(text);
-    CHECK_FALSE(parse_shot(text, directory, "shot.dof", shot, error));
-    CHECK(OIIO::Strutil::starts_with(error, "shot.dof: "));
-    CHECK(error.find('\n') == std::string::npos);
-    return error;
+    CHECK_FALSE(result.ok);
+    return result.error;
 }
 
 }  // namespace

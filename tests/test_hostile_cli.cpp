@@ -27,16 +27,6 @@ std::string file_bytes(const std::string& path)
     return bytes;
 }
 
-/// A 16x16 image of the given channels, every pixel `pixel`.
-void write_flat(const std::string& path, const std::vector<std::string>& channels,
-                const std::vector<float>& pixel)
-{
-    ImageSpec spec(16, 16, int(channels.size()), TypeFloat);
-    spec.channelnames = channels;
-    ImageBuf image(spec);
-    ImageBufAlgo::fill(image, pixel);
-    REQUIRE(image.write(path));
-}
 
 bool same_pixels(const std::string& a, const std::string& b)
 {
@@ -53,8 +43,8 @@ TEST_CASE("no run overwrites a file it reads: depth, mask, PSF, scene file, by a
     REQUIRE(Filesystem::copy(example_scene(), dir + "/scene.exr"));
     REQUIRE(Filesystem::copy(std::string(EXAMPLES_DIR) + "/psf/blades7.exr", dir + "/mask.exr"));
     REQUIRE(Filesystem::copy(std::string(EXAMPLES_DIR) + "/psf/disc_rim.exr", dir + "/psf.exr"));
-    write_flat(dir + "/rgba.exr", { "R", "G", "B", "A" }, { 0.5f, 0.5f, 0.5f, 1.0f });
-    write_flat(dir + "/depth.exr", { "Z" }, { 3.0f });
+    write_uniform_image(dir + "/rgba.exr", { "R", "G", "B", "A" }, { 0.5f, 0.5f, 0.5f, 1.0f });
+    write_uniform_image(dir + "/depth.exr", { "Z" }, { 3.0f });
     REQUIRE(link((dir + "/scene.exr").c_str(), (dir + "/hardlink.exr").c_str()) == 0);
     REQUIRE(symlink("scene.exr", (dir + "/symlink.exr").c_str()) == 0);
     std::string log;
@@ -269,7 +259,7 @@ TEST_CASE("no part is dropped without a word, and 8-bit and sRGB-tagged images a
     CHECK(one_line_naming(log, "parts.exr: part 1 'fx' has colour but no depth (Z)"));
 
     // 8- and 16-bit images in the sRGB encoding: tagged (PNG) or not (TIFF).
-    write_flat(dir + "/z.exr", { "Z" }, { 3.0f });
+    write_uniform_image(dir + "/z.exr", { "Z" }, { 3.0f });
     ImageBuf rgba = read_image(example_scene());
     rgba = ImageBufAlgo::channels(rgba, 4, { 0, 1, 2, 3 });
     rgba = ImageBufAlgo::cut(rgba, ROI(0, 16, 0, 16));
@@ -319,7 +309,7 @@ TEST_CASE("no part is dropped without a word, and 8-bit and sRGB-tagged images a
 TEST_CASE("a colour channel named as the depth is refused")
 {
     const std::string dir = scratch_dir("hostile_depth_channel");
-    write_flat(dir + "/rgba.exr", { "R", "G", "B", "A" }, { 0.5f, 0.5f, 0.5f, 1.0f });
+    write_uniform_image(dir + "/rgba.exr", { "R", "G", "B", "A" }, { 0.5f, 0.5f, 0.5f, 1.0f });
     std::string log;
     // Alpha as depth made every pixel 1 m away, or nowhere: a transparent
     // frame, and exit 0.

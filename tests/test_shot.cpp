@@ -53,18 +53,6 @@ std::vector<std::string> settings_of(const Shot& shot)
     return all;
 }
 
-/// A .dof's error, which must be one line naming the source.
-std::string dof_error(const std::string& text, const std::string& directory = "")
-{
-    Shot shot;
-    std::string error;
-    INFO(text);
-    CHECK_FALSE(parse_shot(text, directory, "shot.dof", shot, error));
-    CHECK(OIIO::Strutil::starts_with(error, "shot.dof: "));
-    CHECK(error.find('\n') == std::string::npos);
-    return error;
-}
-
 }  // namespace
 
 TEST_CASE("keyframes: constants, and focus pulls linear in 1/z")

@@ -8,11 +8,15 @@
 
 #include <unistd.h>
 
+#include <catch2/catch.hpp>
+
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/strutil.h>
 
 #include <defocus/io/image_input.h>
 #include <defocus/layers/layering.h>
+#include <defocus/shot/shot_file.h>
 
 namespace defocus_test {
 
@@ -203,6 +207,27 @@ int run(const std::string& command, std::string& output)
         output.append(buf.data(), n);
     const int status = pclose(pipe);
     return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+void write_uniform_image(const std::string& path, const std::vector<std::string>& channels,
+                         const std::vector<float>& pixel, int width, int height, TypeDesc type)
+{
+    ImageSpec spec(width, height, int(channels.size()), type);
+    spec.channelnames = channels;
+    ImageBuf image(spec);
+    ImageBufAlgo::fill(image, pixel);
+    REQUIRE(image.write(path));
+}
+
+std::string dof_error(const std::string& text, const std::string& directory)
+{
+    defocus::Shot shot;
+    std::string error;
+    INFO(text);
+    CHECK_FALSE(defocus::parse_shot(text, directory, "shot.dof", shot, error));
+    CHECK(Strutil::starts_with(error, "shot.dof: "));
+    CHECK(error.find('\n') == std::string::npos);
+    return error;
 }
 
 std::string example_scene()

@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include <OpenImageIO/imagebuf.h>
 
@@ -79,6 +80,16 @@ double garden_psnr(const ImageBuf& result, const ImageBuf& truth, int dx = 0, in
 
 /// Runs a shell command, returns its exit status; stdout+stderr into `output`.
 int run(const std::string& command, std::string& output);
+
+/// Writes a `width` x `height` image of the given channels, every pixel
+/// `pixel`, as `type`.
+void write_uniform_image(const std::string& path, const std::vector<std::string>& channels,
+                         const std::vector<float>& pixel, int width = 16, int height = 16,
+                         OIIO::TypeDesc type = OIIO::TypeFloat);
+
+/// The error of a .dof text that must be refused (checked: one line, naming
+/// its source "shot.dof"), its paths resolved against `directory`.
+std::string dof_error(const std::string& text, const std::string& directory = "");
 
 /// The example scene (make_example_scene) at 320x180, made once per test
 /// program.

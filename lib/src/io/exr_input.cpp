@@ -102,6 +102,18 @@ bool attributes_fit(const std::string& filename, std::string& why)
 
 }  // namespace
 
+bool is_openexr_file(const std::string& filename)
+{
+    unsigned char magic[4] = { 0, 0, 0, 0 };
+    if (FILE* f = OIIO::Filesystem::fopen(filename, "rb")) {
+        const size_t n = std::fread(magic, 1, 4, f);
+        std::fclose(f);
+        return n == 4 && magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31
+               && magic[3] == 0x01;
+    }
+    return false;
+}
+
 double deep_table_bytes(int64_t width, int64_t height)
 {
     // A sample count, a pointer per channel to the pixel's first sample
@@ -165,6 +177,16 @@ bool ExrInput::open(const std::string& filename, std::string& error)
     }
     m_context = new Context { file, filename };
     return true;
+}
+
+std::string ExrInput::string_attribute(const char* name) const
+{
+    int32_t length = 0;
+    const char* text = nullptr;
+    if (exr_attr_get_string(m_context->file, 0, name, &length, &text) != EXR_ERR_SUCCESS || !text
+        || length < 0)
+        return "";
+    return std::string(text, size_t(length));
 }
 
 bool ExrInput::complete(std::string& why) const

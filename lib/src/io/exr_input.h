@@ -18,6 +18,9 @@
 
 namespace defocus {
 
+/// Whether a file starts as an OpenEXR file does (its magic number).
+bool is_openexr_file(const std::string& filename);
+
 /// Where one channel of a part is decoded to, as float: the address of the
 /// part's data window origin, and the steps to the next pixel and row.
 struct ChannelTarget {
@@ -37,6 +40,10 @@ public:
     /// truncated OpenEXR file: ...").
     bool open(const std::string& filename, std::string& error);
     bool is_open() const { return m_context != nullptr; }
+
+    /// The string attribute `name` of the first part, or "" when it has
+    /// none of that name and type.
+    std::string string_attribute(const char* name) const;
 
     /// Whether every chunk of every part (every tile of every level) is in
     /// the file whole: its offset in the chunk table and its data within

@@ -4,6 +4,8 @@
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 
+#include "io/exr_input.h"
+
 namespace defocus {
 
 using namespace OIIO;
@@ -29,6 +31,12 @@ bool read_image_file(const std::string& filename, const std::string& what, Image
     };
     if (const char* why = not_a_file(filename))
         return fail(why);
+    // OpenImageIO's EXR reader allocates what a damaged header asks for
+    // before it finds the file short: OpenEXR's core library checks first.
+    std::string damage;
+    ExrInput headers;
+    if (is_openexr_file(filename) && !headers.open(filename, damage))
+        return fail(damage);
     auto in = ImageInput::open(filename);
     if (!in) {
         const std::string why = OIIO::geterror();  // geterror() clears it: read once

@@ -24,18 +24,6 @@ using Strutil::fmt::format;
 
 namespace {
 
-bool is_openexr(const std::string& filename)
-{
-    unsigned char magic[4] = { 0, 0, 0, 0 };
-    if (FILE* f = Filesystem::fopen(filename, "rb")) {
-        const size_t n = fread(magic, 1, 4, f);
-        fclose(f);
-        return n == 4 && magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31
-               && magic[3] == 0x01;
-    }
-    return false;
-}
-
 std::string channel_name(const std::string& prefix, const std::string& channel)
 {
     return prefix.empty() ? channel : prefix + "." + channel;
@@ -341,7 +329,7 @@ std::unique_ptr<ImageInput> open_file(const std::string& filename, ExrInput* exr
         return nullptr;
     }
     ExrInput headers_only;
-    if (is_openexr(filename) && !(exr ? exr : &headers_only)->open(filename, error))
+    if (is_openexr_file(filename) && !(exr ? exr : &headers_only)->open(filename, error))
         return nullptr;
     auto in = ImageInput::open(filename);
     if (!in) {
