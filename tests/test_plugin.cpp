@@ -130,6 +130,28 @@ TEST_CASE("oiiotool renders each frame of a sequence scene with --iconfig dof:fr
     CHECK(read_spec(dir + "/out.0003.exr").get_float_attribute("defocus:focusDistance") == 8.0f);
 }
 
+TEST_CASE("through the plugin a gap in the input sequence is an error, or held when the .dof says")
+{
+    const std::string dir = scratch_dir("plugin_missing_frames");
+    std::string log;
+    REQUIRE(run(format("{} {}/seq.0001.exr --width 64 --height 36", MAKE_EXAMPLE_SCENE_BIN, dir),
+                log) == 0);
+    REQUIRE(Filesystem::copy(dir + "/seq.0001.exr", dir + "/seq.0003.exr"));
+    auto dof = [&](const std::string& name, const std::string& missing) {
+        REQUIRE(Filesystem::write_text_file(
+            dir + "/" + name, R"({"version": 1, "inputs": ["seq.#.exr"], "scene": {"frames": "1-3")"
+                                  + missing + R"(}, "camera": {"focus": 3}})"));
+    };
+    dof("strict.dof", "");
+    dof("hold.dof", R"(, "missing_frames": "hold")");
+    CHECK(run(format("{}{} --info {}/strict.dof", with_plugin, OIIOTOOL_BIN, dir), log) != 0);
+    CHECK(Strutil::contains(log, "seq.0002.exr: no such file; frames with input files missing: 2"));
+    REQUIRE(run(format("{}{} --iconfig dof:frame 2 {}/hold.dof -o {}/held.exr", with_plugin,
+                       OIIOTOOL_BIN, dir, dir),
+                log) == 0);
+    require_identical(dir + "/held.exr", cli_render(dir + "/hold.dof", "--frames 1"));
+}
+
 TEST_CASE("oiiotool --info reports the spec without rendering")
 {
     // Pixels that cannot be read: open() must not need them, so it cannot
