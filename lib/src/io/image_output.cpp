@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -39,6 +40,27 @@ const std::map<std::string, std::vector<std::string>>& compressions()
         { "jpeg", { "jpeg" } },
     };
     return names;
+}
+
+/// Whether a PNG or JPEG file lacks the marker that ends every complete
+/// one (a PNG's IEND chunk, a JPEG's EOI): cut short. Checked before such a
+/// file is decoded: libpng reports a file cut short by a longjmp, which
+/// leaks what OpenImageIO's reader held (LeakSanitizer finds it).
+bool cut_before_end_marker(const std::string& filename)
+{
+    static const std::string png_magic = "\x89PNG", jpeg_magic = "\xFF\xD8\xFF";
+    static const std::string png_end("\0\0\0\0IEND\xAE\x42\x60\x82", 12), jpeg_end = "\xFF\xD9";
+    std::string head(4, '\0'), tail(12, '\0');
+    FILE* f = Filesystem::fopen(filename, "rb");
+    if (!f)
+        return false;
+    const bool read = std::fread(head.data(), 1, 4, f) == 4 && std::fseek(f, -12, SEEK_END) == 0
+                      && std::fread(tail.data(), 1, 12, f) == 12;
+    std::fclose(f);
+    if (!read)
+        return Strutil::starts_with(head, png_magic) || Strutil::starts_with(head, jpeg_magic);
+    return (Strutil::starts_with(head, png_magic) && tail != png_end)
+           || (Strutil::starts_with(head, jpeg_magic) && !Strutil::ends_with(tail, jpeg_end));
 }
 
 }  // namespace
@@ -94,6 +116,10 @@ bool written_with_settings(const std::string& filename, const std::string& hash,
             return unreadable(reason);
         recorded = exr.string_attribute("defocus:settingsHash");
     } else {
+        if (cut_before_end_marker(filename)) {
+            why = "is incomplete (it does not end as its format ends)";
+            return false;
+        }
         auto in = ImageInput::open(filename);
         if (!in)
             return unreadable(OIIO::geterror());
