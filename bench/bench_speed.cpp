@@ -10,7 +10,7 @@
 // the read stage against a plain OpenEXR decode; whole frames of the garden
 // scene and the 4K example (`defocus` as a process) and their peak memory;
 // reading large scene files (a million keyframes, ten thousand inputs, a
-// frame list of huge steps).
+// frame list of huge steps, a million frames checked on disk).
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -444,10 +444,24 @@ int main(int argc, const char* argv[])
     const std::string huge_steps = "{\"version\": 1, \"inputs\": [\"" + input_name
                                    + "\"], \"scene\": {\"frames\": \"1-2147483647x2147483646,"
                                      "-1000000000-1000000000x999999999\"}}";
+    // Every frame of every pattern is looked up: three frames on disk of a
+    // million listed, the rest skipped.
+    const std::string sequence_folder = scratch + "/sequence";
+    Filesystem::create_directory(sequence_folder);
+    for (int frame : { 1, 500000, 1000000 })
+        for (const char* name : { "beauty", "depth" })
+            Filesystem::write_text_file(format("{}/{}.{:04d}.exr", sequence_folder, name, frame),
+                                        "");
+    const std::string sequence_frames =
+        format("{{\"version\": 1, \"inputs\": [\"{0}/beauty.#.exr\"], \"scene\": "
+               "{{\"depth\": \"{0}/depth.%04d.exr\", \"frames\": \"1-1000000\", "
+               "\"missing_frames\": \"skip\"}}}}",
+               sequence_folder);
     const std::vector<std::pair<std::string, std::string>> scene_files = {
         { "1,000,000 keyframes", keyframes_text },
         { "10,000 inputs", inputs_text },
         { "frames of huge steps", huge_steps },
+        { "1,000,000 frames, 3 on disk", sequence_frames },
     };
     for (const auto& [name, text] : scene_files)
         add("scene file " + name, [&, text = text] {

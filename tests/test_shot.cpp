@@ -1,5 +1,6 @@
 // Shots: keyframes, frame patterns, settings, .dof files and focusing on a
 // pixel.
+#include <filesystem>
 #include <set>
 
 #include <catch2/catch.hpp>
@@ -148,6 +149,39 @@ TEST_CASE("frame patterns in oiiotool's syntax")
     REQUIRE(set_shot_setting(shot, "focus", "1:1.25,24:3", error));
     CHECK_FALSE(shot_frames(shot, frames, error));
     CHECK(contains(error, "--frames"));
+}
+
+TEST_CASE("a frame is missing exactly when no entry has the name its pattern writes")
+{
+    // The folder is listed once per pattern rather than each frame's file
+    // looked up: the listing must agree with the lookup name by name.
+    const std::string dir = scratch_dir("frames_on_disk");
+    for (const char* name : { "seq.0001.exr", "seq.02.exr", "seq.00003.exr", "seq.12345.exr",
+                              "seq.-001.exr", "seq.1234567890.exr", "seq.0006.exr.tmp",
+                              "xseq.0007.exr" })
+        OIIO::Filesystem::write_text_file(dir + "/" + name, "");
+    std::filesystem::create_symlink(dir + "/nowhere", dir + "/seq.0004.exr");
+    OIIO::Filesystem::create_directory(dir + "/seq.0005.exr");
+    OIIO::Filesystem::create_directory(dir + "/take.0008");
+    OIIO::Filesystem::write_text_file(dir + "/take.0008/seq.exr", "");
+
+    Shot shot;
+    std::string error;
+    std::vector<int> frames, missing;
+    shot.focus = Keyframes(3.0);
+    REQUIRE(set_shot_setting(shot, "missing-frames", "skip", error));
+    shot.frames = "-1,1-7,12345,1234567890";
+    shot.inputs = { dir + "/seq.#.exr" };
+    REQUIRE(shot_frames(shot, frames, error, &missing));
+    CHECK(frames == std::vector<int> { -1, 1, 4, 5, 12345, 1234567890 });
+    CHECK(missing == std::vector<int> { 2, 3, 6, 7 });
+
+    // The frame number in a folder's name.
+    shot.frames = "7-9";
+    shot.inputs = { dir + "/take.#/seq.exr" };
+    REQUIRE(shot_frames(shot, frames, error, &missing));
+    CHECK(frames == std::vector<int> { 8 });
+    CHECK(missing == std::vector<int> { 7, 9 });
 }
 
 TEST_CASE("shot settings: command-line text, errors, focus and focus-at exclude each other")

@@ -1,10 +1,15 @@
 #include <defocus/io/frames.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
+#include <optional>
+#include <string_view>
 #include <regex>
+
+#include <sys/stat.h>
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/strutil.h>
@@ -111,7 +116,8 @@ bool enumerate_frames(const std::string& list, std::vector<int>& frames, std::st
         return false;
     }
     std::vector<int> sorted = frames;
-    std::sort(sorted.begin(), sorted.end());
+    if (!std::is_sorted(sorted.begin(), sorted.end()))
+        std::sort(sorted.begin(), sorted.end());
     const auto twice = std::adjacent_find(sorted.begin(), sorted.end());
     if (twice != sorted.end()) {
         error = format("{}: '{}' names frame {} more than once", what, list, *twice);
@@ -151,45 +157,67 @@ struct FrameNumbering {
         width  = found[1].length() ? std::stoi(found[1]) : 0;
         return true;
     }
+    /// As printf's "%0Nd" writes it (a minus sign counts in the width).
+    /// By hand, not by format(): a shot looks up every frame's files.
     std::string path(int frame) const
     {
-        return format("{}{:0{}d}{}", prefix, frame, width, suffix);
+        char digits[16];
+        const char* end = std::to_chars(digits, digits + sizeof(digits), std::abs(int64_t(frame))).ptr;
+        const size_t length = size_t(end - digits) + (frame < 0 ? 1 : 0);
+        std::string file = prefix;
+        if (frame < 0)
+            file += '-';
+        file.append(size_t(width) > length ? size_t(width) - length : 0, '0');
+        file.append(digits, size_t(end - digits));
+        return file += suffix;
     }
 };
 
-/// The frames of a pattern that name entries of its folder, in order.
-/// What an entry is does not matter here: a symbolic link loop or a folder
-/// among the frames is that frame's error when it is read. (OpenImageIO's
-/// scan stops at the first entry it cannot examine, dropping the frames
-/// after it.)
-std::vector<int> scan_frames(const FrameNumbering& pattern)
+/// The frame an entry of the pattern's folder is, when it is one: the
+/// name as path() writes it for a frame of 0 to 999999999 (no leading zero
+/// past the width).
+std::optional<int> frame_of_entry(const FrameNumbering& pattern, const std::string& name_prefix,
+                                  const std::string& entry)
 {
+    const std::string& suffix = pattern.suffix;
+    if (entry.size() <= name_prefix.size() + suffix.size()
+        || entry.compare(0, name_prefix.size(), name_prefix) != 0
+        || entry.compare(entry.size() - suffix.size(), suffix.size(), suffix) != 0)
+        return std::nullopt;
+    const std::string_view digits(entry.data() + name_prefix.size(),
+                                  entry.size() - name_prefix.size() - suffix.size());
+    const size_t width = size_t(std::max(pattern.width, 1));
+    if (digits.size() < width || digits.size() > 9 || (digits.size() > width && digits[0] == '0')
+        || digits.find_first_not_of("0123456789") != std::string_view::npos)
+        return std::nullopt;
+    int frame = 0;
+    std::from_chars(digits.data(), digits.data() + digits.size(), frame);
+    return frame;
+}
+
+/// The frames of a pattern that name entries of its folder, in order; none
+/// when the folder cannot be listed or the frame number is in a folder's
+/// name. What an entry is does not matter here: a symbolic link loop or a
+/// folder among the frames is that frame's error when it is read.
+/// (OpenImageIO's scan stops at the first entry it cannot examine,
+/// dropping the frames after it.)
+std::optional<std::vector<int>> scan_frames(const FrameNumbering& pattern)
+{
+    if (pattern.suffix.find('/') != std::string::npos)
+        return std::nullopt;
     const size_t slash = pattern.prefix.rfind('/');
     const std::string folder =
         slash == std::string::npos ? "." : pattern.prefix.substr(0, std::max<size_t>(slash, 1));
     const std::string name_prefix =
         slash == std::string::npos ? pattern.prefix : pattern.prefix.substr(slash + 1);
-    if (pattern.suffix.find('/') != std::string::npos)
-        return {};  // the frame number in a folder's name
-    auto literal = [](const std::string& text) {
-        return std::regex_replace(text, std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)");
-    };
-    // The digits the pattern writes: padded to the width, with no leading
-    // zero past it.
-    const std::string width = std::to_string(pattern.width);
-    const std::string digits = pattern.width == 0
-                                   ? "(0|[1-9][0-9]*)"
-                                   : "([0-9]{" + width + "}|[1-9][0-9]{" + width + ",})";
-    const std::regex frame_name(literal(name_prefix) + digits + literal(pattern.suffix));
     std::vector<int> frames;
     std::error_code ec;
-    for (std::filesystem::directory_iterator it(folder, ec), end; !ec && it != end;
-         it.increment(ec)) {
-        const std::string entry = it->path().filename().string();
-        std::smatch frame;
-        if (std::regex_match(entry, frame, frame_name) && frame[1].length() <= 9)
-            frames.push_back(std::stoi(frame[1]));
-    }
+    std::filesystem::directory_iterator it(folder, ec), end;
+    for (; !ec && it != end; it.increment(ec))
+        if (auto frame = frame_of_entry(pattern, name_prefix, it->path().filename().string()))
+            frames.push_back(*frame);
+    if (ec)
+        return std::nullopt;
     std::sort(frames.begin(), frames.end());
     frames.erase(std::unique(frames.begin(), frames.end()), frames.end());
     return frames;
@@ -200,20 +228,98 @@ std::vector<int> scan_frames(const FrameNumbering& pattern)
 /// that frame's error when it is read, not a missing frame.
 bool has_entry(const std::string& path)
 {
-    std::error_code ec;
-    return std::filesystem::exists(std::filesystem::symlink_status(path, ec));
+    struct stat entry;
+    return ::lstat(path.c_str(), &entry) == 0;
+}
+
+/// The numbering of a frame pattern; false for a name that is not one.
+bool parse_numbering(const std::string& path, FrameNumbering& numbering)
+{
+    std::string normalized, range;
+    return parse_frame_pattern(path, normalized, range) && numbering.parse(normalized);
 }
 
 /// The frames of a pattern found on disk, in order ({} for a name that
 /// is not a pattern).
 std::vector<int> frames_on_disk(const std::string& pattern)
 {
-    std::string normalized, range;
     FrameNumbering numbering;
-    if (!parse_frame_pattern(pattern, normalized, range) || !numbering.parse(normalized))
+    if (!parse_numbering(pattern, numbering))
         return {};
-    return scan_frames(numbering);
+    return scan_frames(numbering).value_or(std::vector<int>());
 }
+
+/// A shot's frame patterns, and which of their files are on disk. A shot
+/// checks every one of its frames (up to a million) for each pattern: one
+/// listing of each pattern's folder costs less than a lookup of each file,
+/// and parsing a pattern far more.
+class SequenceFiles {
+public:
+    explicit SequenceFiles(const Shot& shot) : hold_(shot.missing_frames == MissingFrames::Hold)
+    {
+        for (const std::string& file : sequence_files(shot))
+            if (FrameNumbering numbering; parse_numbering(file, numbering))
+                patterns_.push_back({ numbering, std::nullopt, false });
+    }
+    bool empty() const { return patterns_.empty(); }
+    /// The first file of `frame` that is missing, "" when all are there.
+    std::string first_missing(int frame) const
+    {
+        for (Pattern& pattern : patterns_)
+            if (!pattern.has(frame))
+                return pattern.numbering.path(frame);
+        return "";
+    }
+    bool exist(int frame) const
+    {
+        return std::all_of(patterns_.begin(), patterns_.end(),
+                           [frame](Pattern& pattern) { return pattern.has(frame); });
+    }
+    /// See source_frame().
+    int source(int frame) const
+    {
+        if (!hold_ || empty() || exist(frame))
+            return frame;
+        // The frames on disk of the first pattern, nearest earlier first,
+        // then nearest later.
+        const std::vector<int>& on_disk = patterns_.front().on_disk();
+        const auto after = std::upper_bound(on_disk.begin(), on_disk.end(), frame);
+        for (auto earlier = std::make_reverse_iterator(after); earlier != on_disk.rend(); ++earlier)
+            if (*earlier != frame && exist(*earlier))
+                return *earlier;
+        for (auto later = after; later != on_disk.end(); ++later)
+            if (exist(*later))
+                return *later;
+        return frame;
+    }
+
+private:
+    struct Pattern {
+        FrameNumbering numbering;
+        std::optional<std::vector<int>> scanned;  ///< its folder's listing, once listed
+        bool listed;
+        const std::vector<int>& on_disk()
+        {
+            if (!listed)
+                scanned = scan_frames(numbering);
+            listed = true;
+            static const std::vector<int> none;
+            return scanned ? *scanned : none;
+        }
+        /// The listing answers for the frames it can hold; a file lookup
+        /// for the others (negative, ten digits) and for a folder that
+        /// cannot be listed.
+        bool has(int frame)
+        {
+            on_disk();
+            if (scanned && frame >= 0 && frame <= 999999999)
+                return std::binary_search(scanned->begin(), scanned->end(), frame);
+            return has_entry(numbering.path(frame));
+        }
+    };
+    bool hold_;
+    mutable std::vector<Pattern> patterns_;
+};
 
 }  // namespace
 
@@ -225,11 +331,8 @@ bool is_frame_pattern(const std::string& path)
 
 std::string frame_path(const std::string& path, int frame)
 {
-    std::string normalized, range;
-    if (!parse_frame_pattern(path, normalized, range))
-        return path;
     FrameNumbering numbering;
-    return numbering.parse(normalized) ? numbering.path(frame) : path;
+    return parse_numbering(path, numbering) ? numbering.path(frame) : path;
 }
 
 std::vector<std::string> frame_inputs(const Shot& shot, int frame)
@@ -250,28 +353,12 @@ ReadOptions frame_read_options(const Shot& shot, int frame)
 
 bool frame_inputs_exist(const Shot& shot, int frame)
 {
-    for (const std::string& file : sequence_files(shot))
-        if (!has_entry(frame_path(file, frame)))
-            return false;
-    return true;
+    return SequenceFiles(shot).exist(frame);
 }
 
 int source_frame(const Shot& shot, int frame)
 {
-    if (shot.missing_frames != MissingFrames::Hold || frame_inputs_exist(shot, frame))
-        return frame;
-    // The frames on disk of the first pattern, nearest earlier first, then
-    // nearest later.
-    const std::vector<std::string> patterns = sequence_files(shot);
-    if (patterns.empty())
-        return frame;
-    std::vector<int> candidates = frames_on_disk(patterns.front());
-    const auto after = std::upper_bound(candidates.begin(), candidates.end(), frame);
-    std::reverse(candidates.begin(), after);
-    for (int candidate : candidates)
-        if (candidate != frame && frame_inputs_exist(shot, candidate))
-            return candidate;
-    return frame;
+    return SequenceFiles(shot).source(frame);
 }
 
 std::vector<std::string> sequence_files(const Shot& shot)
@@ -287,14 +374,19 @@ std::vector<std::string> sequence_files(const Shot& shot)
 
 std::vector<std::string> files_read(const Shot& shot, const std::vector<int>& frames)
 {
+    const SequenceFiles sequence(shot);
+    std::vector<int> sources;
+    for (int frame : frames)
+        sources.push_back(sequence.source(frame));
     std::vector<std::string> files;
     for (const std::string& file : shot_files(shot)) {
-        if (!is_frame_pattern(file)) {
+        FrameNumbering numbering;
+        if (!parse_numbering(file, numbering)) {
             files.push_back(file);
             continue;
         }
-        for (int frame : frames)
-            files.push_back(frame_path(file, source_frame(shot, frame)));
+        for (int source : sources)
+            files.push_back(numbering.path(source));
     }
     return files;
 }
@@ -312,7 +404,8 @@ bool is_sequence(const Shot& shot)
 std::string frame_ranges(const std::vector<int>& frames)
 {
     std::vector<int> sorted = frames;
-    std::sort(sorted.begin(), sorted.end());
+    if (!std::is_sorted(sorted.begin(), sorted.end()))
+        std::sort(sorted.begin(), sorted.end());
     std::vector<std::string> ranges;
     for (size_t i = 0; i < sorted.size();) {
         size_t j = i;
@@ -337,7 +430,6 @@ bool shot_frames(const Shot& shot, std::vector<int>& frames, std::string& error,
     frames.clear();
     if (missing_frames)
         missing_frames->clear();
-    const std::vector<std::string> patterns = sequence_files(shot);
     const auto first_input_pattern =
         std::find_if(shot.inputs.begin(), shot.inputs.end(), is_frame_pattern);
     if (!shot.frames.empty()) {
@@ -367,22 +459,20 @@ bool shot_frames(const Shot& shot, std::vector<int>& frames, std::string& error,
         if (!enumerate_frames(range, frames, error, first))
             return false;
     }
-    if (patterns.empty())
+    const SequenceFiles sequence(shot);
+    if (sequence.empty())
         return true;
 
     std::vector<int> missing, present;
     for (int frame : frames)
-        (frame_inputs_exist(shot, frame) ? present : missing).push_back(frame);
+        (sequence.exist(frame) ? present : missing).push_back(frame);
     if (missing.empty())
         return true;
     if (missing_frames)
         *missing_frames = missing;
-    std::string first_missing;
-    for (const std::string& file : patterns)
-        if (first_missing.empty() && !has_entry(frame_path(file, missing.front())))
-            first_missing = frame_path(file, missing.front());
     const std::string which = format("{}: no such file; frames with input files missing: {}",
-                                     first_missing, frame_ranges(missing));
+                                     sequence.first_missing(missing.front()),
+                                     frame_ranges(missing));
     if (shot.missing_frames == MissingFrames::Error) {
         error = which + " (--missing-frames skip or hold renders the shot without them)";
         return false;
