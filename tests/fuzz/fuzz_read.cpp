@@ -2,8 +2,10 @@
 // scene or a reason, its headers a size, and a frame that records the
 // harness's settings hash is whole or says why not; read as a .dof, any
 // file gives a shot or a reason. Never a crash, a hang or an allocation
-// past the memory limit. Nothing is rendered, so thousands of inputs run a
-// second where fuzz_scene renders tens.
+// past the memory limit. Nothing is rendered, yet it runs about 50 inputs
+// a second under ASan, as fuzz_scene does: the time goes to the zeroed
+// memory OpenEXR's and LibRaw's readers allocate for what a header
+// declares, not to defocus's own code.
 #include <cstdint>
 #include <string>
 
