@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstring>
 #include <mutex>
+#include <set>
 
 #include <OpenEXR/ImfArray.h>
 #include <OpenEXR/ImfDeepFrameBuffer.h>
@@ -56,7 +57,8 @@ std::string damaged(const std::string& filename, const std::string& why)
 /// Reads the attribute headers of an OpenEXR file as they lie in it (name,
 /// type, 4-byte size, value; a header ends with an empty name, and a
 /// multi-part file's headers with an empty header) and checks that every
-/// value fits in the file. OpenEXR's C++ interface (OpenImageIO's reader,
+/// value fits in the file and no name is given twice (OpenEXR's libraries
+/// differ on which one counts). OpenEXR's C++ interface (OpenImageIO's reader,
 /// the deep reader) allocates an attribute's declared size before reading
 /// it: a 4 KB file declaring a 1.9 GB string took 1.9 GB and 4 s.
 bool attributes_fit(const std::string& filename, std::string& why)
@@ -78,7 +80,13 @@ bool attributes_fit(const std::string& filename, std::string& why)
     const bool multipart = start[5] & 0x10;  // version flags bit 12
     for (bool more = ok; more;) {
         std::string name, type;
+        std::set<std::string> names;
         while (ok && (ok = read_name(name)) && !name.empty()) {
+            if (!names.insert(name).second) {
+                why = format("attribute '{}' is given twice in one header", name);
+                std::fclose(f);
+                return false;
+            }
             int32_t size = 0;
             ok = read_name(type) && std::fread(&size, 4, 1, f) == 1;
             const uint64_t at = uint64_t(std::ftell(f));
@@ -251,8 +259,8 @@ bool ExrInput::complete(std::string& why) const
     return true;
 }
 
-bool ExrInput::read(int part, const std::vector<ChannelTarget>& targets, std::string& error,
-                    int nthreads) const
+bool ExrInput::read(int part, const OIIO::ROI& window, const std::vector<ChannelTarget>& targets,
+                    std::string& error, int nthreads) const
 {
     exr_const_context_t file = m_context->file;
     const std::string& filename = m_context->filename;
@@ -266,6 +274,25 @@ bool ExrInput::read(int part, const std::vector<ChannelTarget>& targets, std::st
         return false;
     }
     const int64_t width = int64_t(dw.max.x) - dw.min.x + 1, height = int64_t(dw.max.y) - dw.min.y + 1;
+    // The core library decodes into buffers laid out by another reader:
+    // where the two read a header differently (an attribute given twice),
+    // a chunk would be written past them.
+    const exr_attr_chlist_t* channels = nullptr;
+    if (exr_get_channels(file, part, &channels) != EXR_ERR_SUCCESS) {
+        error = damaged(filename, core_message);
+        return false;
+    }
+    auto has_channel = [channels](const ChannelTarget& t) {
+        return std::any_of(channels->entries, channels->entries + channels->num_channels,
+                           [&](const exr_attr_chlist_entry_t& entry) {
+                               return t.channel == entry.name.str;
+                           });
+    };
+    if (dw.min.x != window.xbegin || dw.min.y != window.ybegin || width != window.width()
+        || height != window.height() || !std::all_of(targets.begin(), targets.end(), has_channel)) {
+        error = damaged(filename, format("part {}'s headers read two ways", part));
+        return false;
+    }
 
     // The chunks of the part: scanline blocks, or tiles of the top level.
     int64_t across = 1, chunks = 0;

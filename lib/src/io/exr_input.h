@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include <OpenImageIO/imageio.h>
+
 #include <defocus/scene.h>
 #include <defocus/shot/memory_limit.h>
 
@@ -53,10 +55,13 @@ public:
     bool complete(std::string& why) const;
 
     /// Decodes the named channels of flat part `part` (scanline or tiled,
-    /// its full-resolution level) into their targets, chunks in parallel.
-    /// False with `error` when a chunk is damaged.
-    bool read(int part, const std::vector<ChannelTarget>& targets, std::string& error,
-              int nthreads) const;
+    /// its full-resolution level) into their targets, laid out over
+    /// `window`, chunks in parallel. False with `error` when a chunk is
+    /// damaged, or when the part's data window or channels are not those
+    /// the targets were laid out for (another reader of the same headers,
+    /// such as OpenImageIO's, read them differently).
+    bool read(int part, const OIIO::ROI& window, const std::vector<ChannelTarget>& targets,
+              std::string& error, int nthreads) const;
 
 private:
     struct Context;

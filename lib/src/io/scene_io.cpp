@@ -262,11 +262,11 @@ bool decode_layer(const ExrInput& exr, const std::string& filename, const std::s
         if (depth_part->subimage == color_part.subimage) {
             targets.push_back({ depth_name, z, 1, width });
         } else if (depth_window == window) {
-            if (!exr.read(depth_part->subimage, { { depth_name, z, 1, width } }, error, 0))
+            if (!exr.read(depth_part->subimage, window, { { depth_name, z, 1, width } }, error, 0))
                 return false;
         } else {
             ImageBuf depth = depth_image(depth_window, depth_part->spec);
-            if (!exr.read(depth_part->subimage,
+            if (!exr.read(depth_part->subimage, depth_window,
                           { { depth_name, static_cast<float*>(depth.localpixels()), 1,
                               size_t(depth_window.width()) } },
                           error, 0))
@@ -274,7 +274,7 @@ bool decode_layer(const ExrInput& exr, const std::string& filename, const std::s
             lay_depth(layer, depth, 0);
         }
     }
-    return exr.read(color_part.subimage, targets, error, 0);
+    return exr.read(color_part.subimage, window, targets, error, 0);
 }
 
 /// A flat layer: colour from `color_part` (opaque without alpha) and, unless
@@ -560,7 +560,8 @@ bool read_depth_file(const std::string& filename, const ImageSpec& render,
     ImageBuf depth;
     if (exr.is_open()) {
         depth = depth_image(spec.roi(), spec);
-        if (!exr.read(0, { { spec.channelnames[channel], static_cast<float*>(depth.localpixels()),
+        if (!exr.read(0, spec.roi(),
+                      { { spec.channelnames[channel], static_cast<float*>(depth.localpixels()),
                              1, size_t(spec.width) } },
                       error, 0))
             return false;
