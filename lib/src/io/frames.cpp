@@ -84,6 +84,14 @@ struct FrameRange {
     }
 };
 
+/// `frames` in order. Most lists come in order, and are only checked.
+std::vector<int> sorted(std::vector<int> frames)
+{
+    if (!std::is_sorted(frames.begin(), frames.end()))
+        std::sort(frames.begin(), frames.end());
+    return frames;
+}
+
 /// Reads a frame list ("1-10x2,15,20-30") into `frames`, in its order.
 /// At most max_frames frames, counted before any is listed, and none
 /// twice (a frame listed twice would be rendered and written twice).
@@ -115,11 +123,9 @@ bool enumerate_frames(const std::string& list, std::vector<int>& frames, std::st
         error = format("{}: '{}' names no frames", what, list);
         return false;
     }
-    std::vector<int> sorted = frames;
-    if (!std::is_sorted(sorted.begin(), sorted.end()))
-        std::sort(sorted.begin(), sorted.end());
-    const auto twice = std::adjacent_find(sorted.begin(), sorted.end());
-    if (twice != sorted.end()) {
+    const std::vector<int> in_order = sorted(frames);
+    const auto twice = std::adjacent_find(in_order.begin(), in_order.end());
+    if (twice != in_order.end()) {
         error = format("{}: '{}' names frame {} more than once", what, list, *twice);
         return false;
     }
@@ -403,16 +409,14 @@ bool is_sequence(const Shot& shot)
 
 std::string frame_ranges(const std::vector<int>& frames)
 {
-    std::vector<int> sorted = frames;
-    if (!std::is_sorted(sorted.begin(), sorted.end()))
-        std::sort(sorted.begin(), sorted.end());
+    const std::vector<int> in_order = sorted(frames);
     std::vector<std::string> ranges;
-    for (size_t i = 0; i < sorted.size();) {
+    for (size_t i = 0; i < in_order.size();) {
         size_t j = i;
-        while (j + 1 < sorted.size() && int64_t(sorted[j + 1]) == int64_t(sorted[j]) + 1)
+        while (j + 1 < in_order.size() && int64_t(in_order[j + 1]) == int64_t(in_order[j]) + 1)
             ++j;
-        ranges.push_back(j == i ? std::to_string(sorted[i])
-                                : format("{}-{}", sorted[i], sorted[j]));
+        ranges.push_back(j == i ? std::to_string(in_order[i])
+                                : format("{}-{}", in_order[i], in_order[j]));
         i = j + 1;
     }
     constexpr size_t shown = 12;
