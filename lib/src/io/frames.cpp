@@ -255,23 +255,30 @@ std::vector<int> frames_on_disk(const std::string& pattern)
     return scan_frames(numbering).value_or(std::vector<int>());
 }
 
-/// A shot's frame patterns, and which of their files are on disk. A shot
-/// checks every one of its frames (up to a million) for each pattern: one
-/// listing of each pattern's folder costs less than a lookup of each file,
-/// and parsing a pattern far more.
+/// A shot's frame patterns, and which of their files are on disk. A check
+/// of the whole shot asks about every frame (up to a million) of each
+/// pattern: one listing of the pattern's folder costs less than a lookup of
+/// each file, and parsing the pattern far more. A check of one frame looks
+/// its files up, and lists a folder only to find the frame a missing one
+/// holds.
 class SequenceFiles {
 public:
-    explicit SequenceFiles(const Shot& shot) : hold_(shot.missing_frames == MissingFrames::Hold)
+    enum class Check { OneFrame, WholeShot };
+
+    SequenceFiles(const Shot& shot, Check check)
+        : hold_(shot.missing_frames == MissingFrames::Hold)
     {
         for (const std::string& file : sequence_files(shot))
             if (FrameNumbering numbering; parse_numbering(file, numbering))
-                patterns_.push_back({ numbering, std::nullopt, false });
+                patterns_.push_back({ numbering, check == Check::WholeShot
+                                                     ? scan_frames(numbering)
+                                                     : std::nullopt });
     }
     bool empty() const { return patterns_.empty(); }
     /// The first file of `frame` that is missing, "" when all are there.
     std::string first_missing(int frame) const
     {
-        for (Pattern& pattern : patterns_)
+        for (const Pattern& pattern : patterns_)
             if (!pattern.has(frame))
                 return pattern.numbering.path(frame);
         return "";
@@ -279,7 +286,7 @@ public:
     bool exist(int frame) const
     {
         return std::all_of(patterns_.begin(), patterns_.end(),
-                           [frame](Pattern& pattern) { return pattern.has(frame); });
+                           [frame](const Pattern& pattern) { return pattern.has(frame); });
     }
     /// See source_frame().
     int source(int frame) const
@@ -302,29 +309,27 @@ public:
 private:
     struct Pattern {
         FrameNumbering numbering;
-        std::optional<std::vector<int>> scanned;  ///< its folder's listing, once listed
-        bool listed;
+        std::optional<std::vector<int>> listing;  ///< its folder's frames, when listed
+
         const std::vector<int>& on_disk()
         {
-            if (!listed)
-                scanned = scan_frames(numbering);
-            listed = true;
+            if (!listing)
+                listing = scan_frames(numbering);
             static const std::vector<int> none;
-            return scanned ? *scanned : none;
+            return listing ? *listing : none;
         }
-        /// The listing answers for the frames it can hold; a file lookup
-        /// for the others (negative, ten digits) and for a folder that
-        /// cannot be listed.
-        bool has(int frame)
+        /// A listing answers for the frames it can hold; a file lookup for
+        /// the others (negative, ten digits), and when the folder is not
+        /// listed or cannot be.
+        bool has(int frame) const
         {
-            on_disk();
-            if (scanned && frame >= 0 && frame <= 999999999)
-                return std::binary_search(scanned->begin(), scanned->end(), frame);
+            if (listing && frame >= 0 && frame <= 999999999)
+                return std::binary_search(listing->begin(), listing->end(), frame);
             return has_entry(numbering.path(frame));
         }
     };
     bool hold_;
-    mutable std::vector<Pattern> patterns_;
+    mutable std::vector<Pattern> patterns_;  ///< listed when first needed
 };
 
 }  // namespace
@@ -357,14 +362,9 @@ ReadOptions frame_read_options(const Shot& shot, int frame)
     return options;
 }
 
-bool frame_inputs_exist(const Shot& shot, int frame)
-{
-    return SequenceFiles(shot).exist(frame);
-}
-
 int source_frame(const Shot& shot, int frame)
 {
-    return SequenceFiles(shot).source(frame);
+    return SequenceFiles(shot, SequenceFiles::Check::OneFrame).source(frame);
 }
 
 std::vector<std::string> sequence_files(const Shot& shot)
@@ -380,7 +380,7 @@ std::vector<std::string> sequence_files(const Shot& shot)
 
 std::vector<std::string> files_read(const Shot& shot, const std::vector<int>& frames)
 {
-    const SequenceFiles sequence(shot);
+    const SequenceFiles sequence(shot, SequenceFiles::Check::WholeShot);
     std::vector<int> sources;
     for (int frame : frames)
         sources.push_back(sequence.source(frame));
@@ -463,7 +463,7 @@ bool shot_frames(const Shot& shot, std::vector<int>& frames, std::string& error,
         if (!enumerate_frames(range, frames, error, first))
             return false;
     }
-    const SequenceFiles sequence(shot);
+    const SequenceFiles sequence(shot, SequenceFiles::Check::WholeShot);
     if (sequence.empty())
         return true;
 

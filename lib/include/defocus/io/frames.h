@@ -30,9 +30,6 @@ ReadOptions frame_read_options(const Shot& shot, int frame);
 /// patterns.
 std::vector<std::string> sequence_files(const Shot& shot);
 
-/// True when every file of the shot's frame patterns exists for `frame`.
-bool frame_inputs_exist(const Shot& shot, int frame);
-
 /// The frame whose input files `frame` reads: itself, unless they are
 /// missing and the shot holds missing frames (MissingFrames::Hold): then
 /// the nearest earlier frame on disk whose files are all there, else the
