@@ -154,8 +154,7 @@ bool DofInput::open(const std::string& name, ImageSpec& newspec, const ImageSpec
     m_filename = name;
     std::string error;
     auto fail = [&](const std::string& message) {
-        errorfmt("{}", defocus::error_line(Strutil::starts_with(message, name)
-                                                ? message : name + ": " + message));
+        errorfmt("{}", defocus::error_line(defocus::error_about(name, message)));
         return false;
     };
     const Nesting nested;

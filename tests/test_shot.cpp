@@ -507,3 +507,11 @@ TEST_CASE("error lines: control characters escaped, overlong messages cut in the
     CHECK(contains(line, " ... "));
     CHECK(error_line("short") == "short");
 }
+
+TEST_CASE("an error passed up through scene files names each file once")
+{
+    CHECK(error_about("a.dof", "no focus") == "a.dof: no focus");
+    CHECK(error_about("a.dof", "a.dof: no focus") == "a.dof: no focus");
+    CHECK(error_about("a.dof", "b.dof: no focus") == "a.dof: b.dof: no focus");
+    CHECK(error_about("a.dof", "a.dofx: no focus") == "a.dof: a.dofx: no focus");
+}

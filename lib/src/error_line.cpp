@@ -26,4 +26,10 @@ std::string error_line(const std::string& message, size_t limit)
     return line.substr(0, keep / 2) + cut + line.substr(line.size() - (keep - keep / 2));
 }
 
+std::string error_about(const std::string& file, const std::string& message)
+{
+    const std::string prefix = file + ": ";
+    return OIIO::Strutil::starts_with(message, prefix) ? message : prefix + message;
+}
+
 }  // namespace defocus

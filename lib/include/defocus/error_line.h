@@ -12,4 +12,8 @@ namespace defocus {
 /// " ... ", so that the start (the file) and the end (the problem) stay.
 std::string error_line(const std::string& message, size_t limit = 1000);
 
+/// "file: message", unless `message` already begins with "file: " (an
+/// error passed up through a nested scene file names it once).
+std::string error_about(const std::string& file, const std::string& message);
+
 }  // namespace defocus

@@ -11,6 +11,7 @@
 #include <OpenImageIO/parallel.h>
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/error_line.h>
 #include <defocus/io/image_input.h>
 
 #include "io/exr_input.h"
@@ -336,7 +337,7 @@ std::unique_ptr<ImageInput> open_file(const std::string& filename, ExrInput* exr
         std::string why = OIIO::geterror();
         if (why.empty())
             why = "not an image file OpenImageIO can read";
-        error = format("{}: {}", filename, Strutil::replace(why, "\n", " ", true));
+        error = error_about(filename, Strutil::replace(why, "\n", " ", true));
         return in;
     }
     // Decided once, from what was opened: a file rewritten between the two
