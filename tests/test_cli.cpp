@@ -1595,10 +1595,15 @@ TEST_CASE("files the fuzzers found are refused quickly and cheaply")
     // fuzz_scene: a header giving 'channels', 'compression' and
     // 'dataWindow' twice; OpenImageIO's reader took one of each, OpenEXR's
     // core library the other, and decoded past the buffers (a crash).
+    // fuzz_scene: a deep part 738 million pixels wide, whose chunk's table
+    // of sample counts OpenEXR's C++ reader sizes in an int: it asked for
+    // a negative size (bad_alloc; under ASan, an abort).
     const Found found[] = {
         { "found_huge_attribute.exr",
           "attribute 'type' declares 1828716552 bytes, past the end of the file" },
         { "found_attribute_twice.exr", "attribute 'channels' is given twice in one header" },
+        { "found_deep_chunk_too_wide.exr",
+          "part 0's deep chunks hold 738197512 pixels each, more than OpenEXR can count" },
     };
     for (const Found& f : found) {
         INFO(f.file);

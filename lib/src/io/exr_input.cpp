@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdio>
+#include <cstdint>
 #include <cstring>
 #include <mutex>
 #include <set>
@@ -108,6 +109,31 @@ bool attributes_fit(const std::string& filename, std::string& why)
     return ok;
 }
 
+/// OpenEXR 3.1's C++ deep readers size one chunk's table of sample counts
+/// in an int: a deep part whose chunk counts more than 2^31 bytes' worth of
+/// pixels (a data window 738 million pixels wide, found by fuzzing) has
+/// them allocate a negative size. The pixels of one chunk of `part`.
+int64_t deep_chunk_pixels(exr_const_context_t file, int part)
+{
+    exr_storage_t storage = EXR_STORAGE_SCANLINE;
+    exr_get_storage(file, part, &storage);
+    if (storage == EXR_STORAGE_DEEP_SCANLINE) {
+        exr_attr_box2i_t window {};
+        int32_t lines = 0;
+        exr_get_data_window(file, part, &window);
+        exr_get_scanlines_per_chunk(file, part, &lines);
+        return (int64_t(window.max.x) - window.min.x + 1) * std::max(lines, 1);
+    }
+    if (storage == EXR_STORAGE_DEEP_TILED) {
+        uint32_t width = 0, height = 0;
+        exr_tile_level_mode_t level;
+        exr_tile_round_mode_t round;
+        exr_get_tile_descriptor(file, part, &width, &height, &level, &round);
+        return int64_t(width) * int64_t(height);
+    }
+    return 0;
+}
+
 }  // namespace
 
 bool is_openexr_file(const std::string& filename)
@@ -175,6 +201,14 @@ bool ExrInput::open(const std::string& filename, std::string& error)
             return false;
         }
         table_bytes += uint64_t(chunks) * sizeof(uint64_t);
+        const int64_t chunk_pixels = deep_chunk_pixels(file, part);
+        if (chunk_pixels * int64_t(sizeof(unsigned)) > INT32_MAX) {
+            exr_finish(&file);
+            error = damaged(filename, format("part {}'s deep chunks hold {} pixels each, more "
+                                             "than OpenEXR can count",
+                                             part, chunk_pixels));
+            return false;
+        }
     }
     const uint64_t file_bytes = OIIO::Filesystem::file_size(filename);
     if (table_bytes > file_bytes) {
