@@ -457,11 +457,22 @@ int main(int argc, const char* argv[])
                "{{\"depth\": \"{0}/depth.%04d.exr\", \"frames\": \"1-1000000\", "
                "\"missing_frames\": \"skip\"}}}}",
                sequence_folder);
+    // The frame number in a folder's name: the folders are listed.
+    for (int frame : { 1, 500000, 1000000 }) {
+        const std::string take = format("{}/take.{:04d}", sequence_folder, frame);
+        Filesystem::create_directory(take);
+        Filesystem::write_text_file(take + "/beauty.exr", "");
+    }
+    const std::string take_frames =
+        format("{{\"version\": 1, \"inputs\": [\"{0}/take.#/beauty.exr\"], \"scene\": "
+               "{{\"frames\": \"1-1000000\", \"missing_frames\": \"skip\"}}}}",
+               sequence_folder);
     const std::vector<std::pair<std::string, std::string>> scene_files = {
         { "1,000,000 keyframes", keyframes_text },
         { "10,000 inputs", inputs_text },
         { "frames of huge steps", huge_steps },
         { "1,000,000 frames, 3 on disk", sequence_frames },
+        { "1,000,000 folders, 3 on disk", take_frames },
     };
     for (const auto& [name, text] : scene_files)
         add("scene file " + name, [&, text = text] {

@@ -164,6 +164,9 @@ TEST_CASE("a frame is missing exactly when no entry has the name its pattern wri
     OIIO::Filesystem::create_directory(dir + "/seq.0005.exr");
     OIIO::Filesystem::create_directory(dir + "/take.0008");
     OIIO::Filesystem::write_text_file(dir + "/take.0008/seq.exr", "");
+    OIIO::Filesystem::create_directory(dir + "/take.0009");  // no seq.exr
+    OIIO::Filesystem::create_directory(dir + "/take.00010");  // not as %04d writes 10
+    OIIO::Filesystem::write_text_file(dir + "/take.00010/seq.exr", "");
 
     Shot shot;
     std::string error;
@@ -176,12 +179,13 @@ TEST_CASE("a frame is missing exactly when no entry has the name its pattern wri
     CHECK(frames == std::vector<int> { -1, 1, 4, 5, 12345, 1234567890 });
     CHECK(missing == std::vector<int> { 2, 3, 6, 7 });
 
-    // The frame number in a folder's name.
-    shot.frames = "7-9";
+    // The frame number in a folder's name: the folders are listed, and the
+    // file looked up in those that are there.
+    shot.frames = "7-10";
     shot.inputs = { dir + "/take.#/seq.exr" };
     REQUIRE(shot_frames(shot, frames, error, &missing));
     CHECK(frames == std::vector<int> { 8 });
-    CHECK(missing == std::vector<int> { 7, 9 });
+    CHECK(missing == std::vector<int> { 7, 9, 10 });
 }
 
 TEST_CASE("shot settings: command-line text, errors, focus and focus-at exclude each other")

@@ -201,16 +201,35 @@ std::optional<int> frame_of_entry(const FrameNumbering& pattern, const std::stri
     return frame;
 }
 
+/// Whether a folder has an entry of this name. What the entry is does not
+/// matter here: a symbolic link loop or a folder where a frame should be is
+/// that frame's error when it is read, not a missing frame.
+bool has_entry(const std::string& path)
+{
+    struct stat entry;
+    return ::lstat(path.c_str(), &entry) == 0;
+}
+
 /// The frames of a pattern that name entries of its folder, in order; none
-/// when the folder cannot be listed or the frame number is in a folder's
-/// name. What an entry is does not matter here: a symbolic link loop or a
-/// folder among the frames is that frame's error when it is read.
-/// (OpenImageIO's scan stops at the first entry it cannot examine,
-/// dropping the frames after it.)
+/// when the folder cannot be listed. What an entry is does not matter here:
+/// a symbolic link loop or a folder among the frames is that frame's error
+/// when it is read. (OpenImageIO's scan stops at the first entry it cannot
+/// examine, dropping the frames after it.) When the frame number is in a
+/// folder's name (`shot.#/beauty.exr`), the folders are listed, and only
+/// the frames whose folder is there are looked up: a million frames were a
+/// million lookups.
 std::optional<std::vector<int>> scan_frames(const FrameNumbering& pattern)
 {
-    if (pattern.suffix.find('/') != std::string::npos)
-        return std::nullopt;
+    if (const size_t below = pattern.suffix.find('/'); below != std::string::npos) {
+        FrameNumbering folders = pattern;
+        folders.suffix.resize(below);
+        std::optional<std::vector<int>> frames = scan_frames(folders);
+        if (frames)
+            frames->erase(std::remove_if(frames->begin(), frames->end(),
+                                         [&](int frame) { return !has_entry(pattern.path(frame)); }),
+                          frames->end());
+        return frames;
+    }
     const size_t slash = pattern.prefix.rfind('/');
     const std::string folder =
         slash == std::string::npos ? "." : pattern.prefix.substr(0, std::max<size_t>(slash, 1));
@@ -227,15 +246,6 @@ std::optional<std::vector<int>> scan_frames(const FrameNumbering& pattern)
     std::sort(frames.begin(), frames.end());
     frames.erase(std::unique(frames.begin(), frames.end()), frames.end());
     return frames;
-}
-
-/// Whether a folder has an entry of this name. What the entry is does not
-/// matter here: a symbolic link loop or a folder where a frame should be is
-/// that frame's error when it is read, not a missing frame.
-bool has_entry(const std::string& path)
-{
-    struct stat entry;
-    return ::lstat(path.c_str(), &entry) == 0;
 }
 
 /// The numbering of a frame pattern; false for a name that is not one.
