@@ -448,15 +448,16 @@ int main(int argc, const char* argv[])
     // million listed, the rest skipped.
     const std::string sequence_folder = scratch + "/sequence";
     Filesystem::create_directory(sequence_folder);
-    for (int frame : { 1, 500000, 1000000 })
+    for (int frame : { -1000000, -500000, -1, 1, 500000, 1000000 })
         for (const char* name : { "beauty", "depth" })
             Filesystem::write_text_file(format("{}/{}.{:04d}.exr", sequence_folder, name, frame),
                                         "");
-    const std::string sequence_frames =
-        format("{{\"version\": 1, \"inputs\": [\"{0}/beauty.#.exr\"], \"scene\": "
-               "{{\"depth\": \"{0}/depth.%04d.exr\", \"frames\": \"1-1000000\", "
-               "\"missing_frames\": \"skip\"}}}}",
-               sequence_folder);
+    auto sequence_frames = [&](const char* frames) {
+        return format("{{\"version\": 1, \"inputs\": [\"{0}/beauty.#.exr\"], \"scene\": "
+                      "{{\"depth\": \"{0}/depth.%04d.exr\", \"frames\": \"{1}\", "
+                      "\"missing_frames\": \"skip\"}}}}",
+                      sequence_folder, frames);
+    };
     // The frame number in a folder's name: the folders are listed.
     for (int frame : { 1, 500000, 1000000 }) {
         const std::string take = format("{}/take.{:04d}", sequence_folder, frame);
@@ -471,7 +472,8 @@ int main(int argc, const char* argv[])
         { "1,000,000 keyframes", keyframes_text },
         { "10,000 inputs", inputs_text },
         { "frames of huge steps", huge_steps },
-        { "1,000,000 frames, 3 on disk", sequence_frames },
+        { "1,000,000 frames, 3 on disk", sequence_frames("1-1000000") },
+        { "1,000,000 negative frames, 3 on disk", sequence_frames("-1000000--1") },
         { "1,000,000 folders, 3 on disk", take_frames },
     };
     for (const auto& [name, text] : scene_files)

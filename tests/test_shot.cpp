@@ -158,7 +158,8 @@ TEST_CASE("a frame is missing exactly when no entry has the name its pattern wri
     const std::string dir = scratch_dir("frames_on_disk");
     for (const char* name : { "seq.0001.exr", "seq.02.exr", "seq.00003.exr", "seq.12345.exr",
                               "seq.-001.exr", "seq.1234567890.exr", "seq.0006.exr.tmp",
-                              "xseq.0007.exr" })
+                              "xseq.0007.exr", "seq.-0002.exr", "seq.-3.exr", "seq.+008.exr",
+                              "seq.-99999999999.exr" })
         OIIO::Filesystem::write_text_file(dir + "/" + name, "");
     std::filesystem::create_symlink(dir + "/nowhere", dir + "/seq.0004.exr");
     OIIO::Filesystem::create_directory(dir + "/seq.0005.exr");
@@ -173,11 +174,13 @@ TEST_CASE("a frame is missing exactly when no entry has the name its pattern wri
     std::vector<int> frames, missing;
     shot.focus = Keyframes(3.0);
     REQUIRE(set_shot_setting(shot, "missing-frames", "skip", error));
-    shot.frames = "-1,1-7,12345,1234567890";
+    // Negative frames too (a million of them were a million lookups): "%04d"
+    // writes -2 as "-002", and no frame as "+008".
+    shot.frames = "-3--1,1-8,12345,1234567890";
     shot.inputs = { dir + "/seq.#.exr" };
     REQUIRE(shot_frames(shot, frames, error, &missing));
     CHECK(frames == std::vector<int> { -1, 1, 4, 5, 12345, 1234567890 });
-    CHECK(missing == std::vector<int> { 2, 3, 6, 7 });
+    CHECK(missing == std::vector<int> { -3, -2, 2, 3, 6, 7, 8 });
 
     // The frame number in a folder's name: the folders are listed, and the
     // file looked up in those that are there.

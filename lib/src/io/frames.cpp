@@ -163,25 +163,23 @@ struct FrameNumbering {
         width  = found[1].length() ? std::stoi(found[1]) : 0;
         return true;
     }
-    /// As printf's "%0Nd" writes it (a minus sign counts in the width).
-    /// By hand, not by format(): a shot looks up every frame's files.
-    std::string path(int frame) const
+    /// The frame number as printf's "%0Nd" writes it (a minus sign counts
+    /// in the width). By hand, not by format(): a shot looks up every
+    /// frame's files.
+    std::string number(int frame) const
     {
         char digits[16];
         const char* end = std::to_chars(digits, digits + sizeof(digits), std::abs(int64_t(frame))).ptr;
         const size_t length = size_t(end - digits) + (frame < 0 ? 1 : 0);
-        std::string file = prefix;
-        if (frame < 0)
-            file += '-';
-        file.append(size_t(width) > length ? size_t(width) - length : 0, '0');
-        file.append(digits, size_t(end - digits));
-        return file += suffix;
+        std::string text = frame < 0 ? "-" : "";
+        text.append(size_t(width) > length ? size_t(width) - length : 0, '0');
+        return text.append(digits, size_t(end - digits));
     }
+    std::string path(int frame) const { return prefix + number(frame) + suffix; }
 };
 
 /// The frame an entry of the pattern's folder is, when it is one: the
-/// name as path() writes it for a frame of 0 to 999999999 (no leading zero
-/// past the width).
+/// name path() writes for some frame, negative ones too.
 std::optional<int> frame_of_entry(const FrameNumbering& pattern, const std::string& name_prefix,
                                   const std::string& entry)
 {
@@ -192,12 +190,11 @@ std::optional<int> frame_of_entry(const FrameNumbering& pattern, const std::stri
         return std::nullopt;
     const std::string_view digits(entry.data() + name_prefix.size(),
                                   entry.size() - name_prefix.size() - suffix.size());
-    const size_t width = size_t(std::max(pattern.width, 1));
-    if (digits.size() < width || digits.size() > 9 || (digits.size() > width && digits[0] == '0')
-        || digits.find_first_not_of("0123456789") != std::string_view::npos)
-        return std::nullopt;
     int frame = 0;
-    std::from_chars(digits.data(), digits.data() + digits.size(), frame);
+    const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), frame);
+    if (error != std::errc() || end != digits.data() + digits.size()
+        || digits != pattern.number(frame))
+        return std::nullopt;
     return frame;
 }
 
@@ -328,12 +325,12 @@ private:
             static const std::vector<int> none;
             return listing ? *listing : none;
         }
-        /// A listing answers for the frames it can hold; a file lookup for
-        /// the others (negative, ten digits), and when the folder is not
+        /// A listing answers for every frame (a million negative frames
+        /// were a million lookups); a file lookup when the folder is not
         /// listed or cannot be.
         bool has(int frame) const
         {
-            if (listing && frame >= 0 && frame <= 999999999)
+            if (listing)
                 return std::binary_search(listing->begin(), listing->end(), frame);
             return has_entry(numbering.path(frame));
         }
