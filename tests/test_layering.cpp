@@ -41,10 +41,10 @@ ImageBuf render(Scene scene, double focus, const LayeringOptions& options = {})
 {
     const Camera camera = synthetic_camera(focus);
     LayeredScene layers;
-    LayerBounds bounds;
+    Slicing slicing;
     std::string error;
     REQUIRE(decompose_layers(std::move(scene), CircleOfConfusion(camera, ROI(0, 120, 0, 120)),
-                             options, layers, bounds, error));
+                             options, layers, slicing, error));
     ImageBuf out;
     REQUIRE(defocus_layers(out, layers, camera));
     return out;
@@ -140,9 +140,9 @@ TEST_CASE("a deep volume sample split across layers composites back to itself")
     options.layers = 6;
     const CircleOfConfusion coc(synthetic_camera(1.0), ROI(0, 120, 0, 120));
     LayeredScene layers;
-    LayerBounds bounds;
+    Slicing slicing;
     std::string error;
-    REQUIRE(decompose_layers(std::move(scene), coc, options, layers, bounds, error));
+    REQUIRE(decompose_layers(std::move(scene), coc, options, layers, slicing, error));
     REQUIRE(layers.layers.size() >= 3);
     // Back to front, each layer with its own report.
     REQUIRE(layers.reports.size() == layers.layers.size());
@@ -174,11 +174,11 @@ TEST_CASE("deep samples are ordered by Z, then ZBack")
                      { 0.5f, 0.0f, 0.0f, 0.5f, 2.0f, 2.0f } };  // red, point
     scene.deep.push_back(deep);
     LayeredScene layers;
-    LayerBounds bounds;
+    Slicing slicing;
     std::string error;
     REQUIRE(decompose_layers(std::move(scene),
                              CircleOfConfusion(synthetic_camera(1.0), ROI(0, 120, 0, 120)), {},
-                             layers, bounds, error));
+                             layers, slicing, error));
     float out[4];
     composite_pixel(layers.layers, 0, 0, out);
     CHECK(out[0] == Approx(0.5f));   // red in front
@@ -249,4 +249,50 @@ TEST_CASE("the hidden background of a flat render is filled behind nearer layers
         }
     // Without the fill, the card's see-through edge shows black: ~0.2 off.
     CHECK(worst < 0.01);
+}
+
+TEST_CASE("an in-focus light's antialiased rim grows no bokeh at the depth behind it")
+{
+    // A renderer writes one depth per pixel: the rim of a small light 50
+    // times brighter than the wall behind it holds the light's colour but
+    // the wall's depth. Spread whole with the wall's 40 px blur, the rim
+    // grew a bright disc the lens does not make.
+    const float light_z = 0.5f, wall_z = 1.25f;  // CoC 0, and 33.3·(2 - 0.8) = 40 px
+    const float cx = 60.0f, cy = 40.0f, radius = 5.0f;
+    auto coverage = [&](int x, int y) {
+        int inside = 0;
+        for (int sy = 0; sy < 4; ++sy)
+            for (int sx = 0; sx < 4; ++sx)
+                inside += std::hypot(x + (sx + 0.5f) / 4 - cx, y + (sy + 0.5f) / 4 - cy) < radius;
+        return float(inside) / 16.0f;
+    };
+    auto shade = [&](int x, int y, float* rgba, float& z) {
+        const float cover = coverage(x, y);
+        std::fill(rgba, rgba + 3, cover * 50.0f + (1.0f - cover));
+        rgba[3] = 1.0f;
+        z = cover == 1.0f ? light_z : wall_z;
+    };
+    const ImageBuf out = render(flat_scene(shade), light_z);
+    const ImageBuf wall = render(flat_scene([&](int, int, float* rgba, float& z) {
+                                     std::fill(rgba, rgba + 4, 1.0f);
+                                     z = wall_z;
+                                 }),
+                                 light_z);
+    int ghost = 0;
+    for (int y = 0; y < 80; ++y)
+        for (int x = 0; x < 120; ++x)
+            if (std::hypot(x + 0.5f - cx, y + 0.5f - cy) > radius + 3.0f)
+                ghost += out.getchannel(x, y, 0, 1) > 1.05f * wall.getchannel(x, y, 0, 1);
+    CHECK(ghost == 0);
+
+    // Split in two, every rim pixel still composites back to itself.
+    const LayeredScene layers = layered_scene(flat_scene(shade), synthetic_camera(light_z));
+    for (int y = 30; y < 50; ++y)
+        for (int x = 50; x < 70; ++x) {
+            float rgba[4], z, composited[4];
+            shade(x, y, rgba, z);
+            composite_pixel(layers.layers, x, y, composited);
+            for (int c = 0; c < 4; ++c)
+                CHECK(composited[c] == Approx(rgba[c]).epsilon(1e-4));
+        }
 }

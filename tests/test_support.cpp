@@ -26,9 +26,9 @@ defocus::LayeredScene layered_scene(defocus::Scene scene, const defocus::Camera&
 {
     defocus::LayeredScene out;
     const defocus::CircleOfConfusion coc(camera, scene.spec.roi_full());
-    defocus::LayerBounds bounds;
+    defocus::Slicing slicing;
     std::string error;
-    if (!defocus::decompose_layers(std::move(scene), coc, {}, out, bounds, error))
+    if (!defocus::decompose_layers(std::move(scene), coc, {}, out, slicing, error))
         throw std::runtime_error(error);
     return out;
 }

@@ -101,10 +101,11 @@ bool layer_scene(Scene&& scene, const Shot& shot, int frame, const ShotAssets& a
     const CircleOfConfusion coc(out.camera, scene.spec.roi_full());
     const bool to_slice = !scene.flat.empty() || !scene.deep.empty();
     const size_t layers_given = scene.layers.size();
-    LayerBounds bounds;
-    if (!decompose_layers(std::move(scene), coc, shot.layering, layered, bounds, error,
+    Slicing slicing;
+    if (!decompose_layers(std::move(scene), coc, shot.layering, layered, slicing, error,
                           nthreads))
         return fail();
+    const LayerBounds& bounds = slicing.bounds;
     layered.luma = luma_weights(color.config.get());
     if (to_slice) {
         std::vector<std::string> edges;
@@ -113,9 +114,11 @@ bool layer_scene(Scene&& scene, const Shot& shot, int frame, const ShotAssets& a
         // Slices nothing falls into make no layer.
         const int made = int(layered.layers.size() - layers_given);
         const int empty = bounds.count() - made;
-        out.slicing = format("sliced into {} depth layer(s){}, bounds in px of CoC: {}", made,
+        out.slicing = format("sliced into {} depth layer(s){}, bounds in px of CoC: {}; {} "
+                             "mixed pixel(s) on silhouettes split in two",
+                             made,
                              empty > 0 ? format(" ({} empty slice(s) dropped)", empty) : "",
-                             Strutil::join(edges, " "));
+                             Strutil::join(edges, " "), slicing.mixed_pixels);
     }
     lap("slice");
     return true;

@@ -7,6 +7,7 @@
 #include <OpenImageIO/parallel.h>
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/layers/mixed_pixels.h>
 #include <defocus/spread/footprint.h>
 
 #include "util/parallel_rows.h"
@@ -81,27 +82,43 @@ void assign_layers(Fragment& f, int x, int y, const CircleOfConfusion& coc,
     f.back_weight = w.back;
 }
 
-Fragments flat_fragments(const Layer& flat, const CircleOfConfusion& coc,
-                         const LayerBounds& bounds, int nthreads)
+/// A flat render's fragments: one per pixel, and two for a mixed pixel,
+/// its near surface and the rest of it under that.
+Fragments flat_fragments(const Layer& flat, const std::vector<MixedPixel>& mixed,
+                         const CircleOfConfusion& coc, const LayerBounds& bounds, int nthreads)
 {
     Fragments out;
     out.roi = flat.color.roi();
     const int64_t n = out.roi.npixels();
-    out.offsets.resize(n + 1);
-    out.items.resize(n);
-    for (int64_t i = 0; i <= n; ++i)
-        out.offsets[i] = i;
+    auto pixel = [&](int x, int y) {
+        return int64_t(y - out.roi.ybegin) * out.roi.width() + (x - out.roi.xbegin);
+    };
+    out.offsets.assign(n + 1, 0);
+    for (const MixedPixel& m : mixed)
+        out.offsets[pixel(m.x, m.y) + 1] = 1;
+    for (int64_t i = 0; i < n; ++i)
+        out.offsets[i + 1] += out.offsets[i] + 1;
+    out.items.resize(out.offsets[n]);
+    auto color = [&](int x, int y) { return static_cast<const float*>(flat.color.pixeladdr(x, y)); };
+    auto depth = [&](int x, int y) { return *static_cast<const float*>(flat.depth.pixeladdr(x, y)); };
     parallel_for(out.roi.ybegin, out.roi.yend, [&](int y) {
         for (int x = out.roi.xbegin; x < out.roi.xend; ++x) {
-            const float* c = static_cast<const float*>(flat.color.pixeladdr(x, y));
-            Fragment& f = out.items[int64_t(y - out.roi.ybegin) * out.roi.width()
-                                    + (x - out.roi.xbegin)];
-            f = { c[0], c[1], c[2], c[3],
-                  *static_cast<const float*>(flat.depth.pixeladdr(x, y)), 0, 1, 0 };
+            const float* c = color(x, y);
+            Fragment& f = out.items[out.offsets[pixel(x, y)]];
+            f = { c[0], c[1], c[2], c[3], depth(x, y), 0, 1, 0 };
             if (f.a > 0.0f)
                 assign_layers(f, x, y, coc, bounds);
         }
     }, by_rows(nthreads));
+    parallel_for(int64_t(0), int64_t(mixed.size()), [&](int64_t i) {
+        const MixedPixel& m = mixed[i];
+        Fragment* f = &out.items[out.offsets[pixel(m.x, m.y)]];
+        f[0] = { m.near[0], m.near[1], m.near[2], m.near[3], m.near_z, 0, 1, 0 };
+        f[1] = { m.far[0], m.far[1], m.far[2], m.far[3], m.far_z, 0, 1, 0 };
+        for (int k = 0; k < 2; ++k)
+            if (f[k].a > 0.0f)
+                assign_layers(f[k], m.x, m.y, coc, bounds);
+    }, paropt(nthreads));
     return out;
 }
 
@@ -406,16 +423,20 @@ LayerBounds choose_layer_bounds(const Scene& scene, const CircleOfConfusion& coc
 
 bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
                       const LayeringOptions& options, LayeredScene& layered,
-                      LayerBounds& bounds, std::string& error, int nthreads)
+                      Slicing& slicing, std::string& error, int nthreads)
 {
-    bounds = choose_layer_bounds(scene, coc, options);
+    slicing = Slicing();
+    const LayerBounds& bounds = slicing.bounds = choose_layer_bounds(scene, coc, options);
     double held = 0.0;
     for (const Layer& layer : scene.layers)
         held += float_bytes(layer.color.roi().npixels(), 5);
-    for (const Layer& flat : scene.flat)
-        if (!slice(flat_fragments(flat, coc, bounds, nthreads), flat.name, bounds,
+    for (const Layer& flat : scene.flat) {
+        const std::vector<MixedPixel> mixed = find_mixed_pixels(flat, coc, nthreads);
+        slicing.mixed_pixels += int64_t(mixed.size());
+        if (!slice(flat_fragments(flat, mixed, coc, bounds, nthreads), flat.name, bounds,
                    options.memory_limit, held, scene.layers, error, nthreads))
             return false;
+    }
     for (const DeepImage& deep : scene.deep) {
         const double fragments = held + deep_fragment_bytes(deep, bounds);
         if (!options.memory_limit.allows(fragments)) {

@@ -2,6 +2,7 @@
 // layered framework (spread each layer, composite back to front) applies.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -56,6 +57,12 @@ struct SplitWeights {
 };
 SplitWeights split_weights(float front_weight, float a);
 
+/// What cutting a scene into layers did, for -v.
+struct Slicing {
+    LayerBounds bounds;        ///< the layer bounds used
+    int64_t mixed_pixels = 0;  ///< flat pixels split into two surfaces
+};
+
 /// Cuts `scene` into depth layers: its layers as they are, and its flat
 /// renders and deep images cut at the bounds, cropped to their content,
 /// all described and ordered back to front (order_layers) into `layered`.
@@ -65,11 +72,13 @@ SplitWeights split_weights(float front_weight, float a);
 /// composited front to back with an alpha-weighted Z. A flat render's
 /// hidden background, the part of a layer behind nearer layers that one
 /// render cannot see, is filled from the layer's visible surroundings (see
-/// fill_hidden_background). Sets `bounds` to the bounds used. False with
-/// `error` when the layers would take more than options.memory_limit.
+/// fill_hidden_background). A flat render's mixed pixels, on the silhouette
+/// of a nearer surface, are cut as two fragments (find_mixed_pixels). Sets
+/// `slicing` to what was done. False with `error` when the layers would
+/// take more than options.memory_limit.
 bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
                       const LayeringOptions& options, LayeredScene& layered,
-                      LayerBounds& bounds, std::string& error, int nthreads = 0);
+                      Slicing& slicing, std::string& error, int nthreads = 0);
 
 /// Push-pull hole filling (Gortler et al. 1996): the pixels of `layer`
 /// flagged in `holes` (hidden behind nearer layers) take the average of

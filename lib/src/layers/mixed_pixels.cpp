@@ -1,0 +1,199 @@
+#include <defocus/layers/mixed_pixels.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include <OpenImageIO/parallel.h>
+
+#include "util/parallel_rows.h"
+
+namespace defocus {
+
+using namespace OIIO;
+
+namespace {
+
+/// Blurs closer than a pixel of CoC look alike.
+constexpr float discontinuity = 1.0f;
+
+/// How far around a mixed pixel its sides' colours are taken from: an
+/// antialiased rim is a pixel or two wide, and the unmixed pixels beyond
+/// it are within three.
+constexpr int reach = 3;
+
+/// Sums over the pixels of one side of a discontinuity.
+struct Side {
+    double rgba[4] = { 0, 0, 0, 0 };
+    double z = 0;
+    int count = 0;
+
+    void add(const float* color, float depth)
+    {
+        for (int i = 0; i < 4; ++i)
+            rgba[i] += color[i];
+        z += depth;
+        ++count;
+    }
+    double mean(int i) const { return rgba[i] / count; }
+    double mean_depth() const { return z / count; }
+};
+
+/// A flat render's pixels with their signed CoC (NaN where nothing is),
+/// and which of them are mixed.
+class BlurField {
+public:
+    BlurField(const Layer& flat, const CircleOfConfusion& coc, int nthreads)
+        : m_flat(flat)
+        , m_roi(flat.color.roi())
+        , m_blur(m_roi.npixels())
+        , m_mixed(m_roi.npixels(), 0)
+    {
+        parallel_for(m_roi.ybegin, m_roi.yend, [&](int y) {
+            for (int x = m_roi.xbegin; x < m_roi.xend; ++x)
+                m_blur[index(x, y)] = color(x, y)[3] > 0.0f
+                                          ? float(coc.diameter(depth(x, y), x, y))
+                                          : std::numeric_limits<float>::quiet_NaN();
+        }, by_rows(nthreads));
+        parallel_for(m_roi.ybegin, m_roi.yend, [&](int y) {
+            for (int x = m_roi.xbegin; x < m_roi.xend; ++x)
+                m_mixed[index(x, y)] = std::abs(other_side(x, y) - blur(x, y)) > discontinuity;
+        }, by_rows(nthreads));
+    }
+
+    const ROI& roi() const { return m_roi; }
+    const float* color(int x, int y) const
+    {
+        return static_cast<const float*>(m_flat.color.pixeladdr(x, y));
+    }
+    float depth(int x, int y) const
+    {
+        return *static_cast<const float*>(m_flat.depth.pixeladdr(x, y));
+    }
+    float blur(int x, int y) const { return m_blur[index(x, y)]; }
+    bool mixed(int x, int y) const { return m_mixed[index(x, y)]; }
+
+    /// The CoC of the 3x3 neighbour whose CoC differs most from the
+    /// pixel's (its own when none is covered, NaN when it is empty).
+    float other_side(int x, int y) const
+    {
+        const float own = blur(x, y);
+        float other = own;
+        for (int ny = std::max(y - 1, m_roi.ybegin); ny <= std::min(y + 1, m_roi.yend - 1); ++ny)
+            for (int nx = std::max(x - 1, m_roi.xbegin); nx <= std::min(x + 1, m_roi.xend - 1);
+                 ++nx)
+                if (std::abs(blur(nx, ny) - own) > std::abs(other - own))
+                    other = blur(nx, ny);
+        return other;
+    }
+
+private:
+    size_t index(int x, int y) const
+    {
+        return size_t(y - m_roi.ybegin) * size_t(m_roi.width()) + size_t(x - m_roi.xbegin);
+    }
+
+    const Layer& m_flat;
+    ROI m_roi;
+    std::vector<float> m_blur;
+    std::vector<uint8_t> m_mixed;
+};
+
+/// Pixel (x, y), mixed, as its two surfaces; false when it is better left
+/// whole.
+bool split(const BlurField& field, int x, int y, MixedPixel& out)
+{
+    const float own = field.blur(x, y);
+    const float other = field.other_side(x, y);
+    // Only a pixel written at the far surface's depth is split. One at the
+    // near surface's depth is spread with the near blur, which is right for
+    // its main part; its far part, cut off, would become a sample of the
+    // surface hidden behind the near one, and the hidden-surface fill
+    // spreads such samples over the whole hole (a far light beside a
+    // pole's edge flooded the pole's band: 1 dB lost on garden).
+    if (own < other)
+        return false;
+    const float middle = 0.5f * (own + other);
+    const ROI& roi = field.roi();
+    const int x0 = std::max(x - reach, roi.xbegin), x1 = std::min(x + reach, roi.xend - 1);
+    const int y0 = std::max(y - reach, roi.ybegin), y1 = std::min(y + reach, roi.yend - 1);
+    // Each side's colour from its unmixed pixels; a side only a pixel or
+    // two wide (a wire, a small light) has none, and takes its mixed ones.
+    Side sides[2][2];  // [near][mixed]
+    for (int sy = y0; sy <= y1; ++sy)
+        for (int sx = x0; sx <= x1; ++sx) {
+            const float c = field.blur(sx, sy);
+            if (!std::isnan(c) && (sx != x || sy != y))
+                sides[c < middle][field.mixed(sx, sy)].add(field.color(sx, sy),
+                                                           field.depth(sx, sy));
+        }
+    const Side& near = sides[1][0].count ? sides[1][0] : sides[1][1];
+    const Side& far = sides[0][0].count ? sides[0][0] : sides[0][1];
+    if (near.count == 0 || far.count == 0)
+        return false;
+
+    // The pixel's colour as near·alpha + far·(1 - alpha): alpha is where its
+    // colour projects on the line between the sides' colours.
+    const float* color = field.color(x, y);
+    double along = 0.0, length = 0.0, scale = 0.0;
+    for (int i = 0; i < 3; ++i) {
+        const double d = near.mean(i) - far.mean(i);
+        along += (color[i] - far.mean(i)) * d;
+        length += d * d;
+        scale += near.mean(i) * near.mean(i) + far.mean(i) * far.mean(i);
+    }
+    // Sides that differ by less than about 1% in colour look the same
+    // wherever the pixel's light goes.
+    if (!(length > 1e-4 * scale) || !(far.mean(3) > 0.0))
+        return false;
+    const double alpha = std::clamp(along / length, 0.0, 1.0);
+    // The far surface lies whole behind the near one, in its side's colour,
+    // and is seen through what the near one leaves uncovered; the near
+    // fragment takes the rest of the pixel's light. So no estimate is
+    // divided by the uncovered part (near 0 at the silhouette's inner rim)
+    // and the far side holds only the colour it has around the pixel.
+    const double a = color[3];
+    double covered = std::min(alpha * near.mean(3), a);
+    // The far side's share takes no more of a channel than the pixel holds.
+    for (int i = 0; i < 3; ++i)
+        if (far.mean(i) > 0.0)
+            covered = std::max(covered, a - color[i] * far.mean(3) / far.mean(i));
+    const double behind = a - covered;  // the far side's share of coverage
+    const double through = 1.0 - covered;
+    out.x = x;
+    out.y = y;
+    for (int i = 0; i < 3; ++i) {
+        const double share = far.mean(i) / far.mean(3) * behind;
+        out.near[i] = float(std::max(0.0, color[i] - share));
+        out.far[i] = through > 0.0 ? float(share / through) : 0.0f;
+    }
+    out.near[3] = float(covered);
+    out.far[3] = through > 0.0 ? float(behind / through) : 0.0f;
+    out.near_z = float(near.mean_depth());
+    out.far_z = field.depth(x, y);
+    // Nothing of the near surface, or nothing of the far one: the pixel is
+    // right as it is.
+    return covered > 1e-3 * a && behind > 1e-3 * a;
+}
+
+}  // namespace
+
+std::vector<MixedPixel> find_mixed_pixels(const Layer& flat, const CircleOfConfusion& coc,
+                                          int nthreads)
+{
+    const BlurField field(flat, coc, nthreads);
+    const ROI& roi = field.roi();
+    std::vector<std::vector<MixedPixel>> rows(roi.height());
+    parallel_for(roi.ybegin, roi.yend, [&](int y) {
+        for (int x = roi.xbegin; x < roi.xend; ++x)
+            if (MixedPixel pixel; field.mixed(x, y) && split(field, x, y, pixel))
+                rows[y - roi.ybegin].push_back(pixel);
+    }, by_rows(nthreads));
+    std::vector<MixedPixel> all;
+    for (const std::vector<MixedPixel>& row : rows)
+        all.insert(all.end(), row.begin(), row.end());
+    return all;
+}
+
+}  // namespace defocus
