@@ -28,6 +28,28 @@ struct Level {
     Cell& at(int x, int y) { return cells[size_t(y) * width + x]; }
 };
 
+float brightness(const float* rgba)
+{
+    return std::max(0.0f, (rgba[0] + rgba[1] + rgba[2]) / 3.0f);
+}
+
+/// The mean brightness of the layer's observed covered pixels, per unit
+/// of coverage.
+float mean_brightness(const Layer& layer, const std::vector<bool>& holes)
+{
+    const ROI roi = layer.color.roi();
+    double light = 0.0, coverage = 0.0;
+    for (int y = roi.ybegin; y < roi.yend; ++y)
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const float* c = static_cast<const float*>(layer.color.pixeladdr(x, y));
+            if (!holes[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)] && c[3] > 0.0f) {
+                light += brightness(c);
+                coverage += c[3];
+            }
+        }
+    return coverage > 0.0 ? float(light / coverage) : 1.0f;
+}
+
 }  // namespace
 
 void fill_hidden_background(Layer& layer, const std::vector<bool>& holes,
@@ -37,6 +59,7 @@ void fill_hidden_background(Layer& layer, const std::vector<bool>& holes,
     std::vector<Level> pyramid;
     pyramid.push_back({ roi.width(), roi.height(), {} });
     pyramid[0].cells.resize(roi.npixels());
+    const float highlight = mean_brightness(layer, holes);
     parallel_for(roi.ybegin, roi.yend, [&](int y) {
         for (int x = roi.xbegin; x < roi.xend; ++x) {
             // Every pixel not hidden is an observation of the layer, empty
@@ -46,10 +69,17 @@ void fill_hidden_background(Layer& layer, const std::vector<bool>& holes,
                 continue;
             const float* c = static_cast<const float*>(layer.color.pixeladdr(x, y));
             Cell& cell = pyramid[0].cells[p];
-            std::copy(c, c + 4, cell.v);
+            // A highlight weighs as much light as the layer's mean
+            // brightness: what continues behind the nearer layer is not
+            // known, and a small light beside the hole must not flood it
+            // (the mean of a light 100 times brighter than a wall and of
+            // seven wall pixels is 13 walls; weighted, it is 1.1).
+            const float w = std::min(1.0f, highlight / std::max(brightness(c), 1e-30f));
+            for (int i = 0; i < 4; ++i)
+                cell.v[i] = w * c[i];
             const float z = *static_cast<const float*>(layer.depth.pixeladdr(x, y));
-            cell.v[4] = c[3] > 0.0f ? c[3] * std::min(z, 1e30f) : 0.0f;
-            cell.w = 1.0f;
+            cell.v[4] = c[3] > 0.0f ? w * c[3] * std::min(z, 1e30f) : 0.0f;
+            cell.w = w;
         }
     }, by_rows(nthreads));
 
