@@ -296,3 +296,35 @@ TEST_CASE("an in-focus light's antialiased rim grows no bokeh at the depth behin
                 CHECK(composited[c] == Approx(rgba[c]).epsilon(1e-4));
         }
 }
+
+TEST_CASE("automatic layering separates every visible depth step, however narrow the blur range")
+{
+    // Blurs of -8, 0 and +8 px: the whole range fits in one span of 24 px,
+    // so CoC bins alone made one layer, in which the blurred bar's edges
+    // stay hard and the wall's blur smears over the square's sharp edges.
+    const double focus = 0.5;
+    const float near_z = 1.0f / 2.24f, square_z = 0.5f, wall_z = 1.0f / 1.76f;
+    const CircleOfConfusion coc(synthetic_camera(focus), ROI(0, 120, 0, 80));
+    const Scene steps = flat_scene([&](int x, int y, float* rgba, float& z) {
+        std::fill(rgba, rgba + 4, 1.0f);
+        // A vertical bar over a square over a wall.
+        z = x >= 66 && x < 74 ? near_z : x >= 50 && x < 90 && y >= 20 && y < 60 ? square_z : wall_z;
+    });
+    const LayerBounds bounds = choose_layer_bounds(steps, coc, {});
+    std::vector<int> layer_of;
+    for (float z : { near_z, square_z, wall_z }) {
+        const LayerBounds::Share share = bounds.share(coc.diameter(z, 60, 40));
+        CHECK(share.front_weight == 1.0f);  // wholly in one layer
+        layer_of.push_back(share.front);
+    }
+    CHECK(layer_of[0] < layer_of[1]);
+    CHECK(layer_of[1] < layer_of[2]);
+
+    // A floor seen at a grazing angle spans the same blurs with no step:
+    // one layer is enough.
+    const Scene floor = flat_scene([&](int, int y, float* rgba, float& z) {
+        std::fill(rgba, rgba + 4, 1.0f);
+        z = 1.0f / (2.24f - 0.48f * y / 79.0f);
+    });
+    CHECK(choose_layer_bounds(floor, coc, {}).count() == 1);
+}

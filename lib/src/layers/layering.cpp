@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <mutex>
 
 #include <OpenImageIO/parallel.h>
@@ -391,6 +392,152 @@ CocHistogram coc_histogram(const Scene& scene, const CircleOfConfusion& coc)
     return h;
 }
 
+/// A visible depth discontinuity: a nearer surface whose CoC falls in
+/// histogram bin `near` beside or in front of a farther one in bin `far`.
+/// A layer boundary strictly between the two bins puts them in separate
+/// layers, as the method needs wherever their blurs differ visibly.
+struct Occlusion {
+    int near, far;
+    bool operator<(const Occlusion& o) const
+    {
+        return far != o.far ? far < o.far : near < o.near;
+    }
+    bool operator==(const Occlusion& o) const { return near == o.near && far == o.far; }
+};
+
+/// The distinct occlusions of a scene's flat and deep parts whose sides'
+/// CoCs differ by more than `min_step` pixels and by more than a quarter of
+/// the smaller blur: between 4-neighbour pixels (a flat pixel, a deep
+/// pixel's front sample) and between the successive samples of a deep
+/// pixel. Two surfaces spread in one layer go wrong only in a band as wide
+/// as their difference in blur at the edge of a blur as wide as the blur
+/// itself: a step of a quarter moves a blurred edge by an eighth of its
+/// width, and cutting for it costs more (each layer's hidden surface is a
+/// guess) than it gains.
+std::vector<Occlusion> find_occlusions(const Scene& scene, const CircleOfConfusion& coc,
+                                       const CocHistogram& h, double min_step)
+{
+    std::vector<std::vector<Occlusion>> rows;
+    auto add = [&](std::vector<Occlusion>& out, double a, double b) {
+        if (std::isnan(a) || std::isnan(b)
+            || std::abs(a - b) <= std::max(min_step, 0.25 * std::min(std::abs(a), std::abs(b))))
+            return;
+        out.push_back({ h.index(std::min(a, b)), h.index(std::max(a, b)) });
+    };
+    // A step between neighbours is a discontinuity only where it is much
+    // larger than a step beside it: a surface seen at a grazing angle
+    // changes its blur by as much from pixel to pixel, but evenly.
+    auto edge = [&](std::vector<Occlusion>& out, double before, double a, double b, double after) {
+        const double step = std::abs(b - a);
+        const double beside = std::min(std::isnan(before) ? 0.0 : std::abs(a - before),
+                                       std::isnan(after) ? 0.0 : std::abs(after - b));
+        if (!(step > 2.0 * beside))
+            return;
+        add(out, a, b);
+    };
+    // The CoC of every pixel's front surface (NaN where nothing is), each
+    // pixel against its right and lower neighbours.
+    auto scan = [&](const ROI& roi, auto&& front_coc) {
+        const size_t first = rows.size();
+        rows.resize(first + roi.height());
+        auto at = [&](int x, int y) {
+            return x >= roi.xbegin && x < roi.xend && y >= roi.ybegin && y < roi.yend
+                       ? front_coc(x, y)
+                       : std::numeric_limits<double>::quiet_NaN();
+        };
+        parallel_for(roi.ybegin, roi.yend, [&](int y) {
+            std::vector<Occlusion>& out = rows[first + (y - roi.ybegin)];
+            for (int x = roi.xbegin; x < roi.xend; ++x) {
+                const double c = at(x, y);
+                edge(out, at(x - 1, y), c, at(x + 1, y), at(x + 2, y));
+                edge(out, at(x, y - 1), c, at(x, y + 1), at(x, y + 2));
+            }
+        }, by_rows(0));
+    };
+    constexpr double nothing = std::numeric_limits<double>::quiet_NaN();
+    for (const Layer& flat : scene.flat)
+        scan(flat.color.roi(), [&](int x, int y) {
+            const float a = static_cast<const float*>(flat.color.pixeladdr(x, y))[3];
+            return a > 0.0f ? coc.diameter(*static_cast<const float*>(flat.depth.pixeladdr(x, y)), x, y)
+                            : nothing;
+        });
+    for (const DeepImage& deep : scene.deep) {
+        scan(deep.roi, [&](int x, int y) {
+            const int64_t p = deep.pixel_index(x, y);
+            double front = nothing;
+            float front_z = INFINITY;
+            for (uint64_t i = deep.offsets[p]; i < deep.offsets[p + 1]; ++i)
+                if (deep.samples[i].a > 0.0f && deep.samples[i].z < front_z) {
+                    front_z = deep.samples[i].z;
+                    front = coc.diameter(front_z, x, y);
+                }
+            return front;
+        });
+        const size_t first = rows.size();
+        rows.resize(first + deep.roi.height());
+        parallel_for(deep.roi.ybegin, deep.roi.yend, [&](int y) {
+            std::vector<Occlusion>& out = rows[first + (y - deep.roi.ybegin)];
+            std::vector<double> cocs;
+            for (int x = deep.roi.xbegin; x < deep.roi.xend; ++x) {
+                const int64_t p = deep.pixel_index(x, y);
+                cocs.clear();
+                for (uint64_t i = deep.offsets[p]; i < deep.offsets[p + 1]; ++i)
+                    if (deep.samples[i].a > 0.0f)
+                        cocs.push_back(coc.diameter(deep.samples[i].z, x, y));
+                std::sort(cocs.begin(), cocs.end());
+                for (size_t i = 1; i < cocs.size(); ++i)
+                    add(out, cocs[i - 1], cocs[i]);
+            }
+        }, by_rows(0));
+    }
+    std::vector<Occlusion> all;
+    for (std::vector<Occlusion>& row : rows) {
+        std::sort(row.begin(), row.end());
+        row.erase(std::unique(row.begin(), row.end()), row.end());
+        all.insert(all.end(), row.begin(), row.end());
+    }
+    std::sort(all.begin(), all.end());
+    all.erase(std::unique(all.begin(), all.end()), all.end());
+    return all;
+}
+
+/// The fewest boundary bins that separate the two sides of every
+/// occlusion (greedy interval stabbing, optimal for intervals: take the
+/// occlusion whose far side is nearest, and cut once for it and all the
+/// others that one cut can serve). Each cut goes to the emptiest bin its
+/// occlusions allow, so that it rarely cuts through a surface.
+std::vector<int> separating_bins(const std::vector<Occlusion>& occlusions, const CocHistogram& h,
+                                 double soft_band)
+{
+    // A cut within half the soft band of a side would share that side
+    // between the layers it is meant to separate.
+    const int margin = int(std::ceil(0.5 * soft_band / CocHistogram::bin));
+    std::vector<int> cuts;
+    size_t next = 0;  // occlusions before it are separated
+    while (next < occlusions.size()) {
+        const Occlusion& first = occlusions[next];
+        if (!cuts.empty() && first.near < cuts.back() && cuts.back() < first.far) {
+            ++next;
+            continue;
+        }
+        // Every occlusion a cut just before first.far would separate;
+        // the cut may move down to just above the nearest side among them.
+        const int highest = first.far - 1 - margin;
+        int lowest = first.near + 1 + margin;
+        for (size_t i = next; i < occlusions.size(); ++i)
+            if (occlusions[i].near < highest)
+                lowest = std::max(lowest, occlusions[i].near + 1 + margin);
+        lowest = std::min(lowest, highest);
+        int best = highest;
+        for (int b = highest; b >= lowest; --b)
+            if (h.weight[b] < h.weight[best])
+                best = b;
+        cuts.push_back(best);
+        ++next;
+    }
+    return cuts;
+}
+
 }  // namespace
 
 LayerBounds choose_layer_bounds(const Scene& scene, const CircleOfConfusion& coc,
@@ -404,17 +551,31 @@ LayerBounds choose_layer_bounds(const Scene& scene, const CircleOfConfusion& coc
         for (int k = 1; k < options.layers; ++k)
             bounds.push_back(h.lo + (h.hi - h.lo) * k / options.layers);
     } else {
+        // Cuts where the image shows one surface over another with a
+        // visibly different blur (a step narrower than the soft band and a
+        // bin on either side could not be separated anyway), then more
+        // where a layer would span more than max_coc_span.
+        const double min_step = std::max(1.0, options.soft_band + 2 * CocHistogram::bin);
+        const std::vector<int> cuts = separating_bins(find_occlusions(scene, coc, h, min_step),
+                                                      h, options.soft_band);
         const int span = std::max(1, int(options.max_coc_span / CocHistogram::bin));
         int from = 0;
-        while (int(h.weight.size()) - from > span) {
-            // The emptiest bin within reach; among equals the farthest, so
-            // that a gap between objects is crossed in one layer.
-            int best = from + 1;
-            for (int i = from + 1; i <= from + span; ++i)
-                if (h.weight[i] <= h.weight[best])
-                    best = i;
-            bounds.push_back(h.lo + (best + 0.5) * CocHistogram::bin);
-            from = best;
+        for (size_t k = 0; k <= cuts.size(); ++k) {
+            const int to = k < cuts.size() ? cuts[k] : int(h.weight.size());
+            while (to - from > span) {
+                // The emptiest bin within reach; among equals the farthest,
+                // so that a gap between objects is crossed in one layer.
+                int best = from + 1;
+                for (int i = from + 1; i <= from + span; ++i)
+                    if (h.weight[i] <= h.weight[best])
+                        best = i;
+                bounds.push_back(h.lo + (best + 0.5) * CocHistogram::bin);
+                from = best;
+            }
+            if (k < cuts.size() && cuts[k] > from) {
+                bounds.push_back(h.lo + (cuts[k] + 0.5) * CocHistogram::bin);
+                from = cuts[k];
+            }
         }
     }
     bounds.push_back(h.hi);
