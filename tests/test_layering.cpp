@@ -7,6 +7,7 @@
 
 #include <defocus/composite/defocus_layers.h>
 #include <defocus/layers/layering.h>
+#include <defocus/layers/mixed_pixels.h>
 
 #include "test_support.h"
 
@@ -327,4 +328,20 @@ TEST_CASE("automatic layering separates every visible depth step, however narrow
         z = 1.0f / (2.24f - 0.48f * y / 79.0f);
     });
     CHECK(choose_layer_bounds(floor, coc, {}).count() == 1);
+}
+
+TEST_CASE("pixels of a textured background beside an edge are not taken for mixed ones")
+{
+    // Dark and light stripes beside a grey pole, with no antialiasing: the
+    // stripes' mean lies near the pole's grey, and a two-colour fit took
+    // every stripe pixel at the edge for a blend of the two.
+    const float pole_z = 1.0f / 2.9f, stripes_z = 0.5f;
+    const Scene scene = flat_scene([&](int x, int y, float* rgba, float& z) {
+        const bool in_pole = x >= 55 && x < 65;
+        std::fill(rgba, rgba + 3, in_pole ? 0.5f : (y / 4) % 2 ? 1.0f : 0.1f);
+        rgba[3] = 1.0f;
+        z = in_pole ? pole_z : stripes_z;
+    });
+    const CircleOfConfusion coc(synthetic_camera(0.5), ROI(0, 120, 0, 80));
+    CHECK(find_mixed_pixels(scene.flat.front(), coc).empty());
 }

@@ -147,6 +147,11 @@ bool split(const BlurField& field, int x, int y, MixedPixel& out)
     // wherever the pixel's light goes.
     if (!(length > 1e-4 * scale) || !(far.mean(3) > 0.0))
         return false;
+    // A colour well beyond either side is not a blend of the two: the
+    // sides' means stand for a textured surface badly, and such a pixel
+    // (a dark stripe beside a grey pole) is left whole.
+    if (along < -0.1 * length || along > 1.1 * length)
+        return false;
     const double alpha = std::clamp(along / length, 0.0, 1.0);
     // The far surface lies whole behind the near one, in its side's colour,
     // and is seen through what the near one leaves uncovered; the near
