@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <numeric>
 
 #include <OpenImageIO/parallel.h>
 
@@ -26,6 +28,7 @@ struct Level {
     int width, height;
     std::vector<Cell> cells;
     Cell& at(int x, int y) { return cells[size_t(y) * width + x]; }
+    const Cell& at(int x, int y) const { return cells[size_t(y) * width + x]; }
 };
 
 float brightness(const float* rgba)
@@ -35,31 +38,65 @@ float brightness(const float* rgba)
 
 /// The mean brightness of the layer's observed covered pixels, per unit
 /// of coverage.
-float mean_brightness(const Layer& layer, const std::vector<bool>& holes)
+float mean_brightness(const Layer& layer, const std::vector<uint8_t>& holes, int nthreads)
 {
     const ROI roi = layer.color.roi();
-    double light = 0.0, coverage = 0.0;
-    for (int y = roi.ybegin; y < roi.yend; ++y)
+    // Per row, then added in order: the same sum on any number of threads.
+    std::vector<double> light(roi.height(), 0.0), coverage(roi.height(), 0.0);
+    parallel_for(roi.ybegin, roi.yend, [&](int y) {
+        const int row = y - roi.ybegin;
         for (int x = roi.xbegin; x < roi.xend; ++x) {
             const float* c = static_cast<const float*>(layer.color.pixeladdr(x, y));
-            if (!holes[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)] && c[3] > 0.0f) {
-                light += brightness(c);
-                coverage += c[3];
+            if (!holes[size_t(row) * roi.width() + (x - roi.xbegin)] && c[3] > 0.0f) {
+                light[row] += brightness(c);
+                coverage[row] += c[3];
             }
         }
-    return coverage > 0.0 ? float(light / coverage) : 1.0f;
+    }, by_rows(nthreads));
+    const double all_light = std::accumulate(light.begin(), light.end(), 0.0);
+    const double all_coverage = std::accumulate(coverage.begin(), coverage.end(), 0.0);
+    return all_coverage > 0.0 ? float(all_light / all_coverage) : 1.0f;
+}
+
+/// Push-pull levels above the pixels for a fill up to `max_distance`:
+/// as many as make a cell span it.
+int pyramid_levels(double max_distance)
+{
+    return 1 + int(std::ceil(std::log2(std::max(2.0, max_distance))));
 }
 
 }  // namespace
 
-void fill_hidden_background(Layer& layer, const std::vector<bool>& holes,
+ROI hidden_background_window(const ROI& content, const ROI& frame, double max_distance)
+{
+    // A hidden pixel is filled from the cells of each level next to its
+    // own, so content reaches it from two of the coarsest cells away at
+    // most, and what those cells sum lies within one more: beyond four
+    // cells nothing changes a pixel that gets any coverage. The window
+    // keeps the frame's grid of coarsest cells, so that every cell sums
+    // the same pixels.
+    const int64_t cell = int64_t(1) << std::min(pyramid_levels(max_distance), 30);
+    auto grid_below = [&](int64_t v, int origin) {
+        const int64_t steps = (v - origin) >= 0 ? (v - origin) / cell
+                                                : -((origin - v + cell - 1) / cell);
+        return origin + steps * cell;
+    };
+    const int64_t x0 = grid_below(int64_t(content.xbegin) - 4 * cell, frame.xbegin);
+    const int64_t y0 = grid_below(int64_t(content.ybegin) - 4 * cell, frame.ybegin);
+    const int64_t x1 = int64_t(content.xend) + 4 * cell, y1 = int64_t(content.yend) + 4 * cell;
+    return ROI(int(std::max<int64_t>(x0, frame.xbegin)), int(std::min<int64_t>(x1, frame.xend)),
+               int(std::max<int64_t>(y0, frame.ybegin)), int(std::min<int64_t>(y1, frame.yend)),
+               0, 1, 0, 4);
+}
+
+void fill_hidden_background(Layer& layer, const std::vector<uint8_t>& holes,
                             double max_distance, int nthreads)
 {
     const ROI roi = layer.color.roi();
     std::vector<Level> pyramid;
     pyramid.push_back({ roi.width(), roi.height(), {} });
     pyramid[0].cells.resize(roi.npixels());
-    const float highlight = mean_brightness(layer, holes);
+    const float highlight = mean_brightness(layer, holes, nthreads);
     parallel_for(roi.ybegin, roi.yend, [&](int y) {
         for (int x = roi.xbegin; x < roi.xend; ++x) {
             // Every pixel not hidden is an observation of the layer, empty
@@ -85,27 +122,31 @@ void fill_hidden_background(Layer& layer, const std::vector<bool>& holes,
 
     // Push: each level sums 2x2 cells of the finer one, as far as a cell
     // spans the distance to fill.
-    const int levels = 1 + int(std::ceil(std::log2(std::max(2.0, max_distance))));
+    const int levels = pyramid_levels(max_distance);
     for (int l = 1; l <= levels && (pyramid.back().width > 1 || pyramid.back().height > 1); ++l) {
-        Level& fine = pyramid.back();
+        const Level& fine = pyramid.back();
         Level coarse { (fine.width + 1) / 2, (fine.height + 1) / 2, {} };
         coarse.cells.resize(size_t(coarse.width) * coarse.height);
-        for (int y = 0; y < fine.height; ++y)
-            for (int x = 0; x < fine.width; ++x) {
-                const Cell& f = fine.at(x, y);
-                Cell& c = coarse.at(x / 2, y / 2);
-                for (int i = 0; i < 5; ++i)
-                    c.v[i] += f.v[i];
-                c.w += f.w;
+        parallel_for(0, coarse.height, [&](int y) {
+            for (int x = 0; x < coarse.width; ++x) {
+                Cell& c = coarse.at(x, y);
+                for (int fy = 2 * y; fy < std::min(2 * y + 2, fine.height); ++fy)
+                    for (int fx = 2 * x; fx < std::min(2 * x + 2, fine.width); ++fx) {
+                        const Cell& f = fine.at(fx, fy);
+                        for (int i = 0; i < 5; ++i)
+                            c.v[i] += f.v[i];
+                        c.w += f.w;
+                    }
             }
+        }, by_rows(nthreads));
         pyramid.push_back(std::move(coarse));
     }
     // Pull: an empty cell takes the coarser level's averages, interpolated
     // bilinearly between the four nearest coarse cells that have any.
     for (int l = int(pyramid.size()) - 2; l >= 0; --l) {
         Level& fine = pyramid[l];
-        Level& coarse = pyramid[l + 1];
-        for (int y = 0; y < fine.height; ++y)
+        const Level& coarse = pyramid[l + 1];
+        parallel_for(0, fine.height, [&](int y) {
             for (int x = 0; x < fine.width; ++x) {
                 Cell& f = fine.at(x, y);
                 if (f.w > 0.0f)
@@ -133,6 +174,7 @@ void fill_hidden_background(Layer& layer, const std::vector<bool>& holes,
                     f.v[k] = sum[k] / weight;
                 f.w = 1.0f;
             }
+        }, by_rows(nthreads));
     }
 
     parallel_for(roi.ybegin, roi.yend, [&](int y) {

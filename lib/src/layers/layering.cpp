@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
+#include <utility>
 
 #include <OpenImageIO/parallel.h>
 #include <OpenImageIO/strutil.h>
@@ -200,25 +201,64 @@ Fragments deep_fragments(const DeepImage& deep, const CircleOfConfusion& coc,
     return out;
 }
 
-/// Layer k of the fragments: each pixel's share of it composited front to
-/// back, with the alpha-weighted depth. Returns false when it is empty.
-bool extract_layer(const Fragments& frags, int k, Layer& layer, int nthreads)
+/// Where each of `layers` layers has content in the fragments: the
+/// bounding box of the pixels with a share of it; an empty ROI (width 0)
+/// for a layer with none.
+std::vector<ROI> layer_extents(const Fragments& frags, int layers, int nthreads)
 {
     const ROI& roi = frags.roi;
-    ImageSpec color_spec(roi, TypeFloat);
+    const size_t n = size_t(roi.height()) * layers;
+    // Per row and layer, the first and last column with a share.
+    std::vector<int> first(n, std::numeric_limits<int>::max());
+    std::vector<int> last(n, std::numeric_limits<int>::min());
+    parallel_for(roi.ybegin, roi.yend, [&](int y) {
+        const size_t row = size_t(y - roi.ybegin) * layers;
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const int64_t p = int64_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin);
+            for (uint64_t i = frags.offsets[p]; i < frags.offsets[p + 1]; ++i) {
+                const Fragment& f = frags.items[i];
+                if (f.a <= 0.0f)
+                    continue;
+                for (const auto& [k, w] : { std::pair { f.front, f.front_weight },
+                                            std::pair { f.front + 1, f.back_weight } })
+                    if (w > 0.0f && k < layers) {
+                        first[row + k] = std::min(first[row + k], x);
+                        last[row + k] = std::max(last[row + k], x);
+                    }
+            }
+        }
+    }, by_rows(nthreads));
+    std::vector<ROI> extents(layers, ROI(0, 0, 0, 0, 0, 1, 0, 4));
+    for (int k = 0; k < layers; ++k)
+        for (int y = roi.ybegin; y < roi.yend; ++y) {
+            const size_t i = size_t(y - roi.ybegin) * layers + k;
+            if (first[i] > last[i])
+                continue;
+            ROI& e = extents[k];
+            e = e.width() > 0 ? ROI(std::min(e.xbegin, first[i]), std::max(e.xend, last[i] + 1),
+                                    e.ybegin, y + 1, 0, 1, 0, 4)
+                              : ROI(first[i], last[i] + 1, y, y + 1, 0, 1, 0, 4);
+        }
+    return extents;
+}
+
+/// Layer k of the fragments over `window`: each pixel's share of it
+/// composited front to back, with the alpha-weighted depth.
+void extract_layer(const Fragments& frags, int k, const ROI& window, Layer& layer, int nthreads)
+{
+    const ROI& roi = frags.roi;
+    ImageSpec color_spec(window, TypeFloat);
     color_spec.nchannels = 4;
     color_spec.channelnames = { "R", "G", "B", "A" };
     color_spec.alpha_channel = 3;
-    ImageSpec depth_spec(roi, TypeFloat);
+    ImageSpec depth_spec(window, TypeFloat);
     depth_spec.nchannels = 1;
     depth_spec.channelnames = { "Z" };
     // Every pixel is written below.
     layer.color.reset(color_spec, InitializePixels::No);
     layer.depth.reset(depth_spec, InitializePixels::No);
-    std::atomic<bool> any { false };
-    parallel_for(roi.ybegin, roi.yend, [&](int y) {
-        bool row_any = false;
-        for (int x = roi.xbegin; x < roi.xend; ++x) {
+    parallel_for(window.ybegin, window.yend, [&](int y) {
+        for (int x = window.xbegin; x < window.xend; ++x) {
             const int64_t p = int64_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin);
             double rgba[4] = { 0, 0, 0, 0 }, zsum = 0, wsum = 0;
             for (uint64_t i = frags.offsets[p]; i < frags.offsets[p + 1]; ++i) {
@@ -242,29 +282,29 @@ bool extract_layer(const Fragments& frags, int k, Layer& layer, int nthreads)
             // Infinite depths (the sky) stay infinite.
             *static_cast<float*>(layer.depth.pixeladdr(x, y))
                 = wsum > 0 ? float(std::isinf(zsum) ? INFINITY : zsum / wsum) : 0.0f;
-            row_any |= wsum > 0;
         }
-        if (row_any)
-            any = true;
     }, by_rows(nthreads));
-    return any;
 }
 
-/// The pixels that a layer nearer than k covers and layer k does not:
-/// where layer k's hidden background lies.
-std::vector<bool> hidden_under_nearer(const Fragments& frags, const Layer& layer, int k)
+/// The pixels of `layer` (over its window) that a layer nearer than k
+/// covers and layer k does not: where layer k's hidden background lies.
+std::vector<uint8_t> hidden_under_nearer(const Fragments& frags, const Layer& layer, int k,
+                                         int nthreads)
 {
     const ROI& roi = frags.roi;
-    std::vector<bool> holes(roi.npixels(), false);
-    for (int y = roi.ybegin; y < roi.yend; ++y)
-        for (int x = roi.xbegin; x < roi.xend; ++x) {
+    const ROI window = layer.color.roi();
+    std::vector<uint8_t> holes(window.npixels(), 0);
+    parallel_for(window.ybegin, window.yend, [&](int y) {
+        for (int x = window.xbegin; x < window.xend; ++x) {
             const int64_t p = int64_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin);
             if (frags.offsets[p] == frags.offsets[p + 1])
                 continue;
             const Fragment& front = frags.items[frags.offsets[p]];
             const float a = static_cast<const float*>(layer.color.pixeladdr(x, y))[3];
-            holes[p] = front.a > 0.0f && front.front < k && a <= 0.0f;
+            holes[size_t(y - window.ybegin) * window.width() + (x - window.xbegin)] =
+                front.a > 0.0f && front.front < k && a <= 0.0f;
         }
+    }, by_rows(nthreads));
     return holes;
 }
 
@@ -300,26 +340,31 @@ bool slice(const Fragments& frags, const std::string& base, const LayerBounds& b
         double(frags.items.size()) * sizeof(Fragment) + double(frags.offsets.size()) * 8;
     // ImageBuf's move may throw, so a vector that grows copies its layers.
     layers.reserve(layers.size() + bounds.count());
+    const std::vector<ROI> extents = layer_extents(frags, bounds.count(), nthreads);
     for (int k = 0; k < bounds.count(); ++k) {
-        // A layer is made over all of the fragments' window, then cropped.
-        const double need = held + fragment_bytes + float_bytes(frags.roi.npixels(), 5);
+        if (extents[k].width() == 0)
+            continue;
+        // The hidden background matters as far as it shows through the
+        // blurred edges of nearer layers, or spreads its own light out
+        // from under them: up to the largest blur of layers 0..k.
+        const double fill_distance = box_half_width(0.5 * std::max(std::abs(bounds.boundary(0)),
+                                                                   std::abs(bounds.boundary(k + 1))))
+                                     + 1.0;
+        // A layer is made over its content, and where there are nearer
+        // layers, as far around it as their hidden background can be filled.
+        const ROI window = k > 0 ? hidden_background_window(extents[k], frags.roi, fill_distance)
+                                 : extents[k];
+        const double need = held + fragment_bytes + float_bytes(window.npixels(), 5);
         if (!limit.allows(need)) {
             error = cutting_exceeds(limit, base, bounds, need);
             return false;
         }
         Layer layer;
         layer.name = Strutil::fmt::format("{}.{:02d}", base, k);
-        if (!extract_layer(frags, k, layer, nthreads))
-            continue;
-        if (k > 0) {
-            // The hidden background matters as far as it shows through the
-            // blurred edges of nearer layers, or spreads its own light out
-            // from under them: up to the largest blur of layers 0..k.
-            const double c = std::max(std::abs(bounds.boundary(0)),
-                                      std::abs(bounds.boundary(k + 1)));
-            fill_hidden_background(layer, hidden_under_nearer(frags, layer, k),
-                                   box_half_width(0.5 * c) + 1.0, nthreads);
-        }
+        extract_layer(frags, k, window, layer, nthreads);
+        if (k > 0)
+            fill_hidden_background(layer, hidden_under_nearer(frags, layer, k, nthreads),
+                                   fill_distance, nthreads);
         crop_to_content(layer, nthreads);
         held += float_bytes(layer.color.roi().npixels(), 5);
         layers.push_back(std::move(layer));
@@ -340,55 +385,79 @@ struct CocHistogram {
     int index(double c) const { return std::clamp(int((c - lo) / bin), 0, int(weight.size()) - 1); }
 };
 
-/// Calls fn(c, alpha) for every covered flat pixel and deep sample (both
-/// ends of a volume sample), rows in parallel; fn must be thread-safe.
-template<typename Fn>
-void for_each_coc(const Scene& scene, const CircleOfConfusion& coc, Fn&& fn)
+/// Folds every covered flat pixel and deep sample (both ends of a volume
+/// sample) into a tally: visit(tally, c, alpha) with its CoC c. Bands of
+/// rows run in parallel, each into its own copy of `empty`, and their
+/// tallies are merged into one, merge(total, tally): a lock per pixel, as
+/// this once took, made the histogram a good part of slicing a 4K frame.
+template<typename Tally, typename Visit, typename Merge>
+Tally tally_cocs(const Scene& scene, const CircleOfConfusion& coc, const Tally& empty,
+                 int nthreads, Visit&& visit, Merge&& merge)
 {
-    for (const Layer& flat : scene.flat) {
-        const ROI roi = flat.color.roi();
-        parallel_for(roi.ybegin, roi.yend, [&](int y) {
-            for (int x = roi.xbegin; x < roi.xend; ++x) {
+    Tally total = empty;
+    std::mutex mutex;
+    auto bands = [&](const ROI& roi, auto&& row) {
+        parallel_for_chunked(roi.ybegin, roi.yend, 0, [&](int64_t first, int64_t last) {
+            Tally tally = empty;
+            for (int64_t y = first; y < last; ++y)
+                row(tally, int(y));
+            std::lock_guard<std::mutex> lock(mutex);
+            merge(total, tally);
+        }, paropt(nthreads));
+    };
+    for (const Layer& flat : scene.flat)
+        bands(flat.color.roi(), [&](Tally& tally, int y) {
+            for (int x = flat.color.xbegin(); x < flat.color.xend(); ++x) {
                 const float a = static_cast<const float*>(flat.color.pixeladdr(x, y))[3];
                 if (a > 0.0f)
-                    fn(y, coc.diameter(*static_cast<const float*>(flat.depth.pixeladdr(x, y)),
-                                       x, y),
-                       a);
+                    visit(tally,
+                          coc.diameter(*static_cast<const float*>(flat.depth.pixeladdr(x, y)), x, y),
+                          a);
             }
-        }, by_rows(0));
-    }
+        });
     for (const DeepImage& deep : scene.deep)
-        parallel_for(deep.roi.ybegin, deep.roi.yend, [&](int y) {
+        bands(deep.roi, [&](Tally& tally, int y) {
             for (int x = deep.roi.xbegin; x < deep.roi.xend; ++x) {
                 const int64_t p = deep.pixel_index(x, y);
                 for (uint64_t i = deep.offsets[p]; i < deep.offsets[p + 1]; ++i) {
                     const DeepSample& s = deep.samples[i];
                     if (s.a > 0.0f) {
-                        fn(y, coc.diameter(s.z, x, y), s.a);
+                        visit(tally, coc.diameter(s.z, x, y), s.a);
                         if (s.zback != s.z)
-                            fn(y, coc.diameter(s.zback, x, y), 0.0f);
+                            visit(tally, coc.diameter(s.zback, x, y), 0.0f);
                     }
                 }
             }
-        }, by_rows(0));
+        });
+    return total;
 }
 
-CocHistogram coc_histogram(const Scene& scene, const CircleOfConfusion& coc)
+CocHistogram coc_histogram(const Scene& scene, const CircleOfConfusion& coc, int nthreads)
 {
+    using Range = std::pair<double, double>;
+    const Range range = tally_cocs(
+        scene, coc, Range { INFINITY, -INFINITY }, nthreads,
+        [](Range& r, double c, float) {
+            r.first = std::min(r.first, c);
+            r.second = std::max(r.second, c);
+        },
+        [](Range& total, const Range& r) {
+            total.first = std::min(total.first, r.first);
+            total.second = std::max(total.second, r.second);
+        });
     CocHistogram h;
-    std::mutex mutex;
-    for_each_coc(scene, coc, [&](int, double c, float) {
-        std::lock_guard<std::mutex> lock(mutex);
-        h.lo = std::min(h.lo, c);
-        h.hi = std::max(h.hi, c);
-    });
+    h.lo = range.first;
+    h.hi = range.second;
     if (!(h.hi > h.lo))
         return h;
     h.weight.assign(size_t((h.hi - h.lo) / CocHistogram::bin) + 1, 0.0);
-    for_each_coc(scene, coc, [&](int, double c, float a) {
-        std::lock_guard<std::mutex> lock(mutex);
-        h.weight[h.index(c)] += a;
-    });
+    h.weight = tally_cocs(
+        scene, coc, h.weight, nthreads,
+        [&](std::vector<double>& weight, double c, float a) { weight[h.index(c)] += a; },
+        [](std::vector<double>& total, const std::vector<double>& weight) {
+            for (size_t i = 0; i < total.size(); ++i)
+                total[i] += weight[i];
+        });
     return h;
 }
 
@@ -415,7 +484,7 @@ struct Occlusion {
 /// width, and cutting for it costs more (each layer's hidden surface is a
 /// guess) than it gains.
 std::vector<Occlusion> find_occlusions(const Scene& scene, const CircleOfConfusion& coc,
-                                       const CocHistogram& h, double min_step)
+                                       const CocHistogram& h, double min_step, int nthreads)
 {
     std::vector<std::vector<Occlusion>> rows;
     auto add = [&](std::vector<Occlusion>& out, double a, double b) {
@@ -452,7 +521,7 @@ std::vector<Occlusion> find_occlusions(const Scene& scene, const CircleOfConfusi
                 edge(out, at(x - 1, y), c, at(x + 1, y), at(x + 2, y));
                 edge(out, at(x, y - 1), c, at(x, y + 1), at(x, y + 2));
             }
-        }, by_rows(0));
+        }, by_rows(nthreads));
     };
     constexpr double nothing = std::numeric_limits<double>::quiet_NaN();
     for (const Layer& flat : scene.flat)
@@ -488,7 +557,7 @@ std::vector<Occlusion> find_occlusions(const Scene& scene, const CircleOfConfusi
                 for (size_t i = 1; i < cocs.size(); ++i)
                     add(out, cocs[i - 1], cocs[i]);
             }
-        }, by_rows(0));
+        }, by_rows(nthreads));
     }
     std::vector<Occlusion> all;
     for (std::vector<Occlusion>& row : rows) {
@@ -541,9 +610,9 @@ std::vector<int> separating_bins(const std::vector<Occlusion>& occlusions, const
 }  // namespace
 
 LayerBounds choose_layer_bounds(const Scene& scene, const CircleOfConfusion& coc,
-                                const LayeringOptions& options)
+                                const LayeringOptions& options, int nthreads)
 {
-    const CocHistogram h = coc_histogram(scene, coc);
+    const CocHistogram h = coc_histogram(scene, coc, nthreads);
     if (h.weight.empty())
         return std::isfinite(h.lo) ? LayerBounds(h.lo, h.lo) : LayerBounds();
     std::vector<double> bounds { h.lo };
@@ -556,8 +625,8 @@ LayerBounds choose_layer_bounds(const Scene& scene, const CircleOfConfusion& coc
         // bin on either side could not be separated anyway), then more
         // where a layer would span more than max_coc_span.
         const double min_step = std::max(1.0, options.soft_band + 2 * CocHistogram::bin);
-        const std::vector<int> cuts = separating_bins(find_occlusions(scene, coc, h, min_step),
-                                                      h, options.soft_band);
+        const std::vector<int> cuts = separating_bins(
+            find_occlusions(scene, coc, h, min_step, nthreads), h, options.soft_band);
         const int span = std::max(1, int(options.max_coc_span / CocHistogram::bin));
         int from = 0;
         for (size_t k = 0; k <= cuts.size(); ++k) {
@@ -587,7 +656,7 @@ bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
                       Slicing& slicing, std::string& error, int nthreads)
 {
     slicing = Slicing();
-    const LayerBounds& bounds = slicing.bounds = choose_layer_bounds(scene, coc, options);
+    const LayerBounds& bounds = slicing.bounds = choose_layer_bounds(scene, coc, options, nthreads);
     double held = 0.0;
     for (const Layer& layer : scene.layers)
         held += float_bytes(layer.color.roi().npixels(), 5);

@@ -43,11 +43,15 @@ private:
 
 /// The layer bounds for a scene's flat and deep content under a camera.
 /// With options.layers = N: N layers spaced uniformly in CoC. Otherwise
-/// each boundary is placed at the emptiest CoC (least alpha-weighted
-/// content) within max_coc_span of the previous one, so that boundaries
-/// fall in the gaps between objects and rarely cut a surface.
+/// the bounds follow the occlusions: the two sides of every visible depth
+/// discontinuity (a nearer surface beside or in front of one whose blur
+/// differs visibly) go to different layers, with the fewest bounds, each
+/// at the emptiest CoC (least alpha-weighted content) its sides allow; and
+/// where a layer would still span more than max_coc_span, more bounds go
+/// to the emptiest CoC within reach. So bounds fall in the gaps between
+/// objects and rarely cut a surface.
 LayerBounds choose_layer_bounds(const Scene& scene, const CircleOfConfusion& coc,
-                                const LayeringOptions& options);
+                                const LayeringOptions& options, int nthreads = 0);
 
 /// The weights that split premultiplied colour and alpha `a` between two
 /// adjacent layers so that the front part composited over the back part
@@ -85,7 +89,14 @@ bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
 /// the layer's observed pixels around them, covered or empty, found on the
 /// coarsest pyramid level needed, up to `max_distance` pixels away.
 /// Premultiplied colour and alpha are filled, and the alpha-weighted depth.
-void fill_hidden_background(Layer& layer, const std::vector<bool>& holes,
+void fill_hidden_background(Layer& layer, const std::vector<uint8_t>& holes,
                             double max_distance, int nthreads = 0);
+
+/// The window over which fill_hidden_background(layer, holes,
+/// max_distance) gives the same result as over all of `frame`, for a layer
+/// whose content lies within `content`: the content grown by the fill's
+/// reach, on the grid of its coarsest pyramid level, within `frame`.
+OIIO::ROI hidden_background_window(const OIIO::ROI& content, const OIIO::ROI& frame,
+                                   double max_distance);
 
 }  // namespace defocus
