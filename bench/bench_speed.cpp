@@ -9,6 +9,8 @@
 // spreading four 4096x2160 layers against spreading and compositing them;
 // the read stage against a plain OpenEXR decode; whole frames of the garden
 // scene and the 4K example (`defocus` as a process) and their peak memory;
+// the 4K example flattened into one RGBA+Z image: its slice stage, and its
+// whole frame against the layered one's;
 // reading large scene files (a million keyframes, ten thousand inputs, a
 // frame list of huge steps, a million frames checked on disk).
 #include <sys/resource.h>
@@ -42,6 +44,7 @@
 #include <defocus/io/aperture_files.h>
 #include <defocus/io/frames.h>
 #include <defocus/io/scene_io.h>
+#include <defocus/layers/layering.h>
 #include <defocus/shot/shot_file.h>
 #include <defocus/spread/spread.h>
 
@@ -207,6 +210,32 @@ bool read_stage(const std::string& filename)
     defocus::Scene scene;
     std::string error;
     return defocus::read_scene({ filename }, {}, scene, error);
+}
+
+/// The parts of the layered scene `layered` composited by depth into one
+/// RGBA+Z image written to `flat`, as a renderer's flat beauty pass with
+/// Z (oiiotool's --zover, part by part).
+bool write_flattened(const std::string& layered, const std::string& flat)
+{
+    ImageBuf first(layered);
+    if (!first.init_spec(layered, 0, 0))
+        return false;
+    ImageBuf result;
+    for (int part = 0; part < first.nsubimages(); ++part) {
+        ImageBuf layer(layered, part, 0);
+        if (!layer.read(part, 0, true, TypeFloat))
+            return false;
+        if (!result.initialized()) {
+            result = std::move(layer);
+            continue;
+        }
+        // Outside its window a part reads as empty with Z 0: nothing there.
+        ImageBuf both = ImageBufAlgo::zover(result, layer, true);
+        if (both.has_error())
+            return false;
+        result = std::move(both);
+    }
+    return result.write(flat);
 }
 
 /// The four 4096x2160 layers of the floor, as a scene with a camera that
@@ -375,6 +404,33 @@ int main(int argc, const char* argv[])
         });
     }
 
+    // The 4K example as most renders reach compositing: one flat RGBA+Z
+    // image, cut into layers again by the slice stage (layering, mixed
+    // pixels, hidden-background fills), here alone, in-process.
+    const std::string example_camera = "--focal 50 --fstop 1.8 --focus 4";
+    const std::string flat4k = scratch + "/scene4k_flat.exr";
+    defocus::Scene flat_scene;
+    if (!write_flattened(scene4k, flat4k)
+        || !defocus::read_scene({ flat4k }, {}, flat_scene, error)) {
+        std::fprintf(stderr, "bench_speed: %s: cannot flatten the 4K example %s\n",
+                     flat4k.c_str(), error.c_str());
+        return 1;
+    }
+    defocus::Camera flat_camera;
+    flat_camera.focal_length_mm = 50.0;
+    flat_camera.fstop = 1.8;
+    flat_camera.focus_distance = 4.0;
+    add("slice 4K flat", [&] {
+        defocus::Scene scene = flat_scene;
+        const defocus::CircleOfConfusion coc(flat_camera, scene.spec.roi_full());
+        defocus::LayeredScene layered;
+        defocus::Slicing slicing;
+        std::string why;
+        return seconds([&] {
+            return defocus::decompose_layers(std::move(scene), coc, {}, layered, slicing, why);
+        });
+    });
+
     // Whole frames, as a user runs them.
     std::map<std::string, double> peak;
     const std::vector<std::pair<std::string, std::string>> frames = [&] {
@@ -383,9 +439,11 @@ int main(int argc, const char* argv[])
             f.push_back({ "garden", format("{} {} -o {}/garden.exr --focal 85 --fstop 1.4 --focus 3 -q",
                                            DEFOCUS_BIN, arg_quote(garden + "/layers.exr"),
                                            arg_quote(scratch)) });
-        f.push_back({ "4K example", format("{} {} -o {}/4k.exr --focal 50 --fstop 1.8 --focus 4 "
-                                           "--compression none -q",
-                                           DEFOCUS_BIN, arg_quote(scene4k), arg_quote(scratch)) });
+        for (const auto& [name, file] : { std::pair { "4K example", scene4k },
+                                          std::pair { "4K flat", flat4k } })
+            f.push_back({ name, format("{} {} -o {}/4k.exr {} --compression none -q",
+                                       DEFOCUS_BIN, arg_quote(file), arg_quote(scratch),
+                                       example_camera) });
         return f;
     }();
     for (const auto& [name, command] : frames)
@@ -543,6 +601,9 @@ int main(int argc, const char* argv[])
                     median["frame " + name], peak[name] * 1e-6);
     if (!have_garden)
         std::printf("  (garden skipped: no %s)\n", garden.c_str());
+    std::printf("  4K flat: %.2fx the layered 4K example (target: at most 1.5x); its slice "
+                "stage %.3f s (target: at most 0.5 s)\n",
+                median["frame 4K flat"] / median["frame 4K example"], median["slice 4K flat"]);
     std::printf("  4K frame's layers as float RGBA: %.0f MB (target: peak at most twice that)\n",
                 4.0 * 4096 * 2160 * 16 * 1e-6);
     std::printf("\nlens effects, whole frames of %s (%s)\n",
