@@ -5,10 +5,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <iterator>
 #include <numeric>
 
 #include <OpenImageIO/parallel.h>
 
+#include "util/float_pixels.h"
 #include "util/parallel_rows.h"
 
 namespace defocus {
@@ -22,6 +24,13 @@ namespace {
 struct Cell {
     float v[5] = { 0, 0, 0, 0, 0 };
     float w = 0;
+
+    void add(const Cell& c)
+    {
+        for (int i = 0; i < 5; ++i)
+            v[i] += c.v[i];
+        w += c.w;
+    }
 };
 
 struct Level {
@@ -38,24 +47,91 @@ float brightness(const float* rgba)
 
 /// The mean brightness of the layer's observed covered pixels, per unit
 /// of coverage.
-float mean_brightness(const Layer& layer, const std::vector<uint8_t>& holes, int nthreads)
+float mean_brightness(const FloatPixels& color, const std::vector<uint8_t>& holes, int nthreads)
 {
-    const ROI roi = layer.color.roi();
+    const ROI& roi = color.roi();
     // Per row, then added in order: the same sum on any number of threads.
     std::vector<double> light(roi.height(), 0.0), coverage(roi.height(), 0.0);
     parallel_for(roi.ybegin, roi.yend, [&](int y) {
         const int row = y - roi.ybegin;
-        for (int x = roi.xbegin; x < roi.xend; ++x) {
-            const float* c = static_cast<const float*>(layer.color.pixeladdr(x, y));
-            if (!holes[size_t(row) * roi.width() + (x - roi.xbegin)] && c[3] > 0.0f) {
+        const uint8_t* hidden = &holes[size_t(row) * roi.width()];
+        const float* c = color(roi.xbegin, y);
+        for (int i = 0; i < roi.width(); ++i, c += 4)
+            if (!hidden[i] && c[3] > 0.0f) {
                 light[row] += brightness(c);
                 coverage[row] += c[3];
             }
-        }
     }, by_rows(nthreads));
     const double all_light = std::accumulate(light.begin(), light.end(), 0.0);
     const double all_coverage = std::accumulate(coverage.begin(), coverage.end(), 0.0);
     return all_coverage > 0.0 ? float(all_light / all_coverage) : 1.0f;
+}
+
+/// The finer level's 2x2 cells, summed.
+Level coarser(const Level& fine, int nthreads)
+{
+    Level coarse { (fine.width + 1) / 2, (fine.height + 1) / 2, {} };
+    coarse.cells.resize(size_t(coarse.width) * coarse.height);
+    parallel_for(0, coarse.height, [&](int y) {
+        for (int x = 0; x < coarse.width; ++x) {
+            Cell& c = coarse.at(x, y);
+            for (int fy = 2 * y; fy < std::min(2 * y + 2, fine.height); ++fy)
+                for (int fx = 2 * x; fx < std::min(2 * x + 2, fine.width); ++fx)
+                    c.add(fine.at(fx, fy));
+        }
+    }, by_rows(nthreads));
+    return coarse;
+}
+
+/// The mean of the cells of `coarse` around the centre of fine cell (x, y),
+/// interpolated bilinearly between the four nearest that have any; false
+/// when none has.
+bool pull(const Level& coarse, int x, int y, float mean[5])
+{
+    // Fine cell centre in coarse cell units.
+    const float cx = 0.5f * (x + 0.5f) - 0.5f, cy = 0.5f * (y + 0.5f) - 0.5f;
+    const int x0 = int(std::floor(cx)), y0 = int(std::floor(cy));
+    const float fx = cx - x0, fy = cy - y0;
+    float sum[5] = { 0, 0, 0, 0, 0 }, weight = 0.0f;
+    for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 2; ++i) {
+            const int u = std::clamp(x0 + i, 0, coarse.width - 1);
+            const int v = std::clamp(y0 + j, 0, coarse.height - 1);
+            const Cell& c = coarse.at(u, v);
+            if (c.w <= 0.0f)
+                continue;
+            const float b = (i ? fx : 1 - fx) * (j ? fy : 1 - fy);
+            for (int k = 0; k < 5; ++k)
+                sum[k] += b * c.v[k] / c.w;
+            weight += b;
+        }
+    if (weight <= 0.0f)
+        return false;
+    for (int k = 0; k < 5; ++k)
+        mean[k] = sum[k] / weight;
+    return true;
+}
+
+/// The bounding box of the hidden pixels of `roi`; empty (width 0) when
+/// there are none.
+ROI hidden_extent(const std::vector<uint8_t>& holes, const ROI& roi)
+{
+    int x0 = roi.xend, x1 = roi.xbegin, y0 = roi.yend, y1 = roi.ybegin;
+    for (int y = roi.ybegin; y < roi.yend; ++y) {
+        const uint8_t* row = &holes[size_t(y - roi.ybegin) * roi.width()];
+        auto flagged = [](uint8_t h) { return h != 0; };
+        const uint8_t* first = std::find_if(row, row + roi.width(), flagged);
+        if (first == row + roi.width())
+            continue;
+        const int last = int(std::find_if(std::make_reverse_iterator(row + roi.width()),
+                                          std::make_reverse_iterator(first), flagged).base()
+                             - row) - 1;
+        x0 = std::min(x0, roi.xbegin + int(first - row));
+        x1 = std::max(x1, roi.xbegin + last + 1);
+        y0 = std::min(y0, y);
+        y1 = y + 1;
+    }
+    return x1 > x0 ? ROI(x0, x1, y0, y1, 0, 1, 0, 4) : ROI(0, 0, 0, 0, 0, 1, 0, 4);
 }
 
 /// Push-pull levels above the pixels for a fill up to `max_distance`:
@@ -93,102 +169,81 @@ void fill_hidden_background(Layer& layer, const std::vector<uint8_t>& holes,
                             double max_distance, int nthreads)
 {
     const ROI roi = layer.color.roi();
+    const FloatPixels color(layer.color, roi);
+    const FloatPixels depth(layer.depth, ROI(roi.xbegin, roi.xend, roi.ybegin, roi.yend, 0, 1, 0, 1));
+    const float highlight = mean_brightness(color, holes, nthreads);
+    // Only the pixels around the holes matter, as far as the fill reaches.
+    const ROI hidden = hidden_extent(holes, roi);
+    if (hidden.width() == 0)
+        return;
+    const ROI window = hidden_background_window(hidden, roi, max_distance);
+    auto is_hidden = [&](int x, int y) {
+        return holes[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)];
+    };
+
+    // The pyramid starts at 2x2 pixels a cell: the pixels themselves are
+    // read where they are, and only the hidden ones are written.
     std::vector<Level> pyramid;
-    pyramid.push_back({ roi.width(), roi.height(), {} });
-    pyramid[0].cells.resize(roi.npixels());
-    const float highlight = mean_brightness(layer, holes, nthreads);
-    parallel_for(roi.ybegin, roi.yend, [&](int y) {
-        for (int x = roi.xbegin; x < roi.xend; ++x) {
-            // Every pixel not hidden is an observation of the layer, empty
-            // ones too: the fill estimates coverage as well as colour.
-            const size_t p = size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin);
-            if (holes[p])
-                continue;
-            const float* c = static_cast<const float*>(layer.color.pixeladdr(x, y));
-            Cell& cell = pyramid[0].cells[p];
-            // A highlight weighs as much light as the layer's mean
-            // brightness: what continues behind the nearer layer is not
-            // known, and a small light beside the hole must not flood it
-            // (the mean of a light 100 times brighter than a wall and of
-            // seven wall pixels is 13 walls; weighted, it is 1.1).
-            const float w = std::min(1.0f, highlight / std::max(brightness(c), 1e-30f));
-            for (int i = 0; i < 4; ++i)
-                cell.v[i] = w * c[i];
-            const float z = *static_cast<const float*>(layer.depth.pixeladdr(x, y));
-            cell.v[4] = c[3] > 0.0f ? w * c[3] * std::min(z, 1e30f) : 0.0f;
-            cell.w = w;
+    Level first { (window.width() + 1) / 2, (window.height() + 1) / 2, {} };
+    first.cells.resize(size_t(first.width) * first.height);
+    parallel_for(0, first.height, [&](int y) {
+        for (int x = 0; x < first.width; ++x) {
+            Cell& cell = first.at(x, y);
+            const int x0 = window.xbegin + 2 * x, y0 = window.ybegin + 2 * y;
+            for (int py = y0; py < std::min(y0 + 2, window.yend); ++py)
+                for (int px = x0; px < std::min(x0 + 2, window.xend); ++px) {
+                    // Every pixel not hidden is an observation of the layer,
+                    // empty ones too: the fill estimates coverage as well as
+                    // colour.
+                    if (is_hidden(px, py))
+                        continue;
+                    const float* c = color(px, py);
+                    // A highlight weighs as much light as the layer's mean
+                    // brightness: what continues behind the nearer layer is
+                    // not known, and a small light beside the hole must not
+                    // flood it (the mean of a light 100 times brighter than
+                    // a wall and of seven wall pixels is 13 walls; weighted,
+                    // it is 1.1).
+                    const float w = std::min(1.0f, highlight / std::max(brightness(c), 1e-30f));
+                    const float z = *depth(px, py);
+                    for (int i = 0; i < 4; ++i)
+                        cell.v[i] += w * c[i];
+                    cell.v[4] += c[3] > 0.0f ? w * c[3] * std::min(z, 1e30f) : 0.0f;
+                    cell.w += w;
+                }
         }
     }, by_rows(nthreads));
+    pyramid.push_back(std::move(first));
 
     // Push: each level sums 2x2 cells of the finer one, as far as a cell
     // spans the distance to fill.
     const int levels = pyramid_levels(max_distance);
-    for (int l = 1; l <= levels && (pyramid.back().width > 1 || pyramid.back().height > 1); ++l) {
-        const Level& fine = pyramid.back();
-        Level coarse { (fine.width + 1) / 2, (fine.height + 1) / 2, {} };
-        coarse.cells.resize(size_t(coarse.width) * coarse.height);
-        parallel_for(0, coarse.height, [&](int y) {
-            for (int x = 0; x < coarse.width; ++x) {
-                Cell& c = coarse.at(x, y);
-                for (int fy = 2 * y; fy < std::min(2 * y + 2, fine.height); ++fy)
-                    for (int fx = 2 * x; fx < std::min(2 * x + 2, fine.width); ++fx) {
-                        const Cell& f = fine.at(fx, fy);
-                        for (int i = 0; i < 5; ++i)
-                            c.v[i] += f.v[i];
-                        c.w += f.w;
-                    }
-            }
-        }, by_rows(nthreads));
-        pyramid.push_back(std::move(coarse));
-    }
-    // Pull: an empty cell takes the coarser level's averages, interpolated
-    // bilinearly between the four nearest coarse cells that have any.
+    for (int l = 2; l <= levels && (pyramid.back().width > 1 || pyramid.back().height > 1); ++l)
+        pyramid.push_back(coarser(pyramid.back(), nthreads));
+    // Pull: an empty cell takes the coarser level's averages.
     for (int l = int(pyramid.size()) - 2; l >= 0; --l) {
         Level& fine = pyramid[l];
         const Level& coarse = pyramid[l + 1];
         parallel_for(0, fine.height, [&](int y) {
             for (int x = 0; x < fine.width; ++x) {
                 Cell& f = fine.at(x, y);
-                if (f.w > 0.0f)
-                    continue;
-                // Fine cell centre in coarse cell units.
-                const float cx = 0.5f * (x + 0.5f) - 0.5f, cy = 0.5f * (y + 0.5f) - 0.5f;
-                const int x0 = int(std::floor(cx)), y0 = int(std::floor(cy));
-                const float fx = cx - x0, fy = cy - y0;
-                float sum[5] = { 0, 0, 0, 0, 0 }, weight = 0.0f;
-                for (int j = 0; j < 2; ++j)
-                    for (int i = 0; i < 2; ++i) {
-                        const int u = std::clamp(x0 + i, 0, coarse.width - 1);
-                        const int v = std::clamp(y0 + j, 0, coarse.height - 1);
-                        const Cell& c = coarse.at(u, v);
-                        if (c.w <= 0.0f)
-                            continue;
-                        const float b = (i ? fx : 1 - fx) * (j ? fy : 1 - fy);
-                        for (int k = 0; k < 5; ++k)
-                            sum[k] += b * c.v[k] / c.w;
-                        weight += b;
-                    }
-                if (weight <= 0.0f)
-                    continue;
-                for (int k = 0; k < 5; ++k)
-                    f.v[k] = sum[k] / weight;
-                f.w = 1.0f;
+                if (f.w <= 0.0f && pull(coarse, x, y, f.v))
+                    f.w = 1.0f;
             }
         }, by_rows(nthreads));
     }
 
-    parallel_for(roi.ybegin, roi.yend, [&](int y) {
-        for (int x = roi.xbegin; x < roi.xend; ++x) {
-            const size_t p = size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin);
-            const Cell& cell = pyramid[0].cells[p];
-            if (!holes[p] || cell.w <= 0.0f)
-                continue;
-            if (cell.v[3] <= 0.0f)
+    parallel_for(window.ybegin, window.yend, [&](int y) {
+        for (int x = window.xbegin; x < window.xend; ++x) {
+            float mean[5];
+            if (!is_hidden(x, y)
+                || !pull(pyramid[0], x - window.xbegin, y - window.ybegin, mean)
+                || mean[3] <= 0.0f)
                 continue;
             float* c = static_cast<float*>(layer.color.pixeladdr(x, y));
             for (int i = 0; i < 4; ++i)
-                c[i] = cell.v[i] / cell.w;
-            *static_cast<float*>(layer.depth.pixeladdr(x, y)) = cell.v[4] / cell.v[3];
+                c[i] = mean[i];
+            *static_cast<float*>(layer.depth.pixeladdr(x, y)) = mean[4] / mean[3];
         }
     }, by_rows(nthreads));
 }

@@ -80,10 +80,36 @@ LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc, int
 
 void crop_to_content(Layer& layer, int nthreads)
 {
-    ROI content = ImageBufAlgo::nonzero_region(layer.color, {}, nthreads);
-    content.chbegin = 0;
-    content.chend = 4;
-    if (content == layer.color.roi())
+    const ROI roi = layer.color.roi();
+    const FloatPixels pixels(layer.color, roi);
+    // Per row, the first and last pixel with any channel not zero.
+    std::vector<std::pair<int, int>> rows(roi.height(), { roi.xend, roi.xbegin - 1 });
+    parallel_for(roi.ybegin, roi.yend, [&](int y) {
+        auto carries_light = [&](int x) {
+            const float* c = pixels(x, y);
+            return c[0] != 0.0f || c[1] != 0.0f || c[2] != 0.0f || c[3] != 0.0f;
+        };
+        int first = roi.xbegin;
+        while (first < roi.xend && !carries_light(first))
+            ++first;
+        if (first == roi.xend)
+            return;
+        int last = roi.xend - 1;
+        while (!carries_light(last))
+            --last;
+        rows[y - roi.ybegin] = { first, last };
+    }, by_rows(nthreads));
+    ROI content(roi.xend, roi.xbegin, roi.yend, roi.ybegin, 0, 1, 0, 4);
+    for (int y = roi.ybegin; y < roi.yend; ++y)
+        if (const auto& [first, last] = rows[y - roi.ybegin]; first < roi.xend) {
+            content.xbegin = std::min(content.xbegin, first);
+            content.xend = std::max(content.xend, last + 1);
+            content.ybegin = std::min(content.ybegin, y);
+            content.yend = y + 1;
+        }
+    if (content.xend <= content.xbegin)
+        content = ROI(roi.xbegin, roi.xbegin, roi.ybegin, roi.ybegin, 0, 1, 0, 4);
+    if (content == roi)
         return;
     ImageBuf color, depth;
     ImageBufAlgo::crop(color, layer.color, content, nthreads);

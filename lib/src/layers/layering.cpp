@@ -12,6 +12,7 @@
 #include <defocus/layers/mixed_pixels.h>
 #include <defocus/spread/footprint.h>
 
+#include "layers/blur_field.h"
 #include "util/parallel_rows.h"
 
 namespace defocus {
@@ -67,62 +68,106 @@ struct Fragment {
 
 /// Every pixel's fragments, sorted front to back.
 struct Fragments {
-    ROI roi;
+    ROI pixels;
     std::vector<uint64_t> offsets;  ///< per pixel, npixels + 1
     std::vector<Fragment> items;
+
+    const ROI& roi() const { return pixels; }
+
+    /// visit(fragment) for each fragment of pixel (x, y), front to back.
+    template<typename Visit>
+    void each(int x, int y, Visit&& visit) const
+    {
+        const int64_t p = int64_t(y - pixels.ybegin) * pixels.width() + (x - pixels.xbegin);
+        for (uint64_t i = offsets[p]; i < offsets[p + 1]; ++i)
+            visit(items[i]);
+    }
+
+    double bytes() const
+    {
+        return double(items.size()) * sizeof(Fragment) + double(offsets.size()) * sizeof(uint64_t);
+    }
 };
 
-/// Layers are bounded in CoC, which at one pixel grows with depth, so
-/// they stay in depth order wherever the lens focuses.
-void assign_layers(Fragment& f, int x, int y, const CircleOfConfusion& coc,
-                   const LayerBounds& bounds)
+/// The layers of a fragment whose signed CoC is `c`.
+void assign_layers(Fragment& f, double c, const LayerBounds& bounds)
 {
-    const LayerBounds::Share s = bounds.share(coc.diameter(f.z, x, y));
+    const LayerBounds::Share s = bounds.share(c);
     const SplitWeights w = split_weights(s.front_weight, f.a);
     f.front = s.front;
     f.front_weight = w.front;
     f.back_weight = w.back;
 }
 
-/// A flat render's fragments: one per pixel, and two for a mixed pixel,
-/// its near surface and the rest of it under that.
-Fragments flat_fragments(const Layer& flat, const std::vector<MixedPixel>& mixed,
-                         const CircleOfConfusion& coc, const LayerBounds& bounds, int nthreads)
+/// Layers are bounded in CoC, which at one pixel grows with depth, so
+/// they stay in depth order wherever the lens focuses.
+void assign_layers(Fragment& f, int x, int y, const CircleOfConfusion& coc,
+                   const LayerBounds& bounds)
 {
-    Fragments out;
-    out.roi = flat.color.roi();
-    const int64_t n = out.roi.npixels();
-    auto pixel = [&](int x, int y) {
-        return int64_t(y - out.roi.ybegin) * out.roi.width() + (x - out.roi.xbegin);
-    };
-    out.offsets.assign(n + 1, 0);
-    for (const MixedPixel& m : mixed)
-        out.offsets[pixel(m.x, m.y) + 1] = 1;
-    for (int64_t i = 0; i < n; ++i)
-        out.offsets[i + 1] += out.offsets[i] + 1;
-    out.items.resize(out.offsets[n]);
-    auto color = [&](int x, int y) { return static_cast<const float*>(flat.color.pixeladdr(x, y)); };
-    auto depth = [&](int x, int y) { return *static_cast<const float*>(flat.depth.pixeladdr(x, y)); };
-    parallel_for(out.roi.ybegin, out.roi.yend, [&](int y) {
-        for (int x = out.roi.xbegin; x < out.roi.xend; ++x) {
-            const float* c = color(x, y);
-            Fragment& f = out.items[out.offsets[pixel(x, y)]];
-            f = { c[0], c[1], c[2], c[3], depth(x, y), 0, 1, 0 };
-            if (f.a > 0.0f)
-                assign_layers(f, x, y, coc, bounds);
-        }
-    }, by_rows(nthreads));
-    parallel_for(int64_t(0), int64_t(mixed.size()), [&](int64_t i) {
-        const MixedPixel& m = mixed[i];
-        Fragment* f = &out.items[out.offsets[pixel(m.x, m.y)]];
-        f[0] = { m.near[0], m.near[1], m.near[2], m.near[3], m.near_z, 0, 1, 0 };
-        f[1] = { m.far[0], m.far[1], m.far[2], m.far[3], m.far_z, 0, 1, 0 };
-        for (int k = 0; k < 2; ++k)
-            if (f[k].a > 0.0f)
-                assign_layers(f[k], m.x, m.y, coc, bounds);
-    }, paropt(nthreads));
-    return out;
+    assign_layers(f, coc.diameter(f.z, x, y), bounds);
 }
+
+/// A flat render's fragments, made as they are visited: one per pixel, and
+/// two for a mixed pixel, its near surface and the rest of it under that.
+/// (Held at once, a 4K frame's would take 340 MB, and making them took
+/// longer than all else that slices it.)
+class FlatFragments {
+public:
+    FlatFragments(const BlurField& field, const std::vector<MixedPixel>& mixed,
+                  const CircleOfConfusion& coc, const LayerBounds& bounds)
+        : m_field(field)
+        , m_bounds(bounds)
+    {
+        m_mixed.reserve(mixed.size());
+        m_split.reserve(2 * mixed.size());
+        for (const MixedPixel& m : mixed) {
+            m_mixed.push_back({ m.y, m.x });
+            const Fragment sides[2] = {
+                { m.near[0], m.near[1], m.near[2], m.near[3], m.near_z, 0, 1, 0 },
+                { m.far[0], m.far[1], m.far[2], m.far[3], m.far_z, 0, 1, 0 },
+            };
+            for (Fragment f : sides) {
+                if (f.a > 0.0f)
+                    assign_layers(f, m.x, m.y, coc, bounds);
+                m_split.push_back(f);
+            }
+        }
+    }
+
+    const ROI& roi() const { return m_field.roi(); }
+
+    template<typename Visit>
+    void each(int x, int y, Visit&& visit) const
+    {
+        // Mixed pixels lie at discontinuities, ordered by row, then column.
+        if (m_field.at_discontinuity(x, y)) {
+            const auto m = std::lower_bound(m_mixed.begin(), m_mixed.end(), std::pair { y, x });
+            if (m != m_mixed.end() && *m == std::pair { y, x }) {
+                const Fragment* split = &m_split[2 * size_t(m - m_mixed.begin())];
+                visit(split[0]);
+                visit(split[1]);
+                return;
+            }
+        }
+        const float* c = m_field.color(x, y);
+        Fragment f { c[0], c[1], c[2], c[3], m_field.depth(x, y), 0, 1, 0 };
+        if (f.a > 0.0f)
+            assign_layers(f, m_field.blur(x, y), m_bounds);
+        visit(f);
+    }
+
+    double bytes() const
+    {
+        return double(m_split.size()) * sizeof(Fragment)
+               + double(m_mixed.size()) * sizeof(m_mixed[0]);
+    }
+
+private:
+    const BlurField& m_field;
+    const LayerBounds& m_bounds;
+    std::vector<std::pair<int, int>> m_mixed;  ///< (y, x) of each mixed pixel
+    std::vector<Fragment> m_split;             ///< each one's near and far fragment
+};
 
 /// Cuts a volume sample [z, zback] at the layer boundaries inside it. Each
 /// piece keeps the alpha-split of OpenEXR's deep-pixel rules: a piece
@@ -188,7 +233,7 @@ Fragments deep_fragments(const DeepImage& deep, const CircleOfConfusion& coc,
     }, by_rows(nthreads));
 
     Fragments out;
-    out.roi = deep.roi;
+    out.pixels = deep.roi;
     out.offsets.reserve(n + 1);
     out.offsets.push_back(0);
     for (const std::vector<Fragment>& row : rows)
@@ -204,29 +249,27 @@ Fragments deep_fragments(const DeepImage& deep, const CircleOfConfusion& coc,
 /// Where each of `layers` layers has content in the fragments: the
 /// bounding box of the pixels with a share of it; an empty ROI (width 0)
 /// for a layer with none.
-std::vector<ROI> layer_extents(const Fragments& frags, int layers, int nthreads)
+template<typename Source>
+std::vector<ROI> layer_extents(const Source& frags, int layers, int nthreads)
 {
-    const ROI& roi = frags.roi;
+    const ROI& roi = frags.roi();
     const size_t n = size_t(roi.height()) * layers;
     // Per row and layer, the first and last column with a share.
     std::vector<int> first(n, std::numeric_limits<int>::max());
     std::vector<int> last(n, std::numeric_limits<int>::min());
     parallel_for(roi.ybegin, roi.yend, [&](int y) {
         const size_t row = size_t(y - roi.ybegin) * layers;
-        for (int x = roi.xbegin; x < roi.xend; ++x) {
-            const int64_t p = int64_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin);
-            for (uint64_t i = frags.offsets[p]; i < frags.offsets[p + 1]; ++i) {
-                const Fragment& f = frags.items[i];
+        for (int x = roi.xbegin; x < roi.xend; ++x)
+            frags.each(x, y, [&](const Fragment& f) {
                 if (f.a <= 0.0f)
-                    continue;
+                    return;
                 for (const auto& [k, w] : { std::pair { f.front, f.front_weight },
                                             std::pair { f.front + 1, f.back_weight } })
                     if (w > 0.0f && k < layers) {
                         first[row + k] = std::min(first[row + k], x);
                         last[row + k] = std::max(last[row + k], x);
                     }
-            }
-        }
+            });
     }, by_rows(nthreads));
     std::vector<ROI> extents(layers, ROI(0, 0, 0, 0, 0, 1, 0, 4));
     for (int k = 0; k < layers; ++k)
@@ -243,10 +286,13 @@ std::vector<ROI> layer_extents(const Fragments& frags, int layers, int nthreads)
 }
 
 /// Layer k of the fragments over `window`: each pixel's share of it
-/// composited front to back, with the alpha-weighted depth.
-void extract_layer(const Fragments& frags, int k, const ROI& window, Layer& layer, int nthreads)
+/// composited front to back, with the alpha-weighted depth. Returns the
+/// pixels that a nearer layer covers and layer k does not: where its
+/// hidden background lies.
+template<typename Source>
+std::vector<uint8_t> extract_layer(const Source& frags, int k, const ROI& window, Layer& layer,
+                                   int nthreads)
 {
-    const ROI& roi = frags.roi;
     ImageSpec color_spec(window, TypeFloat);
     color_spec.nchannels = 4;
     color_spec.channelnames = { "R", "G", "B", "A" };
@@ -257,16 +303,21 @@ void extract_layer(const Fragments& frags, int k, const ROI& window, Layer& laye
     // Every pixel is written below.
     layer.color.reset(color_spec, InitializePixels::No);
     layer.depth.reset(depth_spec, InitializePixels::No);
+    float* const color = static_cast<float*>(layer.color.localpixels());
+    float* const depth = static_cast<float*>(layer.depth.localpixels());
+    std::vector<uint8_t> hidden(window.npixels());
     parallel_for(window.ybegin, window.yend, [&](int y) {
+        const size_t row = size_t(y - window.ybegin) * window.width();
         for (int x = window.xbegin; x < window.xend; ++x) {
-            const int64_t p = int64_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin);
             double rgba[4] = { 0, 0, 0, 0 }, zsum = 0, wsum = 0;
-            for (uint64_t i = frags.offsets[p]; i < frags.offsets[p + 1]; ++i) {
-                const Fragment& f = frags.items[i];
+            bool first = true, nearer = false;
+            frags.each(x, y, [&](const Fragment& f) {
+                nearer |= first && f.a > 0.0f && f.front < k;
+                first = false;
                 const float w = f.front == k ? f.front_weight
                                 : f.front + 1 == k ? f.back_weight : 0.0f;
                 if (w <= 0.0f || f.a <= 0.0f)
-                    continue;
+                    return;
                 const double t = 1.0 - rgba[3];
                 rgba[0] += t * w * f.r;
                 rgba[1] += t * w * f.g;
@@ -275,37 +326,16 @@ void extract_layer(const Fragments& frags, int k, const ROI& window, Layer& laye
                 rgba[3] += covered;
                 zsum += covered * f.z;
                 wsum += covered;
-            }
-            float* c = static_cast<float*>(layer.color.pixeladdr(x, y));
+            });
+            const size_t p = row + (x - window.xbegin);
             for (int i = 0; i < 4; ++i)
-                c[i] = float(rgba[i]);
+                color[4 * p + i] = float(rgba[i]);
             // Infinite depths (the sky) stay infinite.
-            *static_cast<float*>(layer.depth.pixeladdr(x, y))
-                = wsum > 0 ? float(std::isinf(zsum) ? INFINITY : zsum / wsum) : 0.0f;
+            depth[p] = wsum > 0 ? float(std::isinf(zsum) ? INFINITY : zsum / wsum) : 0.0f;
+            hidden[p] = nearer && !(color[4 * p + 3] > 0.0f);
         }
     }, by_rows(nthreads));
-}
-
-/// The pixels of `layer` (over its window) that a layer nearer than k
-/// covers and layer k does not: where layer k's hidden background lies.
-std::vector<uint8_t> hidden_under_nearer(const Fragments& frags, const Layer& layer, int k,
-                                         int nthreads)
-{
-    const ROI& roi = frags.roi;
-    const ROI window = layer.color.roi();
-    std::vector<uint8_t> holes(window.npixels(), 0);
-    parallel_for(window.ybegin, window.yend, [&](int y) {
-        for (int x = window.xbegin; x < window.xend; ++x) {
-            const int64_t p = int64_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin);
-            if (frags.offsets[p] == frags.offsets[p + 1])
-                continue;
-            const Fragment& front = frags.items[frags.offsets[p]];
-            const float a = static_cast<const float*>(layer.color.pixeladdr(x, y))[3];
-            holes[size_t(y - window.ybegin) * window.width() + (x - window.xbegin)] =
-                front.a > 0.0f && front.front < k && a <= 0.0f;
-        }
-    }, by_rows(nthreads));
-    return holes;
+    return hidden;
 }
 
 /// A bound on the bytes of a deep image's fragments: volume samples are
@@ -332,12 +362,12 @@ std::string cutting_exceeds(const MemoryLimit& limit, const std::string& name,
 /// Cuts one flat render's or deep image's fragments into layers, appended
 /// to `layers`. `held` counts the bytes the layers cut so far hold; false
 /// with `error` when the next layer would take them past `limit`.
-bool slice(const Fragments& frags, const std::string& base, const LayerBounds& bounds,
+template<typename Source>
+bool slice(const Source& frags, const std::string& base, const LayerBounds& bounds,
            const MemoryLimit& limit, double& held, std::vector<Layer>& layers,
            std::string& error, int nthreads)
 {
-    const double fragment_bytes =
-        double(frags.items.size()) * sizeof(Fragment) + double(frags.offsets.size()) * 8;
+    const double fragment_bytes = frags.bytes();
     // ImageBuf's move may throw, so a vector that grows copies its layers.
     layers.reserve(layers.size() + bounds.count());
     const std::vector<ROI> extents = layer_extents(frags, bounds.count(), nthreads);
@@ -352,7 +382,7 @@ bool slice(const Fragments& frags, const std::string& base, const LayerBounds& b
                                      + 1.0;
         // A layer is made over its content, and where there are nearer
         // layers, as far around it as their hidden background can be filled.
-        const ROI window = k > 0 ? hidden_background_window(extents[k], frags.roi, fill_distance)
+        const ROI window = k > 0 ? hidden_background_window(extents[k], frags.roi(), fill_distance)
                                  : extents[k];
         const double need = held + fragment_bytes + float_bytes(window.npixels(), 5);
         if (!limit.allows(need)) {
@@ -361,10 +391,9 @@ bool slice(const Fragments& frags, const std::string& base, const LayerBounds& b
         }
         Layer layer;
         layer.name = Strutil::fmt::format("{}.{:02d}", base, k);
-        extract_layer(frags, k, window, layer, nthreads);
+        const std::vector<uint8_t> hidden = extract_layer(frags, k, window, layer, nthreads);
         if (k > 0)
-            fill_hidden_background(layer, hidden_under_nearer(frags, layer, k, nthreads),
-                                   fill_distance, nthreads);
+            fill_hidden_background(layer, hidden, fill_distance, nthreads);
         crop_to_content(layer, nthreads);
         held += float_bytes(layer.color.roi().npixels(), 5);
         layers.push_back(std::move(layer));
@@ -391,8 +420,9 @@ struct CocHistogram {
 /// tallies are merged into one, merge(total, tally): a lock per pixel, as
 /// this once took, made the histogram a good part of slicing a 4K frame.
 template<typename Tally, typename Visit, typename Merge>
-Tally tally_cocs(const Scene& scene, const CircleOfConfusion& coc, const Tally& empty,
-                 int nthreads, Visit&& visit, Merge&& merge)
+Tally tally_cocs(const Scene& scene, const std::vector<BlurField>& flats,
+                 const CircleOfConfusion& coc, const Tally& empty, int nthreads, Visit&& visit,
+                 Merge&& merge)
 {
     Tally total = empty;
     std::mutex mutex;
@@ -405,14 +435,12 @@ Tally tally_cocs(const Scene& scene, const CircleOfConfusion& coc, const Tally& 
             merge(total, tally);
         }, paropt(nthreads));
     };
-    for (const Layer& flat : scene.flat)
-        bands(flat.color.roi(), [&](Tally& tally, int y) {
-            for (int x = flat.color.xbegin(); x < flat.color.xend(); ++x) {
-                const float a = static_cast<const float*>(flat.color.pixeladdr(x, y))[3];
+    for (const BlurField& flat : flats)
+        bands(flat.roi(), [&](Tally& tally, int y) {
+            for (int x = flat.roi().xbegin; x < flat.roi().xend; ++x) {
+                const float a = flat.color(x, y)[3];
                 if (a > 0.0f)
-                    visit(tally,
-                          coc.diameter(*static_cast<const float*>(flat.depth.pixeladdr(x, y)), x, y),
-                          a);
+                    visit(tally, flat.blur(x, y), a);
             }
         });
     for (const DeepImage& deep : scene.deep)
@@ -432,11 +460,12 @@ Tally tally_cocs(const Scene& scene, const CircleOfConfusion& coc, const Tally& 
     return total;
 }
 
-CocHistogram coc_histogram(const Scene& scene, const CircleOfConfusion& coc, int nthreads)
+CocHistogram coc_histogram(const Scene& scene, const std::vector<BlurField>& flats,
+                           const CircleOfConfusion& coc, int nthreads)
 {
     using Range = std::pair<double, double>;
     const Range range = tally_cocs(
-        scene, coc, Range { INFINITY, -INFINITY }, nthreads,
+        scene, flats, coc, Range { INFINITY, -INFINITY }, nthreads,
         [](Range& r, double c, float) {
             r.first = std::min(r.first, c);
             r.second = std::max(r.second, c);
@@ -452,7 +481,7 @@ CocHistogram coc_histogram(const Scene& scene, const CircleOfConfusion& coc, int
         return h;
     h.weight.assign(size_t((h.hi - h.lo) / CocHistogram::bin) + 1, 0.0);
     h.weight = tally_cocs(
-        scene, coc, h.weight, nthreads,
+        scene, flats, coc, h.weight, nthreads,
         [&](std::vector<double>& weight, double c, float a) { weight[h.index(c)] += a; },
         [](std::vector<double>& total, const std::vector<double>& weight) {
             for (size_t i = 0; i < total.size(); ++i)
@@ -483,8 +512,9 @@ struct Occlusion {
 /// itself: a step of a quarter moves a blurred edge by an eighth of its
 /// width, and cutting for it costs more (each layer's hidden surface is a
 /// guess) than it gains.
-std::vector<Occlusion> find_occlusions(const Scene& scene, const CircleOfConfusion& coc,
-                                       const CocHistogram& h, double min_step, int nthreads)
+std::vector<Occlusion> find_occlusions(const Scene& scene, const std::vector<BlurField>& flats,
+                                       const CircleOfConfusion& coc, const CocHistogram& h,
+                                       double min_step, int nthreads)
 {
     std::vector<std::vector<Occlusion>> rows;
     auto add = [&](std::vector<Occlusion>& out, double a, double b) {
@@ -504,44 +534,46 @@ std::vector<Occlusion> find_occlusions(const Scene& scene, const CircleOfConfusi
             return;
         add(out, a, b);
     };
-    // The CoC of every pixel's front surface (NaN where nothing is), each
-    // pixel against its right and lower neighbours.
-    auto scan = [&](const ROI& roi, auto&& front_coc) {
+    // The CoC of every pixel's front surface (NaN where nothing is), row
+    // by row over `roi`, each pixel against its right and lower neighbours.
+    auto scan = [&](const ROI& roi, const std::vector<float>& front_coc) {
         const size_t first = rows.size();
         rows.resize(first + roi.height());
-        auto at = [&](int x, int y) {
-            return x >= roi.xbegin && x < roi.xend && y >= roi.ybegin && y < roi.yend
-                       ? front_coc(x, y)
-                       : std::numeric_limits<double>::quiet_NaN();
-        };
-        parallel_for(roi.ybegin, roi.yend, [&](int y) {
-            std::vector<Occlusion>& out = rows[first + (y - roi.ybegin)];
-            for (int x = roi.xbegin; x < roi.xend; ++x) {
+        const int width = roi.width(), height = roi.height();
+        constexpr double nothing = std::numeric_limits<double>::quiet_NaN();
+        parallel_for(0, height, [&](int y) {
+            std::vector<Occlusion>& out = rows[first + y];
+            auto at = [&](int x, int y) {
+                return x >= 0 && x < width && y >= 0 && y < height
+                           ? double(front_coc[size_t(y) * width + x])
+                           : nothing;
+            };
+            for (int x = 0; x < width; ++x) {
                 const double c = at(x, y);
+                if (std::isnan(c))
+                    continue;
                 edge(out, at(x - 1, y), c, at(x + 1, y), at(x + 2, y));
                 edge(out, at(x, y - 1), c, at(x, y + 1), at(x, y + 2));
             }
         }, by_rows(nthreads));
     };
-    constexpr double nothing = std::numeric_limits<double>::quiet_NaN();
-    for (const Layer& flat : scene.flat)
-        scan(flat.color.roi(), [&](int x, int y) {
-            const float a = static_cast<const float*>(flat.color.pixeladdr(x, y))[3];
-            return a > 0.0f ? coc.diameter(*static_cast<const float*>(flat.depth.pixeladdr(x, y)), x, y)
-                            : nothing;
-        });
+    for (const BlurField& flat : flats)
+        scan(flat.roi(), flat.blurs());
     for (const DeepImage& deep : scene.deep) {
-        scan(deep.roi, [&](int x, int y) {
-            const int64_t p = deep.pixel_index(x, y);
-            double front = nothing;
-            float front_z = INFINITY;
-            for (uint64_t i = deep.offsets[p]; i < deep.offsets[p + 1]; ++i)
-                if (deep.samples[i].a > 0.0f && deep.samples[i].z < front_z) {
-                    front_z = deep.samples[i].z;
-                    front = coc.diameter(front_z, x, y);
-                }
-            return front;
-        });
+        std::vector<float> front(deep.roi.npixels(), std::numeric_limits<float>::quiet_NaN());
+        parallel_for(deep.roi.ybegin, deep.roi.yend, [&](int y) {
+            for (int x = deep.roi.xbegin; x < deep.roi.xend; ++x) {
+                const int64_t p = deep.pixel_index(x, y);
+                float front_z = INFINITY;
+                for (uint64_t i = deep.offsets[p]; i < deep.offsets[p + 1]; ++i)
+                    if (deep.samples[i].a > 0.0f && deep.samples[i].z < front_z) {
+                        front_z = deep.samples[i].z;
+                        front[size_t(y - deep.roi.ybegin) * deep.roi.width() + (x - deep.roi.xbegin)]
+                            = float(coc.diameter(front_z, x, y));
+                    }
+            }
+        }, by_rows(nthreads));
+        scan(deep.roi, front);
         const size_t first = rows.size();
         rows.resize(first + deep.roi.height());
         parallel_for(deep.roi.ybegin, deep.roi.yend, [&](int y) {
@@ -607,12 +639,10 @@ std::vector<int> separating_bins(const std::vector<Occlusion>& occlusions, const
     return cuts;
 }
 
-}  // namespace
-
-LayerBounds choose_layer_bounds(const Scene& scene, const CircleOfConfusion& coc,
-                                const LayeringOptions& options, int nthreads)
+LayerBounds layer_bounds(const Scene& scene, const std::vector<BlurField>& flats,
+                         const CircleOfConfusion& coc, const LayeringOptions& options, int nthreads)
 {
-    const CocHistogram h = coc_histogram(scene, coc, nthreads);
+    const CocHistogram h = coc_histogram(scene, flats, coc, nthreads);
     if (h.weight.empty())
         return std::isfinite(h.lo) ? LayerBounds(h.lo, h.lo) : LayerBounds();
     std::vector<double> bounds { h.lo };
@@ -626,7 +656,7 @@ LayerBounds choose_layer_bounds(const Scene& scene, const CircleOfConfusion& coc
         // where a layer would span more than max_coc_span.
         const double min_step = std::max(1.0, options.soft_band + 2 * CocHistogram::bin);
         const std::vector<int> cuts = separating_bins(
-            find_occlusions(scene, coc, h, min_step, nthreads), h, options.soft_band);
+            find_occlusions(scene, flats, coc, h, min_step, nthreads), h, options.soft_band);
         const int span = std::max(1, int(options.max_coc_span / CocHistogram::bin));
         int from = 0;
         for (size_t k = 0; k <= cuts.size(); ++k) {
@@ -651,19 +681,38 @@ LayerBounds choose_layer_bounds(const Scene& scene, const CircleOfConfusion& coc
     return LayerBounds(std::move(bounds), options.soft_band);
 }
 
+std::vector<BlurField> blur_fields(const Scene& scene, const CircleOfConfusion& coc, int nthreads)
+{
+    std::vector<BlurField> flats;
+    flats.reserve(scene.flat.size());
+    for (const Layer& flat : scene.flat)
+        flats.emplace_back(flat, coc, nthreads);
+    return flats;
+}
+
+}  // namespace
+
+LayerBounds choose_layer_bounds(const Scene& scene, const CircleOfConfusion& coc,
+                                const LayeringOptions& options, int nthreads)
+{
+    return layer_bounds(scene, blur_fields(scene, coc, nthreads), coc, options, nthreads);
+}
+
 bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
                       const LayeringOptions& options, LayeredScene& layered,
                       Slicing& slicing, std::string& error, int nthreads)
 {
     slicing = Slicing();
-    const LayerBounds& bounds = slicing.bounds = choose_layer_bounds(scene, coc, options, nthreads);
+    const std::vector<BlurField> flats = blur_fields(scene, coc, nthreads);
+    const LayerBounds& bounds = slicing.bounds = layer_bounds(scene, flats, coc, options, nthreads);
     double held = 0.0;
     for (const Layer& layer : scene.layers)
         held += float_bytes(layer.color.roi().npixels(), 5);
-    for (const Layer& flat : scene.flat) {
-        const std::vector<MixedPixel> mixed = find_mixed_pixels(flat, coc, nthreads);
+    for (size_t i = 0; i < flats.size(); ++i) {
+        const std::vector<MixedPixel> mixed = find_mixed_pixels(flats[i], nthreads);
         slicing.mixed_pixels += int64_t(mixed.size());
-        if (!slice(flat_fragments(flat, mixed, coc, bounds, nthreads), flat.name, bounds,
+        const FlatFragments ff(flats[i], mixed, coc, bounds);
+        if (!slice(ff, scene.flat[i].name, bounds,
                    options.memory_limit, held, scene.layers, error, nthreads))
             return false;
     }

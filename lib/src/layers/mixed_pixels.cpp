@@ -2,11 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
-#include <limits>
 
 #include <OpenImageIO/parallel.h>
 
+#include "layers/blur_field.h"
 #include "util/parallel_rows.h"
 
 namespace defocus {
@@ -14,9 +13,6 @@ namespace defocus {
 using namespace OIIO;
 
 namespace {
-
-/// Blurs closer than a pixel of CoC look alike.
-constexpr float discontinuity = 1.0f;
 
 /// How far around a mixed pixel its sides' colours are taken from: an
 /// antialiased rim is a pixel or two wide, and the unmixed pixels beyond
@@ -38,66 +34,6 @@ struct Side {
     }
     double mean(int i) const { return rgba[i] / count; }
     double mean_depth() const { return z / count; }
-};
-
-/// A flat render's pixels with their signed CoC (NaN where nothing is),
-/// and which of them are mixed.
-class BlurField {
-public:
-    BlurField(const Layer& flat, const CircleOfConfusion& coc, int nthreads)
-        : m_flat(flat)
-        , m_roi(flat.color.roi())
-        , m_blur(m_roi.npixels())
-        , m_mixed(m_roi.npixels(), 0)
-    {
-        parallel_for(m_roi.ybegin, m_roi.yend, [&](int y) {
-            for (int x = m_roi.xbegin; x < m_roi.xend; ++x)
-                m_blur[index(x, y)] = color(x, y)[3] > 0.0f
-                                          ? float(coc.diameter(depth(x, y), x, y))
-                                          : std::numeric_limits<float>::quiet_NaN();
-        }, by_rows(nthreads));
-        parallel_for(m_roi.ybegin, m_roi.yend, [&](int y) {
-            for (int x = m_roi.xbegin; x < m_roi.xend; ++x)
-                m_mixed[index(x, y)] = std::abs(other_side(x, y) - blur(x, y)) > discontinuity;
-        }, by_rows(nthreads));
-    }
-
-    const ROI& roi() const { return m_roi; }
-    const float* color(int x, int y) const
-    {
-        return static_cast<const float*>(m_flat.color.pixeladdr(x, y));
-    }
-    float depth(int x, int y) const
-    {
-        return *static_cast<const float*>(m_flat.depth.pixeladdr(x, y));
-    }
-    float blur(int x, int y) const { return m_blur[index(x, y)]; }
-    bool mixed(int x, int y) const { return m_mixed[index(x, y)]; }
-
-    /// The CoC of the 3x3 neighbour whose CoC differs most from the
-    /// pixel's (its own when none is covered, NaN when it is empty).
-    float other_side(int x, int y) const
-    {
-        const float own = blur(x, y);
-        float other = own;
-        for (int ny = std::max(y - 1, m_roi.ybegin); ny <= std::min(y + 1, m_roi.yend - 1); ++ny)
-            for (int nx = std::max(x - 1, m_roi.xbegin); nx <= std::min(x + 1, m_roi.xend - 1);
-                 ++nx)
-                if (std::abs(blur(nx, ny) - own) > std::abs(other - own))
-                    other = blur(nx, ny);
-        return other;
-    }
-
-private:
-    size_t index(int x, int y) const
-    {
-        return size_t(y - m_roi.ybegin) * size_t(m_roi.width()) + size_t(x - m_roi.xbegin);
-    }
-
-    const Layer& m_flat;
-    ROI m_roi;
-    std::vector<float> m_blur;
-    std::vector<uint8_t> m_mixed;
 };
 
 /// Pixel (x, y), mixed, as its two surfaces; false when it is better left
@@ -125,7 +61,7 @@ bool split(const BlurField& field, int x, int y, MixedPixel& out)
         for (int sx = x0; sx <= x1; ++sx) {
             const float c = field.blur(sx, sy);
             if (!std::isnan(c) && (sx != x || sy != y))
-                sides[c < middle][field.mixed(sx, sy)].add(field.color(sx, sy),
+                sides[c < middle][field.at_discontinuity(sx, sy)].add(field.color(sx, sy),
                                                            field.depth(sx, sy));
         }
     const Side& near = sides[1][0].count ? sides[1][0] : sides[1][1];
@@ -187,12 +123,16 @@ bool split(const BlurField& field, int x, int y, MixedPixel& out)
 std::vector<MixedPixel> find_mixed_pixels(const Layer& flat, const CircleOfConfusion& coc,
                                           int nthreads)
 {
-    const BlurField field(flat, coc, nthreads);
+    return find_mixed_pixels(BlurField(flat, coc, nthreads), nthreads);
+}
+
+std::vector<MixedPixel> find_mixed_pixels(const BlurField& field, int nthreads)
+{
     const ROI& roi = field.roi();
     std::vector<std::vector<MixedPixel>> rows(roi.height());
     parallel_for(roi.ybegin, roi.yend, [&](int y) {
         for (int x = roi.xbegin; x < roi.xend; ++x)
-            if (MixedPixel pixel; field.mixed(x, y) && split(field, x, y, pixel))
+            if (MixedPixel pixel; field.at_discontinuity(x, y) && split(field, x, y, pixel))
                 rows[y - roi.ybegin].push_back(pixel);
     }, by_rows(nthreads));
     std::vector<MixedPixel> all;

@@ -1,0 +1,52 @@
+// Internal: a flat render's blur map, made once for all that slices it.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <defocus/layers/mixed_pixels.h>
+#include <defocus/scene.h>
+#include <defocus/shot/camera.h>
+
+#include "util/float_pixels.h"
+
+namespace defocus {
+
+/// A flat render's pixels with the signed CoC of each (NaN where nothing
+/// is), and which of them lie at a depth discontinuity. The layer bounds,
+/// the mixed pixels and each pixel's layer all read it, so the CoC of a
+/// 4K frame's ten million pixels is taken once.
+class BlurField {
+public:
+    BlurField(const Layer& flat, const CircleOfConfusion& coc, int nthreads);
+
+    const OIIO::ROI& roi() const { return m_roi; }
+    const float* color(int x, int y) const { return m_color(x, y); }
+    float depth(int x, int y) const { return *m_depth(x, y); }
+    float blur(int x, int y) const { return m_blur[index(x, y)]; }
+    /// Every pixel's CoC, row by row over roi().
+    const std::vector<float>& blurs() const { return m_blur; }
+    /// True where a 3x3 neighbour's CoC differs from the pixel's by more
+    /// than a pixel (less is no visible difference in blur).
+    bool at_discontinuity(int x, int y) const { return m_discontinuity[index(x, y)]; }
+
+    /// The CoC of the 3x3 neighbour whose CoC differs most from the
+    /// pixel's (its own when none is covered, NaN when it is empty).
+    float other_side(int x, int y) const;
+
+private:
+    size_t index(int x, int y) const
+    {
+        return size_t(y - m_roi.ybegin) * size_t(m_roi.width()) + size_t(x - m_roi.xbegin);
+    }
+
+    OIIO::ROI m_roi;
+    FloatPixels m_color, m_depth;
+    std::vector<float> m_blur;
+    std::vector<uint8_t> m_discontinuity;
+};
+
+/// find_mixed_pixels (mixed_pixels.h) over a blur field already made.
+std::vector<MixedPixel> find_mixed_pixels(const BlurField& field, int nthreads);
+
+}  // namespace defocus
