@@ -8,6 +8,8 @@
 #include <defocus/composite/defocus_layers.h>
 #include <defocus/layers/layering.h>
 #include <defocus/layers/mixed_pixels.h>
+#include <defocus/render_frame.h>
+#include <defocus/shot/shot.h>
 
 #include "test_support.h"
 
@@ -344,4 +346,50 @@ TEST_CASE("pixels of a textured background beside an edge are not taken for mixe
     });
     const CircleOfConfusion coc(synthetic_camera(0.5), ROI(0, 120, 0, 80));
     CHECK(find_mixed_pixels(scene.flat.front(), coc).empty());
+}
+
+TEST_CASE("the confidence AOV is the share of light from rebuilt surfaces, and 0 where all was seen")
+{
+    // In-focus stripes behind a 10 px pole blurred to 30 px: the stripes the
+    // pole hides are rebuilt, and show through its blurred edges.
+    const float pole_z = 1.0f / 2.9f, stripes_z = 0.5f;
+    auto shade = [&](int x, int y, float* rgba, float& z) {
+        const bool in_pole = x >= 55 && x < 65;
+        std::fill(rgba, rgba + 3, in_pole ? 0.5f : (y / 4) % 2 ? 1.0f : 0.1f);
+        rgba[3] = 1.0f;
+        z = in_pole ? pole_z : stripes_z;
+    };
+    Shot shot;
+    shot.inputs = { "stripes.exr" };
+    std::string error;
+    for (const auto& [name, value] : { std::pair { "focal", "100" }, { "fstop", "1" },
+                                       { "sensor", "36" }, { "focus", "0.5" },
+                                       { "aov", "confidence" }, { "camera-from-file", "off" } })
+        REQUIRE(set_shot_setting(shot, name, value, error));
+    auto confidence = [&](Scene scene) {
+        FrameResult result;
+        std::string error;
+        REQUIRE(render_scene(std::move(scene), shot, 0, {}, result, error));
+        REQUIRE(result.image.nchannels() == 5);
+        CHECK(result.image.spec().channelnames[4] == "confidence");
+        return result.image;
+    };
+
+    const ImageBuf flat = confidence(flat_scene(shade));
+    auto at = [&](const ImageBuf& image, int x, int y) { return image.getchannel(x, y, 0, 4); };
+    // Behind the pole the light is the rebuilt stripes' as much as the
+    // pole's; beyond the blur's reach all of it was seen.
+    CHECK(at(flat, 60, 40) > 0.2f);
+    CHECK(at(flat, 60, 40) < 0.8f);
+    for (int y = 0; y < 80; y += 7)
+        for (int x : { 0, 10, 30, 90, 110, 119 })
+            CHECK(at(flat, x, y) == 0.0f);
+
+    // The same scene given as layers hides nothing: nothing is rebuilt.
+    Scene layers = flat_scene(shade);
+    layers.layers.push_back(std::move(layers.flat.front()));
+    layers.flat.clear();
+    const ImageBuf given = confidence(std::move(layers));
+    const auto stats = OIIO::ImageBufAlgo::computePixelStats(given);
+    CHECK(stats.max[4] == 0.0f);
 }

@@ -102,6 +102,20 @@ TEST_CASE("oiiotool opens a .dof as the image the defocus command renders from i
     require_identical(hinted, cli_render(dof, "--focus 1.25 --fstop 2"));
 }
 
+TEST_CASE("the confidence AOV reaches oiiotool through the plugin as through the command")
+{
+    const std::string dof = scene_dof();
+    const std::string out = scratch_dir("plugin_aov") + "/a.exr";
+    std::string log;
+    INFO(log);
+    REQUIRE(run(with_plugin + OIIOTOOL_BIN + " --iconfig dof:aov confidence " + dof + " -o " + out,
+                log) == 0);
+    const ImageSpec spec = read_spec(out);
+    REQUIRE(spec.nchannels == 5);
+    CHECK(spec.channelnames[4] == "confidence");
+    require_identical(out, cli_render(dof, "--aov confidence"));
+}
+
 TEST_CASE("oiiotool renders each frame of a sequence scene with --iconfig dof:frame")
 {
     // A three-frame sequence with a focus pull from 1 m to 8 m.

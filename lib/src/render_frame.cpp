@@ -1,8 +1,10 @@
 #include <defocus/render_frame.h>
 
+#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/timer.h>
 
+#include <defocus/composite/confidence.h>
 #include <defocus/focus/focus_at.h>
 #include <defocus/focus/focus_map.h>
 #include <defocus/io/frames.h>
@@ -172,6 +174,27 @@ double spread_bytes(const LayeredScene& layered)
     return bytes + 2.0 * float_bytes(all.npixels(), 4);
 }
 
+/// The confidence AOV of `image`, defocused from `layered` as the shot
+/// says: the scene's rebuilt part spread and composited the same way.
+bool confidence_aov(ImageBuf& confidence, const ImageBuf& image, const LayeredScene& layered,
+                    const Shot& shot, const Camera& camera, const ApertureImages& images,
+                    std::string& error, int nthreads)
+{
+    LayeredScene part;
+    ImageBuf light(image.spec());  // none, unless something was rebuilt
+    if (rebuilt_part(layered, part, nthreads)
+        && !defocus_layers(light, part, camera, shot.spread, images, shot.window, nullptr,
+                           nullptr, nthreads)) {
+        error = light.geterror();
+        return false;
+    }
+    if (!light_fraction(confidence, image, light, layered.luma, nthreads)) {
+        error = confidence.geterror();
+        return false;
+    }
+    return true;
+}
+
 /// A frame from its prepared layers to the image to write. Errors do not
 /// name the source: the caller does.
 bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
@@ -215,9 +238,24 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
         }
         out.timings.emplace_back("spread and composite", timings.spread);
         timer.lap();
+        ImageBuf confidence;
+        if (shot.aov == Aov::Confidence) {
+            if (!confidence_aov(confidence, image, layered, shot, out.camera, images, error,
+                                nthreads))
+                return false;
+            lap("confidence");
+        }
         if (color.config
             && !color.config->convert(image, color.working, color.output, error, nthreads))
             return false;
+        if (confidence.initialized()) {
+            ImageBuf both;
+            if (!ImageBufAlgo::channel_append(both, image, confidence, {}, nthreads)) {
+                error = both.geterror();
+                return false;
+            }
+            image = std::move(both);
+        }
         lap("colour out");
     }
     describe_output(image.specmod(), layered.spec, shot, out.camera, color, frame);
@@ -272,6 +310,10 @@ bool frame_spec(const Shot& shot, int frame, const ShotAssets& assets, ImageSpec
         return false;
     }
     spec = result_spec(input, window, output_pixel_type(shot, input));
+    if (shot.output == OutputKind::Image && shot.aov == Aov::Confidence) {
+        spec.nchannels += 1;
+        spec.channelnames.push_back("confidence");
+    }
     describe_output(spec, input, shot, camera, color, frame);
     // Focusing at a pixel measures the focus from the pixels.
     if (!shot.focus_at.empty())

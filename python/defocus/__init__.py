@@ -299,7 +299,9 @@ def render(shot: _ShotArg, frame: Optional[int] = None, crop: bool = False) -> n
     """Renders a frame of a shot (a Shot or a .dof file) as defocus does.
 
     Returns float32 pixels, height x width x 4 (premultiplied R,G,B,A in the
-    output colour space) over the result's data window, or with crop=True
+    output colour space; a fifth channel with aov="confidence", the share of
+    each pixel's light from rebuilt hidden surfaces) over the result's data
+    window, or with crop=True
     over the display window (black outside the data). frame=None renders
     the shot's first frame. The pixels are those defocus writes, before
     conversion to the output's pixel type (e.g. half).

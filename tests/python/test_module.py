@@ -225,6 +225,32 @@ def test_decompose_cuts_a_flat_render_into_layers_that_composite_back():
     assert np.allclose(out[30, 45], rgba[30, 45], rtol=1e-4)
 
 
+def test_the_confidence_aov_marks_rebuilt_light_as_the_command_does(example, tmp_path):
+    # Layered input hides nothing: the channel is there, and 0.
+    layered = defocus.render(defocus.Shot(inputs=[example], aov="confidence", **CAMERA))
+    assert layered.shape[2] == 5 and not layered[..., 4].any()
+    # A flat render: a near bar, blurred, hides part of a striped wall.
+    height, width = 64, 96
+    rgba = np.ones((height, width, 4), np.float32)
+    rgba[(np.arange(height) // 4) % 2 == 0, :, :3] = 0.1
+    z = np.full((height, width), 20.0, np.float32)
+    rgba[:, 40:50] = (0.5, 0.5, 0.5, 1.0)
+    z[:, 40:50] = 0.8
+    write_layers([(rgba, z, "flat")], tmp_path / "flat.exr")
+    camera = {**SMALL_CAMERA, "focus": 20.0}
+    ours = defocus.render(defocus.Shot(inputs=[tmp_path / "flat.exr"], aov="confidence",
+                                       **camera))
+    assert ours.shape == (height, width, 5)
+    confidence = ours[..., 4]
+    assert confidence[32, 45] > 0.1 and confidence.max() <= 1.0
+    assert not confidence[:, :20].any()  # beyond the bar's blur all was seen
+    args = [f"--{k}={v}" for k, v in camera.items()]
+    assert cli(tmp_path / "flat.exr", "-o", tmp_path / "cli.exr", "--aov", "confidence",
+               "-d", "float", *args) == (0, "")
+    theirs, _ = pixels(tmp_path / "cli.exr")
+    assert np.array_equal(ours, theirs)
+
+
 @pytest.mark.parametrize("bad, message", [
     (lambda l: [(l[0][0].astype(np.float64), l[0][1])], r"rgba: dtype float64; expected float32"),
     (lambda l: [(l[0][0][..., :3], l[0][1])], r"rgba: shape \(64, 96, 3\); expected"),

@@ -23,6 +23,7 @@ _defocus()
         --spread) COMPREPLY=($(compgen -W 'bounded exact' -- "$cur")); return ;;
         --lens) COMPREPLY=($(compgen -W 'thin optical' -- "$cur")); return ;;
         --output) COMPREPLY=($(compgen -W 'image focusmap' -- "$cur")); return ;;
+        --aov) COMPREPLY=($(compgen -W 'none confidence' -- "$cur")); return ;;
         --edge) COMPREPLY=($(compgen -W 'auto extend black' -- "$cur")); return ;;
         --camera-from-file) COMPREPLY=($(compgen -W 'on off' -- "$cur")); return ;;
         -d) COMPREPLY=($(compgen -W 'half float' -- "$cur")); return ;;

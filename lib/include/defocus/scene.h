@@ -16,6 +16,11 @@ struct Layer {
     std::string name;
     OIIO::ImageBuf color;  ///< float R,G,B,A, alpha_channel = 3
     OIIO::ImageBuf depth;  ///< float Z
+    /// Where the colour is rebuilt, not seen: the background a flat render
+    /// or a deep image hides behind nearer layers, filled in by slicing.
+    /// One channel, nonzero there, over part of the layer's window; empty
+    /// when nothing is.
+    OIIO::ImageBuf rebuilt {};
 };
 
 /// One deep sample: premultiplied colour, alpha, and the depth interval it

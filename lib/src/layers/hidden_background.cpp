@@ -233,6 +233,10 @@ void fill_hidden_background(Layer& layer, const std::vector<uint8_t>& holes,
         }, by_rows(nthreads));
     }
 
+    ImageSpec rebuilt_spec(window, TypeUInt8);
+    rebuilt_spec.nchannels = 1;
+    rebuilt_spec.channelnames = { "rebuilt" };
+    layer.rebuilt.reset(rebuilt_spec, InitializePixels::Yes);
     parallel_for(window.ybegin, window.yend, [&](int y) {
         for (int x = window.xbegin; x < window.xend; ++x) {
             float mean[5];
@@ -244,6 +248,7 @@ void fill_hidden_background(Layer& layer, const std::vector<uint8_t>& holes,
             for (int i = 0; i < 4; ++i)
                 c[i] = mean[i];
             *static_cast<float*>(layer.depth.pixeladdr(x, y)) = mean[4] / mean[3];
+            *static_cast<uint8_t*>(layer.rebuilt.pixeladdr(x, y)) = 1;
         }
     }, by_rows(nthreads));
 }

@@ -111,13 +111,19 @@ void crop_to_content(Layer& layer, int nthreads)
         content = ROI(roi.xbegin, roi.xbegin, roi.ybegin, roi.ybegin, 0, 1, 0, 4);
     if (content == roi)
         return;
-    ImageBuf color, depth;
+    ImageBuf color, depth, rebuilt;
     ImageBufAlgo::crop(color, layer.color, content, nthreads);
     ROI zroi = content;
     zroi.chend = 1;
     ImageBufAlgo::crop(depth, layer.depth, zroi, nthreads);
+    if (layer.rebuilt.initialized()) {
+        const ROI kept = roi_intersection(layer.rebuilt.roi(), zroi);
+        if (kept.npixels() > 0)
+            ImageBufAlgo::crop(rebuilt, layer.rebuilt, kept, nthreads);
+    }
     layer.color = std::move(color);
     layer.depth = std::move(depth);
+    layer.rebuilt = std::move(rebuilt);
 }
 
 void order_layers(LayeredScene& scene, const CircleOfConfusion& coc, int nthreads)

@@ -42,6 +42,16 @@ bool parse_output_window(const std::string& name, OutputWindow& window)
                       output_window_name, window);
 }
 
+bool parse_aov(const std::string& name, Aov& aov)
+{
+    return parse_name(name, { Aov::None, Aov::Confidence }, aov_name, aov);
+}
+
+const char* aov_name(Aov aov)
+{
+    return aov == Aov::Confidence ? "confidence" : "none";
+}
+
 const char* output_window_name(OutputWindow window)
 {
     switch (window) {

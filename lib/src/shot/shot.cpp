@@ -258,6 +258,8 @@ const std::vector<SettingRule>& rules()
           } },
         text({ "compression", "output", "compression", K::Text },
              [](auto& s) -> auto& { return s.compression; }),
+        choice({ "aov", "output", "aov", K::Text }, [](auto& s) -> auto& { return s.aov; },
+               parse_aov, aov_name, "AOV", "none or confidence"),
         choice({ "window", "output", "window", K::Text },
                [](auto& s) -> auto& { return s.window; }, parse_output_window,
                output_window_name, "window", "input, display or grown"),
@@ -337,6 +339,8 @@ bool check_shot(const Shot& shot, std::string& error)
     const Aperture& aperture = shot.spread.aperture;
     if (aperture.shape == ApertureShape::Mask && aperture.mask_file.empty())
         return fail("--aperture mask:FILE needs the image of the shape");
+    if (shot.output == OutputKind::FocusMap && shot.aov != Aov::None)
+        return fail("--aov applies to the defocused image, not to --output focusmap");
     return true;
 }
 

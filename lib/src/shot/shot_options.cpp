@@ -128,6 +128,12 @@ const std::vector<ShotOption>& shot_options()
           "image: the defocused image (default); focusmap: where the focus falls, "
           "green in focus, red in front, blue behind, brighter with more blur, "
           "whitened where the blur reaches --max-blur" },
+        { G::Output, "--aov NAME", "aov",
+          "An extra channel: confidence, named 'confidence', the fraction of each "
+          "pixel's light that came from surfaces the input hides (behind nearer "
+          "objects of a flat render or deep image) and defocus rebuilt: 0 where all "
+          "of it was seen, as everywhere for layered input; where it is high, look "
+          "closely (default: none)" },
         { G::Output, "-d TYPE", "pixel-type",
           "Output pixel type: half or float (default: the input's)" },
         { G::Output, "--compression NAME", "compression",

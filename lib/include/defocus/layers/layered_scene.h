@@ -43,8 +43,8 @@ struct LayeredScene {
     Imath::V3d luma = luma_weights(nullptr);
 };
 
-/// Crops a layer (colour and depth) to the pixels that carry light, as
-/// layering hands layers on.
+/// Crops a layer (colour, depth and rebuilt) to the pixels that carry
+/// light, as layering hands layers on.
 void crop_to_content(Layer& layer, int nthreads = 0);
 
 /// Describes every layer of `scene` and orders them back to front.

@@ -88,7 +88,8 @@ bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
 /// flagged in `holes` (hidden behind nearer layers) take the average of
 /// the layer's observed pixels around them, covered or empty, found on the
 /// coarsest pyramid level needed, up to `max_distance` pixels away.
-/// Premultiplied colour and alpha are filled, and the alpha-weighted depth.
+/// Premultiplied colour and alpha are filled, and the alpha-weighted depth;
+/// the pixels filled are marked in layer.rebuilt.
 void fill_hidden_background(Layer& layer, const std::vector<uint8_t>& holes,
                             double max_distance, int nthreads = 0);
 

@@ -89,4 +89,14 @@ enum class OutputWindow {
 bool parse_output_window(const std::string& name, OutputWindow& window);
 const char* output_window_name(OutputWindow window);
 
+/// An extra channel written beside the image.
+enum class Aov {
+    None,
+    /// "confidence": the fraction of each pixel's light that came from
+    /// rebuilt surfaces (Layer::rebuilt), 0 where all of it was seen.
+    Confidence,
+};
+bool parse_aov(const std::string& name, Aov& aov);
+const char* aov_name(Aov aov);
+
 }  // namespace defocus

@@ -68,6 +68,7 @@ struct Shot {
     OIIO::TypeDesc pixel_type = OIIO::TypeUnknown;  ///< unknown = the input's
     std::string compression;                        ///< "" = the input's
     OutputWindow window = OutputWindow::Input;
+    Aov aov = Aov::None;
     EdgeMode edge = EdgeMode::Auto;  ///< beyond the data window, when the blur reaches it
 
     /// The settings given by set_shot_setting(), each with where (its
