@@ -30,6 +30,20 @@ public:
     /// than a pixel (less is no visible difference in blur).
     bool at_discontinuity(int x, int y) const { return m_discontinuity[index(x, y)]; }
 
+    /// Row y's pixels from the window's first column on.
+    struct Row {
+        const float* color;  ///< RGBA
+        const float* depth;
+        const float* blur;
+        const uint8_t* discontinuity;
+    };
+    Row row(int y) const
+    {
+        const size_t i = index(m_roi.xbegin, y);
+        return { m_color(m_roi.xbegin, y), m_depth(m_roi.xbegin, y), &m_blur[i],
+                 &m_discontinuity[i] };
+    }
+
     /// The CoC of the 3x3 neighbour whose CoC differs most from the
     /// pixel's (its own when none is covered, NaN when it is empty).
     float other_side(int x, int y) const;

@@ -74,13 +74,15 @@ struct Fragments {
 
     const ROI& roi() const { return pixels; }
 
-    /// visit(fragment) for each fragment of pixel (x, y), front to back.
+    /// visit(x, fragments, count) for each pixel x of row y in [x0, x1),
+    /// with its fragments front to back.
     template<typename Visit>
-    void each(int x, int y, Visit&& visit) const
+    void row(int y, int x0, int x1, Visit&& visit) const
     {
-        const int64_t p = int64_t(y - pixels.ybegin) * pixels.width() + (x - pixels.xbegin);
-        for (uint64_t i = offsets[p]; i < offsets[p + 1]; ++i)
-            visit(items[i]);
+        const uint64_t* offset =
+            &offsets[int64_t(y - pixels.ybegin) * pixels.width() + (x0 - pixels.xbegin)];
+        for (int x = x0; x < x1; ++x, ++offset)
+            visit(x, &items[offset[0]], int(offset[1] - offset[0]));
     }
 
     double bytes() const
@@ -136,24 +138,30 @@ public:
 
     const ROI& roi() const { return m_field.roi(); }
 
+    /// As Fragments::row.
     template<typename Visit>
-    void each(int x, int y, Visit&& visit) const
+    void row(int y, int x0, int x1, Visit&& visit) const
     {
+        const BlurField::Row pixels = m_field.row(y);
+        const int first = m_field.roi().xbegin;
         // Mixed pixels lie at discontinuities, ordered by row, then column.
-        if (m_field.at_discontinuity(x, y)) {
-            const auto m = std::lower_bound(m_mixed.begin(), m_mixed.end(), std::pair { y, x });
-            if (m != m_mixed.end() && *m == std::pair { y, x }) {
-                const Fragment* split = &m_split[2 * size_t(m - m_mixed.begin())];
-                visit(split[0]);
-                visit(split[1]);
-                return;
+        auto mixed = std::lower_bound(m_mixed.begin(), m_mixed.end(), std::pair { y, x0 });
+        for (int x = x0; x < x1; ++x) {
+            const int i = x - first;
+            if (pixels.discontinuity[i]) {
+                while (mixed != m_mixed.end() && *mixed < std::pair { y, x })
+                    ++mixed;
+                if (mixed != m_mixed.end() && *mixed == std::pair { y, x }) {
+                    visit(x, &m_split[2 * size_t(mixed - m_mixed.begin())], 2);
+                    continue;
+                }
             }
+            const float* c = pixels.color + 4 * size_t(i);
+            Fragment f { c[0], c[1], c[2], c[3], pixels.depth[i], 0, 1, 0 };
+            if (f.a > 0.0f)
+                assign_layers(f, pixels.blur[i], m_bounds);
+            visit(x, &f, 1);
         }
-        const float* c = m_field.color(x, y);
-        Fragment f { c[0], c[1], c[2], c[3], m_field.depth(x, y), 0, 1, 0 };
-        if (f.a > 0.0f)
-            assign_layers(f, m_field.blur(x, y), m_bounds);
-        visit(f);
     }
 
     double bytes() const
@@ -259,17 +267,18 @@ std::vector<ROI> layer_extents(const Source& frags, int layers, int nthreads)
     std::vector<int> last(n, std::numeric_limits<int>::min());
     parallel_for(roi.ybegin, roi.yend, [&](int y) {
         const size_t row = size_t(y - roi.ybegin) * layers;
-        for (int x = roi.xbegin; x < roi.xend; ++x)
-            frags.each(x, y, [&](const Fragment& f) {
-                if (f.a <= 0.0f)
-                    return;
-                for (const auto& [k, w] : { std::pair { f.front, f.front_weight },
-                                            std::pair { f.front + 1, f.back_weight } })
+        frags.row(y, roi.xbegin, roi.xend, [&](int x, const Fragment* f, int count) {
+            for (const Fragment* end = f + count; f < end; ++f) {
+                if (f->a <= 0.0f)
+                    continue;
+                for (const auto& [k, w] : { std::pair { f->front, f->front_weight },
+                                            std::pair { f->front + 1, f->back_weight } })
                     if (w > 0.0f && k < layers) {
                         first[row + k] = std::min(first[row + k], x);
                         last[row + k] = std::max(last[row + k], x);
                     }
-            });
+            }
+        });
     }, by_rows(nthreads));
     std::vector<ROI> extents(layers, ROI(0, 0, 0, 0, 0, 1, 0, 4));
     for (int k = 0; k < layers; ++k)
@@ -308,32 +317,30 @@ std::vector<uint8_t> extract_layer(const Source& frags, int k, const ROI& window
     std::vector<uint8_t> hidden(window.npixels());
     parallel_for(window.ybegin, window.yend, [&](int y) {
         const size_t row = size_t(y - window.ybegin) * window.width();
-        for (int x = window.xbegin; x < window.xend; ++x) {
+        frags.row(y, window.xbegin, window.xend, [&](int x, const Fragment* f, int count) {
             double rgba[4] = { 0, 0, 0, 0 }, zsum = 0, wsum = 0;
-            bool first = true, nearer = false;
-            frags.each(x, y, [&](const Fragment& f) {
-                nearer |= first && f.a > 0.0f && f.front < k;
-                first = false;
-                const float w = f.front == k ? f.front_weight
-                                : f.front + 1 == k ? f.back_weight : 0.0f;
-                if (w <= 0.0f || f.a <= 0.0f)
-                    return;
+            const bool nearer = count > 0 && f->a > 0.0f && f->front < k;
+            for (const Fragment* end = f + count; f < end; ++f) {
+                const float w = f->front == k ? f->front_weight
+                                : f->front + 1 == k ? f->back_weight : 0.0f;
+                if (w <= 0.0f || f->a <= 0.0f)
+                    continue;
                 const double t = 1.0 - rgba[3];
-                rgba[0] += t * w * f.r;
-                rgba[1] += t * w * f.g;
-                rgba[2] += t * w * f.b;
-                const double covered = t * w * f.a;
+                rgba[0] += t * w * f->r;
+                rgba[1] += t * w * f->g;
+                rgba[2] += t * w * f->b;
+                const double covered = t * w * f->a;
                 rgba[3] += covered;
-                zsum += covered * f.z;
+                zsum += covered * f->z;
                 wsum += covered;
-            });
+            }
             const size_t p = row + (x - window.xbegin);
             for (int i = 0; i < 4; ++i)
                 color[4 * p + i] = float(rgba[i]);
             // Infinite depths (the sky) stay infinite.
             depth[p] = wsum > 0 ? float(std::isinf(zsum) ? INFINITY : zsum / wsum) : 0.0f;
             hidden[p] = nearer && !(color[4 * p + 3] > 0.0f);
-        }
+        });
     }, by_rows(nthreads));
     return hidden;
 }
