@@ -128,6 +128,32 @@ bool layer_scene(Scene&& scene, const Shot& shot, int frame, const ShotAssets& a
 
 }  // namespace
 
+namespace {
+
+/// Whether the image a frame is spread into and its accumulator, over the
+/// inputs' data window, fit the memory limit: checked from the headers, so
+/// that a scene too large to spread is not read and sliced first (a 41
+/// megapixel strip took seconds to be refused after slicing).
+bool spread_fits(const Shot& shot, int frame, std::string& error)
+{
+    if (shot.output != OutputKind::Image)
+        return true;
+    const std::vector<std::string> inputs = frame_inputs(shot, frame);
+    ImageSpec input;
+    if (!read_scene_spec(inputs, frame_read_options(shot, frame), input, error))
+        return false;
+    const double bytes = 2.0 * float_bytes(input.image_pixels(), 4);
+    if (shot.read.memory_limit.allows(bytes))
+        return true;
+    error = format("{}: {}", Strutil::join(inputs, " "),
+                   shot.read.memory_limit.exceeded(
+                       format("spreading a data window of {}x{}", input.width, input.height),
+                       bytes));
+    return false;
+}
+
+}  // namespace
+
 bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, LayeredScene& layered,
                     FrameResult& out, std::string& error, const StageCallback& on_stage,
                     int nthreads)
@@ -135,7 +161,8 @@ bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, Layer
     Timer timer;
     run_stage(on_stage, "read");
     Scene scene;
-    if (!read_scene(frame_inputs(shot, frame), frame_read_options(shot, frame), scene, error))
+    if (!spread_fits(shot, frame, error)
+        || !read_scene(frame_inputs(shot, frame), frame_read_options(shot, frame), scene, error))
         return false;
     return layer_scene(std::move(scene), shot, frame, assets, layered, out, error, on_stage,
                        nthreads, timer);
