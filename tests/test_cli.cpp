@@ -1052,10 +1052,14 @@ TEST_CASE("a header asking for more memory than the limit is refused before allo
 {
     const std::string dir = scratch_dir("cli_memory_limit");
     std::string log;
-    // 200000 x 200000 pixels: 745 GB as RGBA + Z floats, in a 100 KB file.
+    // 200000 x 200000 pixels in a 100 KB file: 1.16 TB to spread into,
+    // 745 GB as RGBA + Z floats to read (a focus map only reads).
     const std::string giant = dir + "/giant.exr";
     write_exr_header_only(giant, 200000, 200000);
     REQUIRE(run_defocus(giant + " -o " + dir + "/o.exr --focus 3", log) == 1);
+    CHECK(one_line_naming(log, "giant.exr: spreading a data window of 200000x200000 needs 1.16 TB, "
+                               "more than the memory limit of"));
+    REQUIRE(run_defocus(giant + " -o " + dir + "/o.exr --focus 3 --output focusmap", log) == 1);
     CHECK(one_line_naming(log, "giant.exr: a data window of 200000x200000 needs 745 GB, more "
                                "than the memory limit of"));
     CHECK_FALSE(Filesystem::exists(dir + "/o.exr"));
@@ -1064,10 +1068,18 @@ TEST_CASE("a header asking for more memory than the limit is refused before allo
     const std::string scene = two_depth_scene(dir);
     REQUIRE(run_defocus(scene + " -o " + dir + "/o.exr --focus 3 --memory-limit 1M", log) == 0);
     write_exr_header_only(dir + "/big.exr", 4000, 3000);
-    REQUIRE(run_defocus(dir + "/big.exr -o " + dir + "/o.exr --focus 3 --memory-limit 100M", log)
+    REQUIRE(run_defocus(dir + "/big.exr -o " + dir + "/o.exr --focus 3 --memory-limit 100M "
+                                  "--output focusmap",
+                        log)
             == 1);
     CHECK(one_line_naming(log, "big.exr: a data window of 4000x3000 needs 229 MB, more than the "
                                "memory limit of 100 MB (--memory-limit)"));
+    // Its layer would fit in 300 MB, but not the image it is spread into and
+    // the accumulator: refused from the header too, before it is read.
+    REQUIRE(run_defocus(dir + "/big.exr -o " + dir + "/o.exr --focus 3 --memory-limit 300M", log)
+            == 1);
+    CHECK(one_line_naming(log, "big.exr: spreading a data window of 4000x3000 needs 366 MB, more "
+                               "than the memory limit of 300 MB (--memory-limit)"));
     // Spreading: a blur of 20000 px grows every layer by 10000 px a side.
     REQUIRE(run_defocus(scene + " -o " + dir + "/o.exr --focus 0.01 --fstop 0.1 --focal 300 "
                                 "--max-blur 20000 --memory-limit 1G",
