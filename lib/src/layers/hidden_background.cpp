@@ -1,5 +1,6 @@
-// Filling the background a flat render cannot see (push-pull: Gortler,
-// Grzeszczuk, Szeliski & Cohen, "The Lumigraph", SIGGRAPH 1996).
+// Filling the background a flat render cannot see: structure continued
+// along lines across thin holes (continued_lines.h), over push-pull
+// (Gortler, Grzeszczuk, Szeliski & Cohen, "The Lumigraph", SIGGRAPH 1996).
 #include <defocus/layers/layering.h>
 
 #include <algorithm>
@@ -10,6 +11,7 @@
 
 #include <OpenImageIO/parallel.h>
 
+#include "layers/continued_lines.h"
 #include "util/float_pixels.h"
 #include "util/parallel_rows.h"
 
@@ -141,6 +143,17 @@ int pyramid_levels(double max_distance)
     return 1 + int(std::ceil(std::log2(std::max(2.0, max_distance))));
 }
 
+/// The longest line along which structure is continued across a hole.
+/// A hidden pixel shows through the nearer layer's blurred edge from up to
+/// its blur radius inside the hole, and spreads its own light out over its
+/// own radius; max_distance bounds each, so a hole up to twice their sum
+/// wide matters all across. Longer lines join unrelated surfaces, and a
+/// smooth fill does better there.
+int line_length(double max_distance)
+{
+    return int(std::min(4.0 * max_distance, 65535.0));
+}
+
 }  // namespace
 
 ROI hidden_background_window(const ROI& content, const ROI& frame, double max_distance)
@@ -148,7 +161,9 @@ ROI hidden_background_window(const ROI& content, const ROI& frame, double max_di
     // A hidden pixel is filled from the cells of each level next to its
     // own, so content reaches it from two of the coarsest cells away at
     // most, and what those cells sum lies within one more: beyond four
-    // cells nothing changes a pixel that gets any coverage. The window
+    // cells nothing changes a pixel that gets any coverage. A line reaches
+    // a pixel from content up to its length away, and reads around it as
+    // far again. The window
     // keeps the frame's grid of coarsest cells, so that every cell sums
     // the same pixels.
     const int64_t cell = int64_t(1) << std::min(pyramid_levels(max_distance), 30);
@@ -157,9 +172,11 @@ ROI hidden_background_window(const ROI& content, const ROI& frame, double max_di
                                                 : -((origin - v + cell - 1) / cell);
         return origin + steps * cell;
     };
-    const int64_t x0 = grid_below(int64_t(content.xbegin) - 4 * cell, frame.xbegin);
-    const int64_t y0 = grid_below(int64_t(content.ybegin) - 4 * cell, frame.ybegin);
-    const int64_t x1 = int64_t(content.xend) + 4 * cell, y1 = int64_t(content.yend) + 4 * cell;
+    const int length = line_length(max_distance);
+    const int64_t margin = std::max(4 * cell, int64_t(length) + ContinuedLines::reach(length));
+    const int64_t x0 = grid_below(int64_t(content.xbegin) - margin, frame.xbegin);
+    const int64_t y0 = grid_below(int64_t(content.ybegin) - margin, frame.ybegin);
+    const int64_t x1 = int64_t(content.xend) + margin, y1 = int64_t(content.yend) + margin;
     return ROI(int(std::max<int64_t>(x0, frame.xbegin)), int(std::min<int64_t>(x1, frame.xend)),
                int(std::max<int64_t>(y0, frame.ybegin)), int(std::min<int64_t>(y1, frame.yend)),
                0, 1, 0, 4);
@@ -233,16 +250,26 @@ void fill_hidden_background(Layer& layer, const std::vector<uint8_t>& holes,
         }, by_rows(nthreads));
     }
 
+    const ContinuedLines lines(color, depth, holes, window, line_length(max_distance), nthreads);
+
     ImageSpec rebuilt_spec(window, TypeUInt8);
     rebuilt_spec.nchannels = 1;
     rebuilt_spec.channelnames = { "rebuilt" };
     layer.rebuilt.reset(rebuilt_spec, InitializePixels::Yes);
     parallel_for(window.ybegin, window.yend, [&](int y) {
         for (int x = window.xbegin; x < window.xend; ++x) {
-            float mean[5];
-            if (!is_hidden(x, y)
-                || !pull(pyramid[0], x - window.xbegin, y - window.ybegin, mean)
-                || mean[3] <= 0.0f)
+            if (!is_hidden(x, y))
+                continue;
+            float mean[5], line[5], trust = 0.0f;
+            const bool pulled = pull(pyramid[0], x - window.xbegin, y - window.ybegin, mean);
+            if (lines.at(x, y, line, trust)) {
+                if (!pulled)
+                    trust = 1.0f;
+                for (int i = 0; i < 5; ++i)
+                    mean[i] = trust * line[i] + (1 - trust) * (pulled ? mean[i] : 0.0f);
+            } else if (!pulled)
+                continue;
+            if (mean[3] <= 0.0f)
                 continue;
             float* c = static_cast<float*>(layer.color.pixeladdr(x, y));
             for (int i = 0; i < 4; ++i)

@@ -84,12 +84,16 @@ bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
                       const LayeringOptions& options, LayeredScene& layered,
                       Slicing& slicing, std::string& error, int nthreads = 0);
 
-/// Push-pull hole filling (Gortler et al. 1996): the pixels of `layer`
-/// flagged in `holes` (hidden behind nearer layers) take the average of
-/// the layer's observed pixels around them, covered or empty, found on the
-/// coarsest pyramid level needed, up to `max_distance` pixels away.
-/// Premultiplied colour and alpha are filled, and the alpha-weighted depth;
-/// the pixels filled are marked in layer.rebuilt.
+/// Hidden-surface filling: the pixels of `layer` flagged in `holes` (hidden
+/// behind nearer layers) are rebuilt from the layer's observed pixels around
+/// them, covered or empty. Where a straight line crosses the hole within
+/// 4 * max_distance pixels between two ends that agree, and along which the
+/// surface runs outside the hole, the structure is continued along it
+/// (stripes, edges, checkers behind a thin occluder); elsewhere, and blended
+/// in as the ends disagree, pixels take the push-pull average (Gortler et al.
+/// 1996) found on the coarsest pyramid level needed, up to `max_distance`
+/// pixels away. Premultiplied colour and alpha are filled, and the
+/// alpha-weighted depth; the pixels filled are marked in layer.rebuilt.
 void fill_hidden_background(Layer& layer, const std::vector<uint8_t>& holes,
                             double max_distance, int nthreads = 0);
 

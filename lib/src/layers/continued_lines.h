@@ -1,0 +1,63 @@
+// Internal: the surface behind a thin hole, continued along straight lines
+// from the two sides of the hole.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include <OpenImageIO/imagebuf.h>
+
+#include "util/float_pixels.h"
+
+namespace defocus {
+
+/// For each hidden pixel of a layer, the surface behind it continued
+/// along the lattice lines that cross its hole within `max_length` pixels.
+/// A line interpolates between its two observed ends; a line whose ends,
+/// and the ends' neighbours across it, agree in colour, coverage and depth
+/// (one surface, one stripe, on both sides) outweighs the others, so that
+/// stripes, edges and checkers continue through a thin occluder.
+/// Each value is premultiplied R, G, B, A and the alpha-weighted depth.
+class ContinuedLines {
+public:
+    /// `holes` flags the hidden pixels of `color`'s ROI; lines are found
+    /// for those within `window`.
+    ContinuedLines(const FloatPixels& color, const FloatPixels& depth,
+                   const std::vector<uint8_t>& holes, const OIIO::ROI& window,
+                   int max_length, int nthreads);
+
+    /// How far from a hidden pixel the lines read: the line, the pixels
+    /// beyond its ends and the ends' neighbours.
+    static int reach(int max_length);
+
+    /// The continued surface at hidden pixel (x, y) and how much to trust
+    /// it (1 where the best line's ends agree exactly, falling as they
+    /// differ); false where no line crosses.
+    bool at(int x, int y, float value[5], float& trust) const;
+
+private:
+    struct Estimate {
+        float sum[5] = { 0, 0, 0, 0, 0 };
+        float weight = 0.0f;
+        float best = INFINITY;  ///< the least disagreement of a line so far
+    };
+
+    bool hidden(int x, int y) const;
+    size_t index(int x, int y) const;
+    void observation(int x, int y, float value[5]) const;
+    float end_of_ray(int x, int y, int dx, int dy, int steps, float end[5]) const;
+    void add_lines(int dx, int dy, const std::vector<uint16_t>& forward,
+                   const std::vector<uint16_t>& backward, int nthreads);
+    void steps_to_observed(int dx, int dy, std::vector<uint16_t>& steps) const;
+
+    const FloatPixels& m_color;
+    const FloatPixels& m_depth;
+    const std::vector<uint8_t>& m_holes;
+    OIIO::ROI m_window;
+    int m_max_length;
+    std::vector<uint32_t> m_slot;  ///< per window pixel: its Estimate + 1, or 0
+    std::vector<Estimate> m_estimates;
+};
+
+}  // namespace defocus
