@@ -14,8 +14,8 @@ using namespace OIIO;
 namespace {
 
 /// The lines' directions, as lattice steps so that each ray's first
-/// observed pixel follows from its neighbour's: half a turn in 16 steps of
-/// 7 to 18 degrees, so a stripe at any angle runs within 9.2 degrees of
+/// observed pixel follows from its neighbour's: half a turn in 12 steps of
+/// 8 to 18 degrees, so a stripe at any angle runs within 9.2 degrees of
 /// one (a 4 px stripe drifts less than 2 px across a 10 px hole).
 constexpr int line_directions = 12;
 constexpr int line_step[line_directions][2] = {
@@ -58,17 +58,41 @@ ContinuedLines::ContinuedLines(const FloatPixels& color, const FloatPixels& dept
     , m_holes(holes)
     , m_window(window)
     , m_max_length(std::clamp(max_length, 0, 65535))
-    , m_slot(window.npixels(), 0)
+    // Every entry is written below, by the threads that will read it.
+    , m_slot(new uint32_t[window.npixels()])
 {
-    for (int y = window.ybegin; y < window.yend; ++y)
+    // A line crosses a band of width w in at least w pixels, and the band's
+    // row and column runs are at most sqrt(2) w: a hidden pixel whose row
+    // and column runs are both longer lies where no line is short enough,
+    // and it blocks the lines that reach it.
+    const std::vector<uint8_t> wide = in_wide_holes(int(std::ceil(std::sqrt(2.0) * m_max_length)),
+                                                    nthreads);
+    // Numbered in raster order: each row's count, then its first number.
+    std::vector<uint32_t> first(window.height() + 1, 0);
+    auto tracked = [&](int x, int y) { return hidden(x, y) && !wide[index(x, y)]; };
+    parallel_for(window.ybegin, window.yend, [&](int y) {
+        uint32_t count = 0;
         for (int x = window.xbegin; x < window.xend; ++x)
-            if (hidden(x, y)) {
-                m_estimates.emplace_back();
-                m_slot[index(x, y)] = uint32_t(m_estimates.size());
-            }
+            count += tracked(x, y);
+        first[y - window.ybegin + 1] = count;
+    }, by_rows(nthreads));
+    for (size_t r = 1; r < first.size(); ++r)
+        first[r] += first[r - 1];
+    m_pixels.resize(first.back());
+    m_estimates.resize(first.back());
+    parallel_for(window.ybegin, window.yend, [&](int y) {
+        uint32_t n = first[y - window.ybegin];
+        for (int x = window.xbegin; x < window.xend; ++x)
+            if (tracked(x, y)) {
+                m_pixels[n] = { x, y };
+                m_slot[index(x, y)] = ++n;
+            } else
+                m_slot[index(x, y)] = wide[index(x, y)] ? blocked : 0;
+    }, by_rows(nthreads));
     if (m_estimates.empty() || m_max_length < 2)
         return;
     std::vector<uint16_t> forward, backward;
+    std::vector<float> line_disagreement;
     for (const auto& step : line_step) {
         parallel_for(0, 2, [&](int64_t backwards) {
             if (backwards)
@@ -76,8 +100,51 @@ ContinuedLines::ContinuedLines(const FloatPixels& color, const FloatPixels& dept
             else
                 steps_to_observed(step[0], step[1], forward);
         }, by_rows(nthreads));
-        add_lines(step[0], step[1], forward, backward, nthreads);
+        add_lines(step[0], step[1], forward, backward, line_disagreement, nthreads);
     }
+}
+
+std::vector<uint8_t> ContinuedLines::in_wide_holes(int limit, int nthreads) const
+{
+    // Column runs first, in blocks of columns that share cache lines, then
+    // row runs: 1 where both are longer than `limit`.
+    const int width = m_window.width(), height = m_window.height();
+    std::vector<uint8_t> wide(m_window.npixels(), 0);
+    constexpr int block = 64;
+    parallel_for(0, (width + block - 1) / block, [&](int b) {
+        const int x0 = b * block, x1 = std::min(x0 + block, width);
+        std::vector<int> run_start(x1 - x0, -1);
+        for (int y = 0; y <= height; ++y)
+            for (int x = x0; x < x1; ++x) {
+                const bool is_hidden = y < height
+                                       && hidden(m_window.xbegin + x, m_window.ybegin + y);
+                int& start = run_start[x - x0];
+                if (is_hidden && start < 0)
+                    start = y;
+                else if (!is_hidden && start >= 0) {
+                    if (y - start > limit)
+                        for (int r = start; r < y; ++r)
+                            wide[size_t(r) * width + x] = 1;
+                    start = -1;
+                }
+            }
+    }, by_rows(nthreads));
+    parallel_for(0, height, [&](int y) {
+        uint8_t* row = &wide[size_t(y) * width];
+        for (int x = 0; x < width;) {
+            if (!hidden(m_window.xbegin + x, m_window.ybegin + y)) {
+                ++x;
+                continue;
+            }
+            int end = x;
+            while (end < width && hidden(m_window.xbegin + end, m_window.ybegin + y))
+                ++end;
+            if (end - x <= limit)
+                std::fill(row + x, row + end, uint8_t(0));
+            x = end;
+        }
+    }, by_rows(nthreads));
+    return wide;
 }
 
 int ContinuedLines::reach(int max_length)
@@ -99,7 +166,7 @@ size_t ContinuedLines::index(int x, int y) const
 bool ContinuedLines::at(int x, int y, float value[5], float& trust) const
 {
     const uint32_t slot = m_slot[index(x, y)];
-    if (!slot || !(m_estimates[slot - 1].weight > 0.0f))
+    if (!slot || slot == blocked || !(m_estimates[slot - 1].weight > 0.0f))
         return false;
     const Estimate& e = m_estimates[slot - 1];
     for (int i = 0; i < 5; ++i)
@@ -110,27 +177,23 @@ bool ContinuedLines::at(int x, int y, float value[5], float& trust) const
 
 void ContinuedLines::steps_to_observed(int dx, int dy, std::vector<uint16_t>& steps) const
 {
-    // steps[p]: how many steps of (dx, dy) from hidden pixel p reach the
+    // steps[i]: how many steps of (dx, dy) from hidden pixel i reach the
     // first observed pixel, 0 when none does within the window and
-    // max_length. Each pixel's count follows from the next pixel's, so the
-    // rows (or, along a row, the pixels) are visited from that end: one
-    // pass whatever the holes' width.
-    steps.assign(m_window.npixels(), 0);
+    // max_length. Each pixel's count follows from that of the pixel one
+    // step on, so the hidden pixels are visited in raster order from that
+    // end: one pass over them whatever the holes' width.
+    steps.assign(m_pixels.size(), 0);
     const int limit = int(m_max_length / std::hypot(dx, dy));
-    const bool from_bottom = dy > 0 || (dy == 0 && dx > 0);
-    for (int i = 0; i < m_window.height(); ++i) {
-        const int y = from_bottom ? m_window.yend - 1 - i : m_window.ybegin + i;
-        const int v = y + dy;
-        if (v < m_window.ybegin || v >= m_window.yend)
+    const bool from_end = dy > 0 || (dy == 0 && dx > 0);
+    const size_t count = m_pixels.size();
+    for (size_t n = 0; n < count; ++n) {
+        const size_t i = from_end ? count - 1 - n : n;
+        const int u = m_pixels[i].x + dx, v = m_pixels[i].y + dy;
+        if (!m_window.contains(u, v))
             continue;
-        for (int n = 0; n < m_window.width(); ++n) {
-            const int x = dx > 0 ? m_window.xend - 1 - n : m_window.xbegin + n;
-            const int u = x + dx;
-            if (u < m_window.xbegin || u >= m_window.xend || !m_slot[index(x, y)])
-                continue;
-            const int k = !hidden(u, v) ? 1 : steps[index(u, v)] ? steps[index(u, v)] + 1 : 0;
-            steps[index(x, y)] = uint16_t(k <= limit ? k : 0);
-        }
+        const uint32_t next = m_slot[index(u, v)];
+        const int k = !next ? 1 : next == blocked ? 0 : steps[next - 1] ? steps[next - 1] + 1 : 0;
+        steps[i] = uint16_t(k <= limit ? k : 0);
     }
 }
 
@@ -141,74 +204,99 @@ void ContinuedLines::observation(int x, int y, float value[5]) const
     value[4] = c[3] > 0.0f ? c[3] * std::min(*m_depth(x, y), 1e30f) : 0.0f;
 }
 
-float ContinuedLines::end_of_ray(int x, int y, int dx, int dy, int steps, float end[5]) const
+float ContinuedLines::change_beyond(int x, int y, int dx, int dy, const float end[5]) const
 {
-    // The ray's first observed pixel, and how much the surface changes
-    // along the ray's direction over the next few beyond it: a structure
-    // continues along a line only where it runs along that line outside
-    // the hole too (the isophote direction of Criminisi et al. 2004), not
-    // where the line cuts across stripes that happen to match at both ends.
-    int u = x + steps * dx, v = y + steps * dy;
-    observation(u, v, end);
+    // How much the surface changes along the ray's direction over the few
+    // observed pixels beyond its end (x, y): a structure continues along a
+    // line only where it runs along that line outside the hole too (the
+    // isophote direction of Criminisi et al. 2004), not where the line
+    // cuts across stripes that happen to match at both ends.
     float change = 0.0f, previous[5], next[5];
     std::copy(end, end + 5, previous);
     for (int n = 1; n < straight_run; ++n) {
-        u += dx;
-        v += dy;
-        if (!m_window.contains(u, v) || hidden(u, v))
+        x += dx;
+        y += dy;
+        if (!m_window.contains(x, y) || hidden(x, y))
             break;
-        observation(u, v, next);
+        observation(x, y, next);
         change += disagreement(previous, next);
         std::copy(next, next + 5, previous);
     }
     return change;
 }
 
-void ContinuedLines::add_lines(int dx, int dy, const std::vector<uint16_t>& forward,
-                               const std::vector<uint16_t>& backward, int nthreads)
+float ContinuedLines::disagreement_of_line(int ax, int ay, int bx, int by, int dx, int dy) const
 {
+    float a[5], b[5];
+    observation(ax, ay, a);
+    observation(bx, by, b);
+    float m = disagreement(a, b);
+    // The ends' neighbours across the line must agree too: a line that
+    // meets the same stripe at both ends by chance (periodic texture) does
+    // not continue it.
+    for (int side = -1; side <= 1; side += 2) {
+        const int pax = ax - side * dy, pay = ay + side * dx;
+        const int pbx = bx - side * dy, pby = by + side * dx;
+        if (!m_window.contains(pax, pay) || !m_window.contains(pbx, pby) || hidden(pax, pay)
+            || hidden(pbx, pby))
+            continue;
+        float pa[5], pb[5];
+        observation(pax, pay, pa);
+        observation(pbx, pby, pb);
+        m += disagreement(pa, pb);
+    }
+    return m + change_beyond(ax, ay, dx, dy, a) + change_beyond(bx, by, -dx, -dy, b);
+}
+
+void ContinuedLines::add_lines(int dx, int dy, const std::vector<uint16_t>& forward,
+                               const std::vector<uint16_t>& backward,
+                               std::vector<float>& line_disagreement, int nthreads)
+{
+    // Every hidden pixel on a line between the same two ends shares its
+    // disagreement: it is found once, at the line's first pixel.
     const float step = float(std::hypot(dx, dy));
-    parallel_for(m_window.ybegin, m_window.yend, [&](int y) {
-        for (int x = m_window.xbegin; x < m_window.xend; ++x) {
-            const size_t p = index(x, y);
-            const int kf = forward[p], kb = backward[p];
-            if (!kf || !kb || (kf + kb) * step > m_max_length)
-                continue;
-            float a[5], b[5];
-            float m = end_of_ray(x, y, dx, dy, kf, a) + end_of_ray(x, y, -dx, -dy, kb, b)
-                      + disagreement(a, b);
-            // The ends' neighbours across the line must agree too: a line
-            // that meets the same stripe at both ends by chance (periodic
-            // texture) does not continue it.
-            for (int side = -1; side <= 1; side += 2) {
-                const int ax = x + kf * dx - side * dy, ay = y + kf * dy + side * dx;
-                const int bx = x - kb * dx - side * dy, by = y - kb * dy + side * dx;
-                if (!m_window.contains(ax, ay) || !m_window.contains(bx, by) || hidden(ax, ay)
-                    || hidden(bx, by))
-                    continue;
-                float pa[5], pb[5];
-                observation(ax, ay, pa);
-                observation(bx, by, pb);
-                m += disagreement(pa, pb);
-            }
-            // A soft minimum over the lines: each weighs exp(-m / tau)
-            // relative to the best so far, and less the longer it is.
-            constexpr float tau = 0.05f;
-            Estimate& e = m_estimates[m_slot[p] - 1];
-            if (m < e.best) {
-                const float rescale = std::isfinite(e.best) ? std::exp(-(e.best - m) / tau) : 0.0f;
-                for (float& s : e.sum)
-                    s *= rescale;
-                e.weight *= rescale;
-                e.best = m;
-            }
-            const float w = std::exp(-(m - e.best) / tau) / ((kf + kb) * step);
-            const float t = float(kb) / float(kf + kb);  // 0 at b's end, 1 at a's
-            for (int i = 0; i < 5; ++i)
-                e.sum[i] += w * (t * a[i] + (1 - t) * b[i]);
-            e.weight += w;
+    auto crosses = [&](int64_t i) {
+        return forward[i] && backward[i] && (forward[i] + backward[i]) * step <= m_max_length;
+    };
+    line_disagreement.resize(m_pixels.size());
+    parallel_for(int64_t(0), int64_t(m_pixels.size()), [&](int64_t i) {
+        if (backward[i] != 1 || !crosses(i))
+            return;
+        const int x = m_pixels[i].x, y = m_pixels[i].y, kf = forward[i];
+        line_disagreement[i] = disagreement_of_line(x + kf * dx, y + kf * dy, x - dx, y - dy,
+                                                    dx, dy);
+    }, paropt(nthreads));
+
+    parallel_for(int64_t(0), int64_t(m_pixels.size()), [&](int64_t i) {
+        if (!crosses(i))
+            return;
+        const int x = m_pixels[i].x, y = m_pixels[i].y;
+        const int kf = forward[i], kb = backward[i];
+        const float m = line_disagreement[m_slot[index(x - (kb - 1) * dx, y - (kb - 1) * dy)] - 1];
+        // A soft minimum over the lines: each weighs exp(-m / tau)
+        // relative to the best so far, and less the longer it is. A line
+        // 20 tau worse than the best, or untrusted by exp(-10), adds
+        // nothing.
+        constexpr float tau = 0.05f;
+        Estimate& e = m_estimates[i];
+        if (!(m < std::min(e.best + 20.0f * tau, 10.0f * trust_scale)))
+            return;
+        if (m < e.best) {
+            const float rescale = std::isfinite(e.best) ? std::exp(-(e.best - m) / tau) : 0.0f;
+            for (float& s : e.sum)
+                s *= rescale;
+            e.weight *= rescale;
+            e.best = m;
         }
-    }, by_rows(nthreads));
+        float a[5], b[5];
+        observation(x + kf * dx, y + kf * dy, a);
+        observation(x - kb * dx, y - kb * dy, b);
+        const float w = std::exp(-(m - e.best) / tau) / ((kf + kb) * step);
+        const float t = float(kb) / float(kf + kb);  // 0 at b's end, 1 at a's
+        for (int c = 0; c < 5; ++c)
+            e.sum[c] += w * (t * a[c] + (1 - t) * b[c]);
+        e.weight += w;
+    }, paropt(nthreads));
 }
 
 }  // namespace defocus

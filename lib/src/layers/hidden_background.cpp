@@ -250,7 +250,13 @@ void fill_hidden_background(Layer& layer, const std::vector<uint8_t>& holes,
         }, by_rows(nthreads));
     }
 
-    const ContinuedLines lines(color, depth, holes, window, line_length(max_distance), nthreads);
+    // Lines start at hidden pixels and read as far as their reach.
+    const int length = line_length(max_distance);
+    const int reach = ContinuedLines::reach(length);
+    const ROI line_window = roi_intersection(
+        ROI(hidden.xbegin - reach, hidden.xend + reach, hidden.ybegin - reach, hidden.yend + reach),
+        window);
+    const ContinuedLines lines(color, depth, holes, line_window, length, nthreads);
 
     ImageSpec rebuilt_spec(window, TypeUInt8);
     rebuilt_spec.nchannels = 1;
