@@ -579,6 +579,82 @@ TEST_CASE("colour: any format OIIO writes, e.g. an sRGB JPEG proxy")
 
 namespace {
 
+/// Two planes of colour and depth, and a depth image of them, tagged as
+/// being in the space of `chromaticities` when given.
+std::string tagged_scene(const std::string& dir, const std::string& name,
+                         const float* chromaticities)
+{
+    ImageSpec spec(20, 20, 5, TypeFloat);
+    spec.channelnames = { "R", "G", "B", "A", "Z" };
+    spec.alpha_channel = 3;
+    spec.z_channel = 4;
+    if (chromaticities)
+        spec.attribute("chromaticities", TypeDesc(TypeDesc::FLOAT, 8), chromaticities);
+    ImageBuf image(spec);
+    ImageBufAlgo::fill(image, { 0.9f, 0.3f, 0.1f, 1.0f, 2.0f });
+    ImageBufAlgo::fill(image, { 0.1f, 0.4f, 0.8f, 1.0f, 6.0f }, ROI(10, 20, 0, 20));
+    const std::string path = dir + "/" + name + ".exr";
+    REQUIRE(image.write(path));
+    return path;
+}
+
+/// What Debian's oiiotool reads of an image's header.
+std::string oiiotool_info(const std::string& file)
+{
+    std::string info;
+    REQUIRE(run(format("{} --info -v {}", OIIOTOOL_BIN, file), info) == 0);
+    return info;
+}
+
+}  // namespace
+
+TEST_CASE("colour: an output names its space, and an input's named space is read back")
+{
+    const std::string dir = scratch_dir("cli_color_names");
+    const float ap1[8] = { 0.713f, 0.293f, 0.165f, 0.830f, 0.128f, 0.044f, 0.32168f, 0.33767f };
+    std::string log;
+
+    // An ACEScg render tagged only by its chromaticities, as renderers
+    // write them, is read as ACEScg; the result says so in its header.
+    const std::string scene = tagged_scene(dir, "acescg", ap1);
+    REQUIRE(run_defocus(scene + " -o " + dir + "/once.exr -v" + camera, log) == 0);
+    CHECK_THAT(log, Catch::Contains("input 'ACEScg' (from the file's chromaticities: ACES AP1)"));
+    std::string info = oiiotool_info(dir + "/once.exr");
+    CHECK_THAT(info, Catch::Contains("chromaticities: 0.713, 0.293, 0.165, 0.83, 0.128, 0.044"));
+    CHECK_THAT(info, Catch::Contains("colorInteropID: \"lin_ap1_scene\""));
+
+    // Converted pixels never keep the input's chromaticities.
+    REQUIRE(run_defocus(scene + " -o " + dir + "/rec709.exr --tocolorspace lin_rec709" + camera,
+                        log) == 0);
+    info = oiiotool_info(dir + "/rec709.exr");
+    CHECK_THAT(info, Catch::Contains("chromaticities: 0.64, 0.33, 0.3, 0.6, 0.15, 0.06"));
+    CHECK_THAT(info, Catch::Contains("colorInteropID: \"lin_rec709_scene\""));
+    // A focus map is false colour: it names no space.
+    REQUIRE(run_defocus(scene + " -o " + dir + "/map.exr --output focusmap" + camera, log) == 0);
+    info = oiiotool_info(dir + "/map.exr");
+    CHECK_THAT(info, !Catch::Contains("chromaticities") && !Catch::Contains("colorInteropID"));
+
+    // Each result, read back and defocused again with no colour option,
+    // is taken in the space it was written in: the same pixels as naming
+    // that space.
+    for (const char* space : { "ACEScg", "lin_rec709" }) {
+        INFO(space);
+        const std::string written = format("{}/written_{}.exr", dir, space);
+        REQUIRE(run_defocus(format("{} -o {} --tocolorspace {}", scene, written, space) + camera,
+                            log) == 0);
+        const std::string again = format(" --depth {} --tocolorspace srgb_tx", scene) + camera;
+        REQUIRE(run_defocus(written + " -o " + dir + "/implicit.exr" + again, log) == 0);
+        REQUIRE(run_defocus(written + " -o " + dir + "/explicit.exr --iscolorspace " + space
+                                + again,
+                            log) == 0);
+        const auto diff = ImageBufAlgo::compare(read_image(dir + "/implicit.exr"),
+                                                read_image(dir + "/explicit.exr"), 0.0f, 0.0f);
+        CHECK(diff.maxerror == 0.0);
+    }
+}
+
+namespace {
+
 /// The option names a text lists: at a line's start for --help, in the
 /// first column of a table for the README.
 std::set<std::string> option_names(const std::string& text, const std::string& before)

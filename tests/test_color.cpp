@@ -10,6 +10,8 @@
 #include <OpenImageIO/imagebufalgo.h>
 
 #include <defocus/color/color.h>
+#include <defocus/color/color_plan.h>
+#include <defocus/color/primaries.h>
 
 #include "test_support.h"
 
@@ -162,4 +164,74 @@ TEST_CASE("luminance weights come from the config in use")
     CHECK(luma_weights(&config) == config.luma());
     // Without a config the input is linear Rec.709.
     CHECK(luma_weights(nullptr) == Imath::V3d(0.2126, 0.7152, 0.0722));
+}
+
+TEST_CASE("an input's space comes from its colorInteropID, its tag, then its chromaticities")
+{
+    auto shared = std::make_shared<const ColorManagement>(shipped());
+    auto plan_for = [&](const OIIO::ImageSpec& spec) {
+        ColorPlan plan;
+        std::string error;
+        REQUIRE(plan_color(plan, shared, "", "", "", spec, error));
+        return plan;
+    };
+    const struct {
+        std::array<float, 8> xy;
+        const char* space;
+    } primaries[] = {
+        { { 0.7347f, 0.2653f, 0.0f, 1.0f, 0.0001f, -0.077f, 0.32168f, 0.33767f }, "ACES2065-1" },
+        { { 0.713f, 0.293f, 0.165f, 0.830f, 0.128f, 0.044f, 0.32168f, 0.33767f }, "ACEScg" },
+        { { 0.64f, 0.33f, 0.30f, 0.60f, 0.15f, 0.06f, 0.3127f, 0.3290f }, "Linear Rec.709 (sRGB)" },
+        { { 0.680f, 0.320f, 0.265f, 0.690f, 0.150f, 0.060f, 0.3127f, 0.3290f }, "Linear P3-D65" },
+        { { 0.708f, 0.292f, 0.170f, 0.797f, 0.131f, 0.046f, 0.3127f, 0.3290f }, "Linear Rec.2020" },
+    };
+    for (const auto& p : primaries) {
+        INFO(p.space);
+        OIIO::ImageSpec spec(4, 4, 4, OIIO::TypeHalf);
+        spec.attribute("oiio:ColorSpace", "Linear");  // as OIIO tags every EXR
+        spec.attribute("chromaticities", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 8), p.xy.data());
+        const ColorPlan plan = plan_for(spec);
+        CHECK(plan.input == p.space);
+        CHECK(plan.guess.empty());
+        CHECK_THAT(plan.summary, Catch::Contains("from the file's chromaticities"));
+        // What is written names the space again.
+        OIIO::ImageSpec written(4, 4, 4, OIIO::TypeHalf);
+        record_color_space(written, *shared, plan.input);
+        CHECK(plan_for(written).input == p.space);
+    }
+    // The interop ID tells ACEScct from ACEScg, which share primaries.
+    OIIO::ImageSpec cct(4, 4, 4, OIIO::TypeHalf);
+    record_color_space(cct, *shared, "ACEScct");
+    CHECK(cct.get_string_attribute("colorInteropID") == "acescct_ap1_scene");
+    CHECK(plan_for(cct).input == "ACEScct");
+    // Chromaticities nothing matches leave the old guess, said to be one.
+    OIIO::ImageSpec odd(4, 4, 4, OIIO::TypeHalf);
+    odd.attribute("oiio:ColorSpace", "Linear");
+    const float xy[8] = { 0.6f, 0.3f, 0.3f, 0.6f, 0.1f, 0.1f, 0.3f, 0.3f };
+    odd.attribute("chromaticities", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 8), xy);
+    CHECK(plan_for(odd).input == "Linear Rec.709 (sRGB)");
+    CHECK_FALSE(plan_for(odd).guess.empty());
+    // A space files cannot name leaves no stale name behind.
+    record_color_space(odd, *shared, "Raw");
+    CHECK(odd.find_attribute("chromaticities") == nullptr);
+}
+
+TEST_CASE("P3-D65 and Rec.2020 convert to Rec.709 by the matrices of their primaries")
+{
+    // Rec.709 red, green and blue of pure P3 / Rec.2020 red: the first
+    // column of inverse(M709) * M_P3 (both to XYZ with the D65 white).
+    const ColorManagement c = shipped();
+    const struct {
+        const char* space;
+        std::array<float, 3> red_in_rec709;
+    } cases[] = { { "lin_p3d65", { 1.224940f, -0.042057f, -0.019638f } },
+                  { "lin_rec2020", { 1.660491f, -0.124550f, -0.018151f } } };
+    for (const auto& k : cases) {
+        INFO(k.space);
+        ImageBuf image = rgba_pixels({ { 1.0f, 0.0f, 0.0f, 1.0f } });
+        std::string error;
+        REQUIRE(c.convert(image, c.find_space(k.space), c.find_space("lin_rec709"), error));
+        for (int ch = 0; ch < 3; ++ch)
+            CHECK(image.getchannel(0, 0, 0, ch) == Approx(k.red_in_rec709[ch]).margin(2e-4));
+    }
 }

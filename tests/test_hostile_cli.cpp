@@ -272,7 +272,8 @@ TEST_CASE("no part is dropped without a word, and 8-bit and sRGB-tagged images a
     const struct {
         std::string file, input;
     } inputs[] = {
-        { "tagged.png", "input 'sRGB - Texture', spread in" },
+        { "tagged.png", "input 'sRGB - Texture' (from the file's colour space tag 'sRGB'), "
+                        "spread in" },
         { "untagged8.tif", "input 'sRGB - Texture' (a guess: an untagged 8-bit image taken as "
                            "sRGB, as OpenImageIO does)" },
         { "untagged16.tif", "input 'sRGB - Texture' (a guess: an untagged 16-bit image taken as "

@@ -12,6 +12,7 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/color/primaries.h>
 #include <defocus/error_line.h>
 #include <defocus/io/frames.h>
 #include <defocus/io/image_output.h>
@@ -114,8 +115,10 @@ int main(int argc, const char* argv[])
     }
     ImageSpec spec = layered.spec;
     record_camera(spec, prepared.camera);
-    if (prepared.color.config)  // the layers are in the working space now
+    if (prepared.color.config) {  // the layers are in the working space now
         spec.attribute("oiio:ColorSpace", prepared.color.working);
+        record_color_space(spec, *prepared.color.config, prepared.color.working);
+    }
     if (!write_layers_atomic(layered.layers, spec, output, error))
         return fail("{}", error);
     return EXIT_SUCCESS;

@@ -4,6 +4,7 @@
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/timer.h>
 
+#include <defocus/color/primaries.h>
 #include <defocus/composite/confidence.h>
 #include <defocus/focus/focus_at.h>
 #include <defocus/focus/focus_map.h>
@@ -37,9 +38,14 @@ void describe_output(ImageSpec& spec, const ImageSpec& input, const Shot& shot,
 {
     spec.extra_attribs = input.extra_attribs;
     erase_part_attributes(spec);
-    // A focus map is false colour: it has no colour space.
-    if (color.config && shot.output == OutputKind::Image)
+    if (shot.output != OutputKind::Image) {
+        // A focus map is false colour: it has no colour space.
+        spec.erase_attribute("chromaticities");
+        spec.erase_attribute("colorInteropID");
+    } else if (color.config) {
         spec.attribute("oiio:ColorSpace", color.output);
+        record_color_space(spec, *color.config, color.output);
+    }
     if (!shot.compression.empty())
         spec.attribute("compression", shot.compression);
     record_camera(spec, camera);

@@ -118,11 +118,13 @@ const std::vector<ShotOption>& shot_options()
         { G::InputColor, "--colorconfig FILE", "colorconfig",
           "OCIO config (default: $OCIO, else the config shipped with defocus)" },
         { G::InputColor, "--iscolorspace NAME", "iscolorspace",
-          "Colour space of the input (default: the file's oiio:ColorSpace if the config "
-          "has it, else linear)" },
+          "Colour space of the input (default: what the file names: its colorInteropID, "
+          "a colour space tag the config has, or the chromaticities of AP0, AP1, Rec.709, "
+          "P3-D65 or Rec.2020; else a guess, which -v reports)" },
 
         { G::OutputColor, "--tocolorspace NAME", "tocolorspace",
-          "Colour space of the output (default: the input's)" },
+          "Colour space of the output (default: the input's), named in its header by "
+          "chromaticities and colorInteropID" },
 
         { G::Output, "--output KIND", "output",
           "image: the defocused image (default); focusmap: where the focus falls, "

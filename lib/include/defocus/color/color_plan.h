@@ -18,13 +18,18 @@ struct ColorPlan {
     /// Why the input space is a guess ("" when it was named or tagged
     /// precisely): display-referred output then may not be what was meant.
     std::string guess;
+    /// What in the file named the input space ("" when the caller named
+    /// it, or it is a guess).
+    std::string rule;
     std::string summary;         ///< one line for -v
 };
 
 /// Plans the colour of a render of an input with `input_spec` in `config`.
-/// `input_space` ("" = the file's oiio:ColorSpace when the config knows it,
-/// OIIO's generic "Linear" as lin_rec709, else scene_linear; the last two
-/// are guesses) and `output_space` ("" = the input's) must be spaces of the
+/// `input_space` ("" = what the file names: its colorInteropID, else its
+/// oiio:ColorSpace when the config knows it and it is not OIIO's generic
+/// "Linear", else, for float pixels, the linear space of its
+/// chromaticities; failing those, the guesses: "Linear" as lin_rec709,
+/// untagged integers as sRGB, else scene_linear) and `output_space` ("" = the input's) must be spaces of the
 /// config. Without a config (`no_config` says why) the input is taken as
 /// linear, unless a space is named: then that is an error.
 bool plan_color(ColorPlan& plan, std::shared_ptr<const ColorManagement> config,
