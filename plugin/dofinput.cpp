@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <map>
 #include <mutex>
 #include <vector>
 
@@ -113,13 +114,59 @@ std::string DofInput::changed_input() const
     return "";
 }
 
+/// A host's frame pattern names a frame of a .dof as a file of its own
+/// (oiiotool --frames 1001-1005 shot.#.dof asks for shot.1001.dof...).
+/// Where `name` does not exist but is such a name of one that does, the
+/// scene file it names and the frame; else false.
+bool numbered_frame(const std::string& name, std::string& scene, int& frame)
+{
+    if (!Strutil::iends_with(name, ".dof") || Filesystem::exists(name))
+        return false;
+    const std::string stem = name.substr(0, name.size() - 4);
+    const size_t dot = stem.rfind('.');
+    if (dot == std::string::npos)
+        return false;
+    const std::string number = stem.substr(dot + 1);
+    const size_t digits_from = number.size() > 1 && number[0] == '-' ? 1 : 0;
+    if (number.size() <= digits_from || number.size() > 9
+        || !std::all_of(number.begin() + digits_from, number.end(),
+                        [](char c) { return c >= '0' && c <= '9'; }))
+        return false;
+    const std::string candidate = stem.substr(0, dot) + name.substr(name.size() - 4);
+    if (!Filesystem::exists(candidate))
+        return false;
+    scene = candidate;
+    frame = Strutil::stoi(number);
+    return true;
+}
+
+/// A host that opens a sequence's .dof again without a frame (oiiotool
+/// --frames 1-5 shot.dof -o out.#.exr) gets the first frame each time:
+/// said once per file on stderr, the only channel a plugin has besides
+/// errors.
+void warn_if_reopened(const std::string& name, int frame)
+{
+    static std::mutex mutex;
+    static std::map<std::string, int> opened;  // times opened without a frame
+    std::lock_guard<std::mutex> lock(mutex);
+    if (++opened[name] == 2)
+        Strutil::print(stderr,
+                       "defocus: warning: {} is a sequence opened again without a frame: each "
+                       "open gives frame {}. Name the frame in the file name ({}), or give it "
+                       "with --iconfig dof:frame {{FRAME_NUMBER}}\n",
+                       name, frame,
+                       name.substr(0, name.size() - 4) + ".#" + name.substr(name.size() - 4));
+}
+
 bool DofInput::valid_file(const std::string& filename) const
 {
     // No exception may leave a plugin entry point: it would end the host.
     try {
         Shot shot;
-        std::string error;
-        return Strutil::iends_with(filename, ".dof") && defocus::load_shot(filename, shot, error);
+        std::string error, scene = filename;
+        int frame = 0;
+        numbered_frame(filename, scene, frame);
+        return Strutil::iends_with(filename, ".dof") && defocus::load_shot(scene, shot, error);
     } catch (const std::exception&) {
         return false;
     }
@@ -162,11 +209,18 @@ bool DofInput::open(const std::string& name, ImageSpec& newspec, const ImageSpec
         return fail(Strutil::fmt::format("scene files nested more than {} deep",
                                          defocus::max_shot_file_nesting));
     try {
-        if (!defocus::load_shot(name, m_shot, error))
+        std::string scene = name;
+        int numbered = 0;
+        const bool frame_in_name = numbered_frame(name, scene, numbered);
+        if (!defocus::load_shot(scene, m_shot, error))
             return fail(error);
         bool frame_given = false;
         if (!apply_hints(config, frame_given, error))
             return fail(error);
+        if (frame_in_name && !frame_given) {
+            m_frame = numbered;
+            frame_given = true;
+        }
         if (!defocus::check_shot(m_shot, error)
             || !defocus::read_shot_assets(m_shot, m_assets, error))
             return fail(error);
@@ -175,6 +229,8 @@ bool DofInput::open(const std::string& name, ImageSpec& newspec, const ImageSpec
             if (!defocus::shot_frames(m_shot, frames, error))
                 return fail(error);
             m_frame = frames.front();
+            if (frames.size() > 1)
+                warn_if_reopened(name, m_frame);
         }
         if (!defocus::frame_spec(m_shot, m_frame, m_assets, m_spec, error))
             return fail(error);

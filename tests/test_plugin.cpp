@@ -116,7 +116,7 @@ TEST_CASE("the confidence AOV reaches oiiotool through the plugin as through the
     require_identical(out, cli_render(dof, "--aov confidence"));
 }
 
-TEST_CASE("oiiotool renders each frame of a sequence scene with --iconfig dof:frame")
+TEST_CASE("oiiotool renders each frame of a sequence scene: shot.#.dof, or --iconfig dof:frame")
 {
     // A three-frame sequence with a focus pull from 1 m to 8 m.
     const std::string dir = scratch_dir("plugin_sequence");
@@ -142,6 +142,29 @@ TEST_CASE("oiiotool renders each frame of a sequence scene with --iconfig dof:fr
     }
     CHECK(read_spec(dir + "/out.0001.exr").get_float_attribute("defocus:focusDistance") == 1.0f);
     CHECK(read_spec(dir + "/out.0003.exr").get_float_attribute("defocus:focusDistance") == 8.0f);
+
+    // The natural form: a frame pattern on the .dof's name. seq.0002.dof
+    // does not exist, so it is frame 2 of seq.dof.
+    REQUIRE(run(format("{}{} --frames 1-3 {}/seq.#.dof -o {}/named.#.exr", with_plugin,
+                       OIIOTOOL_BIN, dir, dir),
+                log) == 0);
+    for (int frame : { 1, 2, 3 }) {
+        INFO("frame " << frame);
+        require_identical(format("{}/named.{:04d}.exr", dir, frame),
+                          format("{}/out.{:04d}.exr", dir, frame));
+    }
+    // A number no sequence file explains is still no such file.
+    CHECK(run(format("{}{} {}/other.0002.dof -o {}/x.exr", with_plugin, OIIOTOOL_BIN, dir, dir),
+              log) != 0);
+
+    // The same .dof opened for every frame without one gives the first
+    // frame each time: said once.
+    REQUIRE(run(format("{}{} --frames 1-3 {}/seq.dof -o {}/same.#.exr", with_plugin,
+                       OIIOTOOL_BIN, dir, dir),
+                log) == 0);
+    CHECK(Strutil::contains(log, "is a sequence opened again without a frame"));
+    CHECK(log.find("opened again") == log.rfind("opened again"));
+    CHECK_THAT(log, Catch::Contains("seq.#.dof"));
 }
 
 TEST_CASE("through the plugin a gap in the input sequence is an error, or held when the .dof says")
