@@ -23,6 +23,8 @@
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/version.h>
+
 #include "test_support.h"
 
 using namespace defocus_test;
@@ -694,6 +696,34 @@ float attribute(const std::string& file, const char* name)
 }
 
 }  // namespace
+
+TEST_CASE("an output keeps the software that made its input, and adds a line to its history")
+{
+    const std::string dir = scratch_dir("cli_provenance");
+    ImageBuf image(read_image(two_depth_scene(dir)));
+    image.specmod().attribute("Software", "Blender 3.4");
+    image.specmod().attribute("Exif:ImageHistory", "rendered");
+    const std::string input = dir + "/rendered.exr";
+    REQUIRE(image.write(input));
+    std::string log;
+    REQUIRE(run_defocus(input + " -o " + dir + "/once.exr --fstop 2.8 --focus 3", log) == 0);
+    const ImageSpec once = read_spec(dir + "/once.exr");
+    const std::string ours = "defocus " + std::string(defocus::version());
+    CHECK(once.get_string_attribute("Software") == "Blender 3.4; " + ours);
+    CHECK(once.get_string_attribute("Exif:ImageHistory")
+          == "rendered\n" + ours + ": " + input + " --focus 3 --fstop 2.8");
+    // Defocused again: one more line, the software named once.
+    REQUIRE(run_defocus(dir + "/once.exr -o " + dir + "/twice.exr --depth " + input
+                            + " --focus 2",
+                        log) == 0);
+    const ImageSpec twice = read_spec(dir + "/twice.exr");
+    CHECK(twice.get_string_attribute("Software") == "Blender 3.4; " + ours);
+    const std::vector<std::string> lines
+        = Strutil::splits(twice.get_string_attribute("Exif:ImageHistory"), "\n");
+    REQUIRE(lines.size() == 3);
+    CHECK_THAT(lines[2], Catch::StartsWith(ours + ": " + dir + "/once.exr"));
+    CHECK_THAT(lines[2], Catch::EndsWith("--depth " + input + " --focus 2"));
+}
 
 TEST_CASE("sequences: frame patterns in and out, keyframes, per-frame metadata")
 {

@@ -31,6 +31,22 @@ TypeDesc output_pixel_type(const Shot& shot, const ImageSpec& input)
     return r >= 0 ? input.channelformat(r) : input.format;
 }
 
+/// One line of an image's history for this render: the version, the files
+/// the frame reads and the settings given, as defocus's options.
+std::string history_line(const Shot& shot, int frame)
+{
+    std::string line = format("defocus {}: {}", version(),
+                              Strutil::join(files_read(shot, { frame }), " "));
+    for (const ShotSetting& setting : shot_settings())
+        if (is_given(shot, setting.name)) {
+            const std::string value = shot_setting(shot, setting.name);
+            line += format(" --{} {}", setting.name,
+                           value.find_first_of(" \t") == std::string::npos ? value
+                                                                            : "'" + value + "'");
+        }
+    return line;
+}
+
 /// The metadata of a result: the input's (less what describes one part),
 /// its colour space, and the settings used.
 void describe_output(ImageSpec& spec, const ImageSpec& input, const Shot& shot,
@@ -62,7 +78,17 @@ void describe_output(ImageSpec& spec, const ImageSpec& input, const Shot& shot,
     if (is_sequence(shot))
         spec.attribute("defocus:frame", frame);
     spec.attribute("defocus:settingsHash", settings_hash(shot, frame));
-    spec.attribute("Software", std::string("defocus ") + version());
+    // Provenance, as oiiotool keeps it: the software that made the input
+    // stays named, and the image's history gains how this step was made.
+    const std::string ours = std::string("defocus ") + version();
+    const std::string software = input.get_string_attribute("Software");
+    spec.attribute("Software", software.empty() || Strutil::ends_with(software, ours)
+                                   ? (software.empty() ? ours : software)
+                                   : software + "; " + ours);
+    std::string history = input.get_string_attribute("Exif:ImageHistory");
+    if (!history.empty() && !Strutil::ends_with(history, "\n"))
+        history += "\n";
+    spec.attribute("Exif:ImageHistory", history + history_line(shot, frame));
 }
 
 }  // namespace
