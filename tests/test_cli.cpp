@@ -697,6 +697,23 @@ float attribute(const std::string& file, const char* name)
 
 }  // namespace
 
+TEST_CASE("on a terminal, the progress bar clears to a one-line summary")
+{
+    // script(1) gives the command a terminal, so it draws its bar.
+    const std::string dir = scratch_dir("cli_terminal");
+    const std::string scene = two_depth_scene(dir);
+    std::string log;
+    REQUIRE(run(format("script -qec '{} {} -o {}/one.exr --focus 3' /dev/null", defocus_bin,
+                       scene, dir),
+                log) == 0);
+    CHECK_THAT(log, Catch::Contains("\rwrote " + dir + "/one.exr in "));
+    CHECK_THAT(log, Catch::EndsWith(" s\r\n"));
+    REQUIRE(run(format("script -qec '{} {} -o {}/seq.#.exr --frames 1-3 --focus 3' /dev/null",
+                       defocus_bin, scene, dir),
+                log) == 0);
+    CHECK_THAT(log, Catch::Contains("\rwrote 3 of 3 frames in "));
+}
+
 TEST_CASE("an output keeps the software that made its input, and adds a line to its history")
 {
     const std::string dir = scratch_dir("cli_provenance");

@@ -40,9 +40,11 @@ void Progress::stage(const std::string& frame, const char* stage)
 
 void Progress::written(const std::string& frame, const std::string& file, double seconds)
 {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    ++m_written;
+    m_last_written = file;
     if (m_mode != ProgressMode::Lines)
         return;
-    std::lock_guard<std::mutex> lock(m_mutex);
     const std::string done = m_frames > 1 ? format(" ({}/{})", m_over + 1, m_frames) : "";
     OIIO::Strutil::print("{}{}{}wrote {} in {:.2f} s\n", frame, done,
                          frame.empty() ? "" : ": ", file, seconds);
@@ -81,6 +83,15 @@ void Progress::finish()
     std::lock_guard<std::mutex> lock(m_mutex);
     clear_bar();
     m_current.clear();
+    // The bar leaves nothing behind, so its last word is a line that stays.
+    if (m_mode != ProgressMode::Bar || m_written == 0)
+        return;
+    if (m_frames == 1)
+        OIIO::Strutil::print("wrote {} in {:.2f} s\n", m_last_written, m_timer());
+    else
+        OIIO::Strutil::print("wrote {} of {} frames in {:.2f} s\n", m_written, m_frames,
+                             m_timer());
+    std::fflush(stdout);
 }
 
 void Progress::clear_bar()

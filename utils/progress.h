@@ -22,7 +22,8 @@ public:
 
     /// A frame worker started `stage` ("read", "render", ...) of `frame`.
     void stage(const std::string& frame, const char* stage);
-    /// A frame was written (one line in Lines mode).
+    /// A frame was written (one line in Lines mode; in Bar mode the
+    /// count, which finish() reports).
     void written(const std::string& frame, const std::string& file, double seconds);
     /// A block of text for stdout (the -v report), whole.
     void text(const std::string& text);
@@ -30,7 +31,7 @@ public:
     void error(const std::string& message);
     /// A frame is over, written or not.
     void frame_over();
-    /// Clears the bar.
+    /// Clears the bar, and in Bar mode says in one line what was written.
     void finish();
 
 private:
@@ -39,7 +40,8 @@ private:
 
     std::mutex m_mutex;
     ProgressMode m_mode;
-    int m_frames, m_over = 0;
+    int m_frames, m_over = 0, m_written = 0;
+    std::string m_last_written;
     std::string m_current;  ///< "frame 1004: render"
     OIIO::Timer m_timer;
     bool m_bar_drawn = false;
