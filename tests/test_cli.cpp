@@ -697,6 +697,19 @@ float attribute(const std::string& file, const char* name)
 
 }  // namespace
 
+TEST_CASE("a chunk's log begins with the version, host, date and its frames")
+{
+    const std::string dir = scratch_dir("cli_chunk_log");
+    std::string log;
+    REQUIRE(run_defocus(two_depth_scene(dir) + " -o " + dir + "/c.#.exr --frames 1-5 --focus 3 "
+                        "--chunk 2/2",
+                        log) == 0);
+    char host[256] = {};
+    gethostname(host, sizeof host - 1);
+    CHECK_THAT(log, Catch::StartsWith(format("defocus {} on {} at ", defocus::version(), host)));
+    CHECK_THAT(Strutil::splits(log, "\n")[0], Catch::EndsWith(" UTC: chunk 2/2, frames 3-5"));
+}
+
 TEST_CASE("on a terminal, the progress bar clears to a one-line summary")
 {
     // script(1) gives the command a terminal, so it draws its bar.
@@ -1300,7 +1313,8 @@ TEST_CASE("cutting into more layers than the memory limit holds is refused")
 namespace {
 
 /// Starts defocus with `args` (output to /dev/null); its process id.
-pid_t start_defocus(const std::vector<std::string>& args)
+pid_t start_defocus(const std::vector<std::string>& args,
+                    const std::string& stderr_file = "/dev/null")
 {
     std::vector<std::string> all = { defocus_bin };
     all.insert(all.end(), args.begin(), args.end());
@@ -1311,7 +1325,8 @@ pid_t start_defocus(const std::vector<std::string>& args)
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
     posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
-    posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_addopen(&actions, 2, stderr_file.c_str(),
+                                     O_WRONLY | O_CREAT | O_TRUNC, 0644);
     pid_t pid = -1;
     const int failed = posix_spawn(&pid, defocus_bin.c_str(), &actions, nullptr, argv.data(),
                                    environ);
@@ -1369,9 +1384,10 @@ TEST_CASE("an interrupted run leaves its targets as they were and no temporary f
     // 2.5 s of work to interrupt at 0.4 s.
     const std::vector<std::string> slow = { "--focus", "4", "--focal", "85", "--fstop", "1",
                                             "--cateye", "1" };
+    const std::string errors = scratch_dir("cli_interrupt_log") + "/stderr.txt";
     auto slow_run = [&](std::vector<std::string> args) {
         args.insert(args.end(), slow.begin(), slow.end());
-        return start_defocus(args);
+        return start_defocus(args, errors);
     };
     // A closed terminal and a reader gone from a pipe end a run as Ctrl-C
     // does: they used to leave the temporary file behind.
@@ -1398,6 +1414,11 @@ TEST_CASE("an interrupted run leaves its targets as they were and no temporary f
     int status = 0;
     REQUIRE(waitpid(pid, &status, 0) == pid);
     CHECK(WIFSIGNALED(status));
+    // The log (a farm task's) ends saying why.
+    std::string said;
+    REQUIRE(Filesystem::read_text_file(errors, said));
+    CHECK_THAT(said, Catch::EndsWith("defocus: stopped by signal TERM: outputs not finished were "
+                                     "not written\n"));
     for (const std::string& name : folder(dir))
         CHECK(name.find(".tmp") == std::string::npos);
     CHECK(read_image(dir + "/s.0001.exr").spec().width == read_spec(scene).width);  // complete

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <ctime>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -23,6 +24,7 @@
 #include <defocus/render_frame.h>
 #include <defocus/io/settings_hash.h>
 #include <defocus/shot/shot_file.h>
+#include <defocus/version.h>
 
 #include "cli_options.h"
 #include "progress.h"
@@ -291,7 +293,7 @@ std::string verbose_report(const FrameResult& frame, const CommandLine& cl,
 
 int main(int argc, const char* argv[])
 {
-    remove_temporaries_on_interrupt();
+    remove_temporaries_on_interrupt("defocus");
     Filesystem::convert_native_arguments(argc, argv);
     CommandLine cl;
     bool help_only = false;
@@ -365,6 +367,17 @@ int main(int argc, const char* argv[])
             return EXIT_SUCCESS;
     }
 
+    if (cl.chunk_n > 0 && !cl.quiet) {
+        // A farm task's log begins with where, when and what it ran.
+        char host[256] = {};
+        ::gethostname(host, sizeof host - 1);
+        const std::time_t now = std::time(nullptr);
+        char date[32];
+        std::strftime(date, sizeof date, "%Y-%m-%d %H:%M:%S UTC", std::gmtime(&now));
+        Strutil::print("defocus {} on {} at {}: chunk {}, frames {}\n", version(), host, date,
+                       cl.chunk, frame_ranges(frames));
+        std::fflush(stdout);
+    }
     OIIO::attribute("threads", cl.threads);
     const bool sequence = is_sequence(shot);
     const ProgressMode mode = cl.quiet ? ProgressMode::Quiet

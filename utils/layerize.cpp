@@ -37,7 +37,7 @@ int fail(const char* fmt, const Args&... args)
 
 int main(int argc, const char* argv[])
 {
-    remove_temporaries_on_interrupt();
+    remove_temporaries_on_interrupt("layerize");
     Filesystem::convert_native_arguments(argc, argv);
     std::vector<std::string> inputs;
     std::string output;

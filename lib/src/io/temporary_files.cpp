@@ -13,6 +13,7 @@
 #include <chrono>
 #include <climits>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <vector>
 
@@ -52,6 +53,16 @@ int take_slot(const std::string& path, const std::string& folder)
     return -1;  // more files in flight than slots: not removed on a signal
 }
 
+/// "PROGRAM: " for the handler's last line, set before it is installed.
+char program_prefix[64];
+
+void write_to_stderr(const char* text)
+{
+    // write(2) is safe in a signal handler; what it cannot write is lost.
+    const ssize_t ignored = ::write(STDERR_FILENO, text, std::strlen(text));
+    (void)ignored;
+}
+
 void handle_interrupt(int signal_number)
 {
     for (Slot& slot : slots)
@@ -60,6 +71,13 @@ void handle_interrupt(int signal_number)
             if (slot.folder[0])
                 rmdir(slot.folder);
         }
+    // A farm's log ends with why the task ended, not mid-line.
+    write_to_stderr(program_prefix);
+    write_to_stderr(signal_number == SIGINT    ? "stopped by signal INT"
+                    : signal_number == SIGTERM ? "stopped by signal TERM"
+                    : signal_number == SIGHUP  ? "stopped by signal HUP"
+                                               : "stopped by signal PIPE");
+    write_to_stderr(": outputs not finished were not written\n");
     ::signal(signal_number, SIG_DFL);
     raise(signal_number);
 }
@@ -222,8 +240,10 @@ bool TemporaryFile::commit(std::string& error)
     return true;
 }
 
-void remove_temporaries_on_interrupt()
+void remove_temporaries_on_interrupt(const char* program)
 {
+    const std::string prefix = std::string(program) + ": ";
+    std::snprintf(program_prefix, sizeof program_prefix, "%s", prefix.c_str());
     struct sigaction action = {};
     action.sa_handler = handle_interrupt;
     sigemptyset(&action.sa_mask);

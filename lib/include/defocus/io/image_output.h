@@ -21,11 +21,13 @@ bool write_atomic(const std::string& filename,
                   std::string& error);
 
 /// Makes SIGINT and SIGTERM remove every temporary file being written,
-/// then end the process by the same signal (a shell sees 130 or 143): an
-/// interrupted run leaves its targets as they were. For programs to call
-/// at start, not for a library inside a host. What SIGKILL leaves behind
-/// is removed by the next write of the same target on the same host.
-void remove_temporaries_on_interrupt();
+/// say so on stderr ("PROGRAM: stopped by signal TERM: ..."), then end the
+/// process by the same signal (a shell sees 130 or 143): an interrupted
+/// run leaves its targets as they were, and a farm task's log says why it
+/// ended. For programs to call at start, not for a library inside a host.
+/// What SIGKILL leaves behind is removed by the next write of the same
+/// target on the same host.
+void remove_temporaries_on_interrupt(const char* program);
 
 /// Whether `filename` can be written as an image, checked before any work
 /// is done: its folder exists and is writable, a format writes its
