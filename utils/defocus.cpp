@@ -59,7 +59,7 @@ bool parse_command_line(int argc, const char* argv[], CommandLine& cl, bool& hel
              "rectangle spreading\n"
              "(Kosloff, Tao & Barsky, Graphics Interface 2009)")
         .usage("defocus INPUT [INPUT...] -o OUTPUT [options]\n"
-               "       defocus SHOT.dof -o OUTPUT [options]")
+               "   or: defocus SHOT.dof -o OUTPUT [options]")
         .add_help(true)
         .exit_on_error(false);
     ap.description(

@@ -47,7 +47,7 @@ int main(int argc, const char* argv[])
     ArgParse ap;
     ap.intro("layerize -- the depth layers defocus would use")
         .usage("layerize INPUT [INPUT...] -o OUTPUT.exr [options]\n"
-               "       layerize --info INPUT [INPUT...] [options]")
+               "   or: layerize --info INPUT [INPUT...] [options]")
         .add_help(true)
         .exit_on_error(false);
     ap.description(

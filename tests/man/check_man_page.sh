@@ -19,6 +19,16 @@ while read -r option; do
     [ -z "$words" ] || grep -qF -- "$words" <<< "$text" || fail "$option: help '$words' missing"
     count=$((count + 1))
 done <<< "$options"
+# Every form of the command --help shows ("Usage: ...", "or: ...") is in
+# the synopsis, where man readers look for it.
+synopsis=$(sed -n '/^\.SH SYNOPSIS/,/^\.SH DESCRIPTION/p' <<< "$text")
+name=$(basename "$tool")
+usage=$(sed -n '/^Usage:/,/^$/p' <<< "$help")
+forms=$(sed -nE "s/^ *(Usage:|or:|) +$name +([^ ]+).*/\\2/p" <<< "$usage")
+[ -n "$forms" ] || fail "$tool --help shows no usage"
+while read -r form; do
+    grep -qF -- "$form" <<< "$synopsis" || fail "synopsis lacks the form '$form ...'"
+done <<< "$forms"
 version=$("$tool" --version)
 grep -qF "\"$version\"" "$page" || fail "is not of $version"
 echo "$page: $count options, $version: matches --help"
