@@ -172,6 +172,28 @@ TEST_CASE("bad pixels are handled, counted and never reach the output")
     }
 }
 
+TEST_CASE("a mistyped option is answered with the nearest one")
+{
+    std::string log;
+    const std::string scene = example_scene() + " -o " + scratch_dir("cli_typo") + "/o.exr ";
+    const struct {
+        std::string args, said;
+    } cases[] = {
+        { "--focsu 3", "Invalid option \"--focsu\": did you mean --focus?" },
+        { "--memroy-limit 1G", "did you mean --memory-limit?" },
+        { "--foacl 50", "did you mean --focal?" },
+        { "--wibble 3", "Invalid option \"--wibble\" (see --help)" },
+    };
+    for (const auto& c : cases) {
+        INFO(c.args);
+        CHECK(run_defocus(scene + c.args, log) != 0);
+        CHECK_THAT(log, Catch::Contains(c.said));
+        CHECK(count_of(log, "\n") == 1);
+    }
+    REQUIRE(run(format("{} {} -o x.exr --layres 3", LAYERIZE_BIN, example_scene()), log) != 0);
+    CHECK_THAT(log, Catch::Contains("did you mean --layers?"));
+}
+
 TEST_CASE("every bad input ends in a one-line error and no output")
 {
     const std::string dir = scratch_dir("cli_errors");

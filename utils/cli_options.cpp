@@ -1,6 +1,9 @@
 #include "cli_options.h"
 
+#include <algorithm>
+#include <iostream>
 #include <regex>
+#include <sstream>
 
 #include <defocus/shot/option_value.h>
 #include <defocus/version.h>
@@ -17,6 +20,50 @@ void add_version_option(ArgParse& ap, const char* program)
             OIIO::Strutil::print("{} {}\n", program, version());
             ap.abort();
         });
+}
+
+namespace {
+
+/// The options `ap` lists in its help, as --help prints them.
+std::vector<std::string> option_names(const ArgParse& ap)
+{
+    // OIIO's ArgParse lists its options only through print_help().
+    std::stringstream help;
+    std::streambuf* out = std::cout.rdbuf(help.rdbuf());
+    ap.print_help();
+    std::cout.rdbuf(out);
+    static const std::regex option("^ +(--?[a-z][-a-z0-9]*)");
+    std::vector<std::string> names;
+    std::smatch m;
+    for (std::string line; std::getline(help, line);)
+        if (std::regex_search(line, m, option))
+            names.push_back(m[1]);
+    return names;
+}
+
+}  // namespace
+
+std::string unknown_option_hint(const ArgParse& ap, const std::string& error)
+{
+    static const std::regex invalid("Invalid option \"(-[^\"]*)\"");
+    std::smatch m;
+    // OIIO's own guess, when it has one, is already in the message.
+    if (!std::regex_search(error, m, invalid) || OIIO::Strutil::contains(error, "did you mean"))
+        return error;
+    const std::string given = m[1];
+    std::string nearest;
+    if (OIIO::Strutil::starts_with(given, "--")) {
+        size_t best = std::max<size_t>(2, given.size() / 3) + 1;  // farther is no typo
+        for (const std::string& name : option_names(ap)) {
+            const size_t d = OIIO::Strutil::edit_distance(given, name);
+            // Among equals, a name of the same length: two letters swapped.
+            if (d < best || (d == best && !nearest.empty() && name.size() == given.size())) {
+                best = d;
+                nearest = name;
+            }
+        }
+    }
+    return nearest.empty() ? error + " (see --help)" : error + ": did you mean " + nearest + "?";
 }
 
 int parse_arguments(ArgParse& ap, int argc, const char* argv[])

@@ -17,6 +17,10 @@ namespace defocus {
 /// ap.parse_args(), also taking "--option=value" for "--option value".
 int parse_arguments(OIIO::ArgParse& ap, int argc, const char* argv[]);
 
+/// A parse error, with the nearest option when it names an unknown one
+/// ('Invalid option "--focsu": did you mean --focus?').
+std::string unknown_option_hint(const OIIO::ArgParse& ap, const std::string& error);
+
 /// --version: prints "PROGRAM VERSION" and stops the parse, as --help does.
 void add_version_option(OIIO::ArgParse& ap, const char* program);
 

@@ -149,7 +149,7 @@ bool parse_command_line(int argc, const char* argv[], CommandLine& cl, bool& hel
     add_version_option(ap, "defocus");
 
     if (parse_arguments(ap, argc, argv) < 0)
-        return fail(ap.geterror());
+        return fail(unknown_option_hint(ap, ap.geterror()));
     if (ap.aborted()) {  // --help
         help_only = true;
         return true;

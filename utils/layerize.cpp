@@ -76,7 +76,7 @@ int main(int argc, const char* argv[])
     add_version_option(ap, "layerize");
 
     if (parse_arguments(ap, argc, argv) < 0)
-        return fail("{}", ap.geterror());
+        return fail("{}", unknown_option_hint(ap, ap.geterror()));
     if (ap.aborted())
         return EXIT_SUCCESS;
     Shot shot;
