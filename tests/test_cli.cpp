@@ -347,6 +347,30 @@ TEST_CASE("the help teaches the options")
                                 "--compression",
                                 "--crop", "-v", "--threads", "Examples" })
         CHECK(Strutil::contains(log, option));
+    // It fits the terminal (COLUMNS where stdout is not one), each option's
+    // help wrapped under its column, and no wrapped line reads as an option.
+    for (const char* tool : { DEFOCUS_BIN, LAYERIZE_BIN })
+        for (const int columns : { 60, 80, 132 }) {
+            INFO(tool << ", " << columns << " columns");
+            REQUIRE(run(format("COLUMNS={} {} --help", columns, tool), log) == 0);
+            size_t longest = 0, options = 0;
+            for (const std::string& line : Strutil::splits(log, "\n")) {
+                longest = std::max(longest, line.size());
+                options += Strutil::starts_with(line, "    -");
+            }
+            CHECK(longest < size_t(columns));
+            CHECK(options >= 25);
+        }
+    std::string wide;
+    REQUIRE(run(format("COLUMNS=1000 {} --help", DEFOCUS_BIN), wide) == 0);
+    const auto lines = [](const std::string& text, const char* start) {
+        size_t n = 0;
+        for (const std::string& line : Strutil::splits(text, "\n"))
+            n += Strutil::starts_with(line, start);
+        return n;
+    };
+    REQUIRE(run(format("COLUMNS=60 {} --help", DEFOCUS_BIN), log) == 0);
+    CHECK(lines(log, "    -") == lines(wide, "    -"));
 }
 
 TEST_CASE("layerize writes the layers defocus uses, and defocus reads them back")

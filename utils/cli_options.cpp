@@ -1,6 +1,10 @@
 #include "cli_options.h"
 
+#include <sys/ioctl.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cstdlib>
 #include <iostream>
 #include <regex>
 #include <sstream>
@@ -24,21 +28,79 @@ void add_version_option(ArgParse& ap, const char* program)
 
 namespace {
 
-/// The options `ap` lists in its help, as --help prints them.
-std::vector<std::string> option_names(const ArgParse& ap)
+/// What `ap` prints for --help. OIIO's ArgParse gives its options, and
+/// its help, only through print_help(), to std::cout.
+std::string help_text(const ArgParse& ap)
 {
-    // OIIO's ArgParse lists its options only through print_help().
     std::stringstream help;
     std::streambuf* out = std::cout.rdbuf(help.rdbuf());
     ap.print_help();
     std::cout.rdbuf(out);
+    return help.str();
+}
+
+/// The options `ap` lists in its help, as --help prints them.
+std::vector<std::string> option_names(const ArgParse& ap)
+{
     static const std::regex option("^ +(--?[a-z][-a-z0-9]*)");
     std::vector<std::string> names;
     std::smatch m;
+    std::stringstream help(help_text(ap));
     for (std::string line; std::getline(help, line);)
         if (std::regex_search(line, m, option))
             names.push_back(m[1]);
     return names;
+}
+
+/// The terminal's width; $COLUMNS, else 80, when stdout is not a terminal.
+/// (OIIO 2.4's Sysutil::terminal_columns() reads an unset size then.)
+int terminal_columns()
+{
+    struct winsize size = {};
+    if (isatty(STDOUT_FILENO) && ioctl(STDOUT_FILENO, TIOCGWINSZ, &size) == 0 && size.ws_col > 0)
+        return size.ws_col;
+    const char* columns = std::getenv("COLUMNS");
+    const int given = columns ? std::atoi(columns) : 0;
+    return given > 0 ? given : 80;
+}
+
+/// `line` cut into lines of at most `width` characters, the later ones
+/// indented to where its text starts: after the option for an option's
+/// line, else its own indent. No later line starts with '-', which would
+/// read as an option (to the README's and the completion's readers too).
+std::string wrap_help_line(const std::string& line, size_t width)
+{
+    if (line.size() <= width)
+        return line + "\n";
+    static const std::regex option_line("^( +-\\S+(?: [^ ]+)* {2,})");
+    std::smatch m;
+    const size_t indent = std::regex_search(line, m, option_line)
+                              ? size_t(m[1].length())
+                              : line.find_first_not_of(' ');
+    if (indent == std::string::npos || indent + 20 > width)
+        return line + "\n";
+    const std::vector<std::string> words = OIIO::Strutil::splits(line.substr(indent), " ");
+    std::vector<std::vector<std::string>> lines(1);
+    size_t used = 0;
+    for (const std::string& word : words) {
+        if (!lines.back().empty() && indent + used + 1 + word.size() > width) {
+            lines.emplace_back();
+            used = 0;
+            // Take the previous word along rather than start with a dash.
+            if (word[0] == '-' && lines[lines.size() - 2].size() > 1) {
+                std::vector<std::string>& previous = lines[lines.size() - 2];
+                lines.back().push_back(previous.back());
+                used = previous.back().size();
+                previous.pop_back();
+            }
+        }
+        used += (lines.back().empty() ? 0 : 1) + word.size();
+        lines.back().push_back(word);
+    }
+    std::string out = line.substr(0, indent);
+    for (size_t i = 0; i < lines.size(); ++i)
+        out += (i ? std::string(indent, ' ') : "") + OIIO::Strutil::join(lines[i], " ") + "\n";
+    return out;
 }
 
 }  // namespace
@@ -64,6 +126,17 @@ std::string unknown_option_hint(const ArgParse& ap, const std::string& error)
         }
     }
     return nearest.empty() ? error + " (see --help)" : error + ": did you mean " + nearest + "?";
+}
+
+void add_help_option(ArgParse& ap)
+{
+    ap.arg("--help").help("Print help message").action([&ap](cspan<const char*>) {
+        const size_t width = size_t(std::max(terminal_columns(), 60) - 1);
+        std::stringstream help(help_text(ap));
+        for (std::string line; std::getline(help, line);)
+            OIIO::Strutil::print("{}", wrap_help_line(line, width));
+        ap.abort();
+    });
 }
 
 int parse_arguments(ArgParse& ap, int argc, const char* argv[])

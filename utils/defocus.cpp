@@ -60,8 +60,9 @@ bool parse_command_line(int argc, const char* argv[], CommandLine& cl, bool& hel
              "(Kosloff, Tao & Barsky, Graphics Interface 2009)")
         .usage("defocus INPUT [INPUT...] -o OUTPUT [options]\n"
                "   or: defocus SHOT.dof -o OUTPUT [options]")
-        .add_help(true)
+        .add_help(false)
         .exit_on_error(false);
+    add_help_option(ap);
     ap.description(
         "INPUT is a layered scene. A multi-part EXR whose parts each hold\n"
         "premultiplied R,G,B,A and Z: the parts are the layers. A deep EXR, or a\n"

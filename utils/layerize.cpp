@@ -48,8 +48,9 @@ int main(int argc, const char* argv[])
     ap.intro("layerize -- the depth layers defocus would use")
         .usage("layerize INPUT [INPUT...] -o OUTPUT.exr [options]\n"
                "   or: layerize --info INPUT [INPUT...] [options]")
-        .add_help(true)
+        .add_help(false)
         .exit_on_error(false);
+    add_help_option(ap);
     ap.description(
         "Reads a scene as defocus does (multi-part, deep or flat RGBA+Z EXR,\n"
         "views, several files) and cuts it into the same depth layers for the\n"
