@@ -3,9 +3,9 @@
 
 Usage:
   defocus-submit --chunk-size N [farm options] INPUT... -o OUTPUT.#.exr [defocus options]
-  defocus-submit --chunk-size N [farm options] SHOT.dof -o OUTPUT.#.exr [defocus options]
-  defocus-submit --resume [farm options] (the same arguments)
-  defocus-submit --check --job-dir DIR
+   or: defocus-submit --chunk-size N [farm options] SHOT.dof -o OUTPUT.#.exr [defocus options]
+   or: defocus-submit --resume [farm options] (the same arguments)
+   or: defocus-submit --check --job-dir DIR
 
 The shot (inputs and defocus options) is saved as DIR/shot.dof and its
 frames are cut into chunks of at most N neighbouring frames. One array job
@@ -203,9 +203,17 @@ def job_name(given, output):
     return re.sub(r"[^A-Za-z0-9._-]", "_", stem).lstrip(".") or "defocus"
 
 
+class HelpFormatter(argparse.RawDescriptionHelpFormatter):
+    """argparse's help with "Usage:" spelt as help2man and the other tools
+    spell it, so that the man page's synopsis holds every form."""
+
+    def add_usage(self, usage, actions, groups, prefix=None):
+        super().add_usage(usage, actions, groups, prefix or "Usage: ")
+
+
 def main():
     parser = argparse.ArgumentParser(
-        prog="defocus-submit", formatter_class=argparse.RawDescriptionHelpFormatter,
+        prog="defocus-submit", formatter_class=HelpFormatter,
         description=__doc__.split("\n", 2)[2].split("\n\n", 1)[1],
         usage=__doc__.split("Usage:\n", 1)[1].split("\n\n")[0].strip(),
         epilog="Example:\n  defocus-submit --chunk-size 10 --cpus 4 plate.#.exr --frames 1001-1240 "

@@ -37,4 +37,6 @@ expect "bounded exact" defocus --spread ""
 expect "half" defocus -d h
 expect "shot.dof shot.exr" defocus sh
 expect "" defocus --fstop ""
+expect "--chunk --chunk-size" defocus-submit --chun
+expect "--dry-run" defocus-submit --dry
 echo "completion test passed"

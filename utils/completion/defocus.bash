@@ -1,4 +1,4 @@
-# Bash completion for defocus and layerize. The options are read from the
+# Bash completion for defocus, layerize and defocus-submit. The options are read from the
 # tool's own --help when first completed, so they never drift from it;
 # names and files are completed for the options that take them.
 
@@ -6,8 +6,12 @@ _defocus_options()
 {
     local tool=$1 var="_defocus_options_${1//[^a-z]/_}"
     if [[ -z ${!var-} ]]; then
-        printf -v "$var" '%s' "$("$tool" --help 2>/dev/null \
-            | sed -nE 's/^ +(-[-a-z0-9]+).*/\1/p' | sort -u | tr '\n' ' ')"
+        # defocus-submit takes defocus's options too, for the shot.
+        local helps
+        helps=$("$tool" --help 2>/dev/null)
+        [[ $tool == defocus-submit ]] && helps+=$'\n'$(defocus --help 2>/dev/null)
+        printf -v "$var" '%s' "$(sed -nE 's/^ +(-[-a-z0-9]+).*/\1/p' <<< "$helps" \
+            | sort -u | tr '\n' ' ')"
     fi
     printf '%s' "${!var}"
 }
@@ -42,4 +46,4 @@ _defocus()
         _filedir '@(exr|dof|sxr|tif|tiff)'
     fi
 }
-complete -F _defocus defocus layerize
+complete -F _defocus defocus layerize defocus-submit
