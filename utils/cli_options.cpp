@@ -202,16 +202,6 @@ bool ShotArguments::apply(Shot& shot, std::string& error) const
         if (!g.setting.empty()
             && !set_shot_setting(shot, g.setting, g.value, error, g.option))
             return false;
-    // Options that shape only a polygon do nothing to other apertures.
-    for (const Given& g : m_given)
-        if ((g.setting == "blades" || g.setting == "roundness" || g.setting == "rotation")
-            && shot.spread.aperture.shape != ApertureShape::Polygon) {
-            error = OIIO::Strutil::fmt::format("{} applies only to --aperture polygon (the "
-                                               "aperture is {})",
-                                               g.option,
-                                               aperture_shape_name(shot.spread.aperture.shape));
-            return false;
-        }
     return true;
 }
 

@@ -341,6 +341,16 @@ bool check_shot(const Shot& shot, std::string& error)
         return fail("--aperture mask:FILE needs the image of the shape");
     if (shot.output == OutputKind::FocusMap && shot.aov != Aov::None)
         return fail("--aov applies to the defocused image, not to --output focusmap");
+    // Settings that shape only a polygon would do nothing to other apertures.
+    if (aperture.shape != ApertureShape::Polygon)
+        for (const char* polygon_only : { "blades", "roundness", "rotation" })
+            if (is_given(shot, polygon_only)) {
+                const auto label = shot.given.find(polygon_only);
+                return fail(format("{} applies only to --aperture polygon (the aperture is {})",
+                                   label != shot.given.end() ? label->second
+                                                             : "--" + std::string(polygon_only),
+                                   aperture_shape_name(aperture.shape)));
+            }
     return true;
 }
 
