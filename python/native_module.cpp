@@ -5,12 +5,15 @@
 // Every render runs on a thread of its own with the GIL released; the
 // calling thread waits for it and checks Python's signals, so Ctrl-C
 // cancels the render at its next stage and raises KeyboardInterrupt.
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <chrono>
 #include <condition_variable>
 #include <exception>
 #include <mutex>
 #include <optional>
+#include <regex>
 #include <stdexcept>
 #include <thread>
 
@@ -38,13 +41,61 @@ using OIIO::ImageBuf;
 using OIIO::ImageSpec;
 using OIIO::ROI;
 using OIIO::TypeFloat;
+namespace Strutil = OIIO::Strutil;
 using OIIO::Strutil::fmt::format;
 
 namespace {
 
-/// Raised as defocus.Error, with the one-line message the CLI prints.
+/// A setting's value as a Python literal: a number, a pixel (x, y), or
+/// quoted text.
+std::string python_literal(const ShotSetting& setting, const std::string& value)
+{
+    if (setting.kind == ShotValueKind::Point)
+        return "(" + Strutil::replace(value, ",", ", ") + ")";
+    return Strutil::string_is<double>(value) ? value : "\"" + value + "\"";
+}
+
+/// The library's message with each setting's option named as its Python
+/// keyword: "--focus-at X,Y" reads "focus_at=X,Y", "--aperture polygon"
+/// reads 'aperture="polygon"'. A word after an option is its value when
+/// the setting takes it, or a placeholder when in capitals; else the
+/// option stands alone ("--aov applies ..." reads "aov applies ...").
+std::string python_words(const std::string& message)
+{
+    static const std::regex option(R"(--([a-z][a-z0-9-]*)( ([A-Za-z0-9:,.+-]*[A-Za-z0-9]))?)");
+    std::string out;
+    auto last = message.cbegin();
+    for (std::sregex_iterator it(message.begin(), message.end(), option), end; it != end;
+         ++it) {
+        const std::smatch& m = *it;
+        const auto setting = std::find_if(shot_settings().begin(), shot_settings().end(),
+                                          [&](const ShotSetting& s) { return m[1] == s.name; });
+        if (setting == shot_settings().end())
+            continue;
+        out.append(last, m[0].first);
+        out += Strutil::replace(m[1].str(), "-", "_", true);
+        const std::string word = m[3];
+        Shot scratch;
+        std::string ignored;
+        if (m[2].matched && set_shot_setting(scratch, setting->name, word, ignored))
+            out += "=" + python_literal(*setting, word);
+        else if (m[2].matched && Strutil::upper(word) == word)
+            out += "=" + word;
+        else
+            out += m[2].str();
+        last = m[0].second;
+    }
+    out.append(last, message.cend());
+    return out;
+}
+
+/// Raised as defocus.Error, with the one-line message the CLI prints, the
+/// settings named as Python keywords.
 struct Error : std::runtime_error {
-    explicit Error(const std::string& message) : std::runtime_error(error_line(message)) {}
+    explicit Error(const std::string& message)
+        : std::runtime_error(error_line(python_words(message)))
+    {
+    }
 };
 
 /// Thrown out of a render at a stage boundary once Ctrl-C was pressed.
@@ -265,13 +316,54 @@ std::vector<std::string> render_sequence(const Shot& shot, const std::string& pa
     return outputs;
 }
 
-/// An ImageBuf of `channels` float channels over (0, 0, width, height)
-/// from C-contiguous float32 pixels (checked by the Python side).
+/// Where arrays lie: the data window's origin (x, y) and the display
+/// window (x, y, width, height), as OpenImageIO's ImageSpec has them.
+using Windows = std::tuple<int, int, int, int, int, int>;
+
+/// `spec` placed at the windows.
+void place(ImageSpec& spec, const Windows& windows)
+{
+    std::tie(spec.x, spec.y, spec.full_x, spec.full_y, spec.full_width, spec.full_height) =
+        windows;
+}
+
+/// The camera values `frame` of a shot renders with (frame_camera), by
+/// their Python names: camera_from_file's header values included, the
+/// keyframes taken at the frame.
+py::dict resolved_camera(const Shot& shot, std::optional<int> frame)
+{
+    const int at = frame_or_first(shot, frame);
+    Camera camera;
+    CameraOrigins origins;
+    std::string error;
+    bool found;
+    {
+        py::gil_scoped_release release;
+        found = frame_camera(shot, at, camera, origins, error);
+    }
+    check(found, error);
+    auto pixel = [](double x, double y) -> py::object {
+        return std::isnan(x) ? py::none() : py::object(py::make_tuple(x, y));
+    };
+    py::dict values;
+    values["focal"]          = camera.focal_length_mm;
+    values["fstop"]          = camera.fstop;
+    values["focus"]          = camera.focus_distance;
+    values["sensor"]         = camera.sensor_width_mm;
+    values["focus_at"]       = pixel(camera.focus_x, camera.focus_y);
+    values["focus_tilt"]     = py::make_tuple(camera.tilt_deg[0], camera.tilt_deg[1]);
+    values["optical_centre"] = pixel(camera.optical_x, camera.optical_y);
+    return values;
+}
+
+/// An ImageBuf of `channels` float channels from C-contiguous float32
+/// pixels (checked by the Python side), placed at the windows.
 ImageBuf buffer(const py::array_t<float, py::array::c_style>& pixels,
-                std::vector<std::string> names)
+                std::vector<std::string> names, const Windows& windows)
 {
     const int height = int(pixels.shape(0)), width = int(pixels.shape(1));
     ImageSpec spec(width, height, int(names.size()), TypeFloat);
+    place(spec, windows);
     spec.channelnames = std::move(names);
     if (spec.nchannels == 4)
         spec.alpha_channel = 3;
@@ -286,18 +378,22 @@ ImageBuf buffer(const py::array_t<float, py::array::c_style>& pixels,
 using ArrayLayers = std::vector<std::tuple<std::string, py::array_t<float, py::array::c_style>,
                                            py::array_t<float, py::array::c_style>>>;
 
-/// A scene in memory: `layers` given as such, or (`flat`) one render to
-/// cut into layers.
-Scene array_scene(const ArrayLayers& layers, bool flat)
+/// A scene in memory, named `source` in messages. One render is flat and
+/// is cut into layers, as the CLI cuts a file of one part; several are
+/// layers given as such.
+Scene array_scene(const ArrayLayers& layers, const Windows& windows, const char* source)
 {
     Scene scene;
-    scene.source = flat ? "decompose()" : "render_layers()";
+    scene.source = source;
+    const bool flat = layers.size() == 1;
     for (const auto& [name, rgba, z] : layers) {
-        Layer layer { name, buffer(rgba, { "R", "G", "B", "A" }), buffer(z, { "Z" }) };
+        Layer layer { name, buffer(rgba, { "R", "G", "B", "A" }, windows),
+                      buffer(z, { "Z" }, windows) };
         (flat ? scene.flat : scene.layers).push_back(std::move(layer));
     }
     const ImageSpec& first = (flat ? scene.flat : scene.layers).front().color.spec();
     scene.spec = ImageSpec(first.width, first.height, 5, TypeFloat);
+    place(scene.spec, windows);
     scene.spec.channelnames = { "R", "G", "B", "A", "Z" };
     scene.spec.alpha_channel = 3;
     scene.spec.z_channel = 4;
@@ -312,10 +408,10 @@ Shot with_input(const Shot& settings, const Scene& scene)
     return shot;
 }
 
-py::tuple render_layers(const ArrayLayers& layers, const Shot& settings,
+py::tuple render_layers(const ArrayLayers& layers, const Windows& windows, const Shot& settings,
                         std::optional<int> frame, bool crop)
 {
-    Scene scene = array_scene(layers, false);
+    Scene scene = array_scene(layers, windows, "render_layers()");
     const Shot shot = with_input(settings, scene);
     const ShotAssets assets = read_assets(shot);
     const int at = frame ? *frame : 1;
@@ -331,10 +427,10 @@ py::tuple render_layers(const ArrayLayers& layers, const Shot& settings,
 
 /// The layers a flat render is cut into, back to front: (name, RGBA, Z)
 /// over the render's window, scene-linear.
-std::vector<py::tuple> decompose(const ArrayLayers& render, const Shot& settings,
-                                 std::optional<int> frame)
+std::vector<py::tuple> decompose(const ArrayLayers& render, const Windows& windows,
+                                 const Shot& settings, std::optional<int> frame)
 {
-    Scene scene = array_scene(render, true);
+    Scene scene = array_scene(render, windows, "decompose()");
     const Shot shot = with_input(settings, scene);
     const ROI window = scene.spec.roi();
     const ShotAssets assets = read_assets(shot);
@@ -393,6 +489,7 @@ PYBIND11_MODULE(_defocus, m)
             check(shot_frames(shot, frames, error), error);
             return frames;
         })
+        .def("resolved_camera", &resolved_camera)
         .def("settings_hash", [](const Shot& shot, int frame) {
             return settings_hash(shot, frame);
         })

@@ -200,6 +200,22 @@ bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, Layer
                        nthreads, timer);
 }
 
+bool frame_camera(const Shot& shot, int frame, Camera& camera, CameraOrigins& origins,
+                  std::string& error)
+{
+    const std::vector<std::string> inputs = frame_inputs(shot, frame);
+    const ReadOptions options = frame_read_options(shot, frame);
+    Scene scene;
+    if (shot.focus_at.empty() ? !read_scene_spec(inputs, options, scene.spec, error)
+                              : !read_scene(inputs, options, scene, error))
+        return false;
+    sanitize(scene);
+    if (shot_camera(shot, scene, frame, camera, origins, error))
+        return true;
+    error = Strutil::join(inputs, " ") + ": " + error;
+    return false;
+}
+
 bool prepare_layers(Scene&& scene, const Shot& shot, int frame, const ShotAssets& assets,
                     LayeredScene& layered, FrameResult& out, std::string& error,
                     const StageCallback& on_stage, int nthreads)

@@ -18,13 +18,19 @@ with ``_`` for ``-`` (``fstop``, ``focus_at``, ``max_blur``)::
     defocus.render_sequence(shot, "dof.#.exr", frames=range(1001, 1041))
     shot.save("shot.dof")                       # defocus shot.dof -o ... renders it
 
+An unset setting reads None (``shot.fstop``); ``shot.resolved(frame)``
+gives what a render of that frame uses, the input's header included.
+
 Layers you already hold render from memory: ``render_layers([(rgba, z),
 ...], focus=3.0)`` with premultiplied RGBA and depth as float32 arrays, or
 OpenImageIO ImageBufs (``import OpenImageIO``; ``render_imagebuf`` gives an
-ImageBuf back with the result's windows and metadata).
+ImageBuf back with the result's windows and metadata). One (rgba, z) is a
+flat render and is cut into layers, as the command cuts it; pass
+``origin=(x, y)`` and ``display_window=(x, y, w, h)`` for overscan.
 
 Failures raise ``defocus.Error`` (a RuntimeError) with the command's
-one-line message; bad arrays raise ValueError. Renders release the GIL, so
+one-line message, settings named as keywords (``focus=`` for the command's
+``--focus``); bad arrays raise ValueError. Renders release the GIL, so
 threads render side by side, and Ctrl-C stops a render at its next stage
 with KeyboardInterrupt, leaving no partial file.
 """
@@ -116,9 +122,9 @@ def _frames_text(value: Any) -> str:
     return str(value)
 
 
-def _to_text(python_name: str, value: Any) -> str:
+def _to_text(name: str, value: Any) -> str:
     """A Python value as the text the command line gives the setting."""
-    name, _, _, kind = _SETTINGS[python_name]
+    kind = _SETTINGS[name][3]
     if value is None:
         return ""
     if kind == _NUMBER:
@@ -177,8 +183,10 @@ class Shot:
     ``defocus.settings()`` lists them). A keyframed setting (focus, focal,
     fstop, focus_at, ...) takes a number, or a dict {frame: value}; a pixel
     setting (focus_at, optical_centre) takes (x, y). Settings read and
-    write as attributes; an unset one reads None. ``Shot.load`` reads a
-    .dof scene file and ``save`` writes one.
+    write as attributes; an unset one reads None, and ``resolved(frame)``
+    gives the values a render of that frame uses (defaults, the input's
+    header, keyframes taken at the frame). ``Shot.load`` reads a .dof scene
+    file and ``save`` writes one.
     """
 
     __slots__ = ("_native",)
@@ -225,6 +233,19 @@ class Shot:
         whose output has the same."""
         return self._native.settings_hash(frame)
 
+    def resolved(self, frame: Optional[int] = None) -> Dict[str, Any]:
+        """Every setting as a render of `frame` (default: the shot's first)
+        uses it: {name: value}. Unset settings take their defaults; with
+        camera_from_file, the camera values the input's header records
+        (focal, fstop, focus, sensor) take the place of unset ones; the
+        keyframed camera values are taken at the frame, and with focus_at
+        the focus is the depth measured there. Reads the input's header
+        (its pixels too with focus_at); raises Error as render() does."""
+        values = {name: _from_text(name, self._native.get(native))
+                  for name, (native, *_r) in _SETTINGS.items()}
+        values.update(self._native.resolved_camera(frame))
+        return values
+
     def check(self) -> None:
         """Raises Error with the first reason the shot cannot be rendered."""
         self._native.check()
@@ -253,7 +274,10 @@ class Shot:
     def __getattr__(self, name: str) -> Any:
         if name not in _SETTINGS:
             raise AttributeError(f"Shot has no setting '{name}' (defocus.settings() lists them)")
-        return _from_text(name, self._native.get(_SETTINGS[name][0]))
+        native = _SETTINGS[name][0]
+        if not self._native.is_given(native):
+            return None
+        return _from_text(name, self._native.get(native))
 
     def __setattr__(self, name: str, value: Any) -> None:
         if name == "inputs":
@@ -407,15 +431,19 @@ def _array(value: Any, what: str, channels: int) -> np.ndarray:
     return np.ascontiguousarray(value)
 
 
+def _imagebuf_windows(value: Any) -> Optional[Tuple[int, ...]]:
+    """An ImageBuf's data window origin and display window, as _windows
+    gives them; None for an array."""
+    if type(value).__name__ != "ImageBuf":
+        return None
+    spec = value.spec()
+    return (spec.x, spec.y, spec.full_x, spec.full_y, spec.full_width, spec.full_height)
+
+
 def _layers(layers: Sequence[Any], what: str) -> List[Tuple[str, np.ndarray, np.ndarray]]:
     out = []
     for i, layer in enumerate(layers):
-        if isinstance(layer, dict):
-            name, rgba, z = layer.get("name", f"layer{i}"), layer.get("rgba"), layer.get("z")
-        elif isinstance(layer, (tuple, list)) and len(layer) in (2, 3):
-            name, (rgba, z) = (layer[2] if len(layer) == 3 else f"layer{i}"), layer[:2]
-        else:
-            raise ValueError(f"{what}[{i}]: expected (rgba, z) or (rgba, z, name)")
+        name, rgba, z = _layer_parts(layer, i, what)
         rgba = _array(rgba, f"{what}[{i}] rgba", 4)
         z = _array(z, f"{what}[{i}] z", 1)
         if z.shape != rgba.shape[:2]:
@@ -430,37 +458,109 @@ def _layers(layers: Sequence[Any], what: str) -> List[Tuple[str, np.ndarray, np.
     return out
 
 
+def _layer_parts(layer: Any, i: int, what: str) -> Tuple[Any, Any, Any]:
+    """(name, rgba, z) of one layer as render_layers takes it."""
+    if isinstance(layer, dict):
+        return layer.get("name", f"layer{i}"), layer.get("rgba"), layer.get("z")
+    if isinstance(layer, (tuple, list)) and len(layer) in (2, 3):
+        return (layer[2] if len(layer) == 3 else f"layer{i}"), layer[0], layer[1]
+    raise ValueError(f"{what}[{i}]: expected (rgba, z) or (rgba, z, name)")
+
+
+def _whole_pixels(value: Any, count: int, what: str) -> Tuple[int, ...]:
+    try:
+        values = tuple(value)
+    except TypeError:
+        values = ()
+    if len(values) != count or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool)
+                                       for v in values):
+        form = "(x, y)" if count == 2 else "(x, y, width, height)"
+        raise ValueError(f"{what}: expected {form} in whole pixels, got {value!r}")
+    return tuple(int(v) for v in values)
+
+
+def _windows(layers: Sequence[Any], arrays: List[Tuple[str, np.ndarray, np.ndarray]],
+             origin: Any, display_window: Any, what: str) -> Tuple[int, ...]:
+    """Where the arrays lie, as (x, y, full_x, full_y, full_width,
+    full_height): the data window's origin and the display window as given,
+    else those of the ImageBufs passed, else (0, 0) and the arrays' extent."""
+    bufs = None
+    for i, layer in enumerate(layers):
+        for part in _layer_parts(layer, i, what)[1:]:
+            found = _imagebuf_windows(part)
+            if found is not None and bufs is not None and found != bufs:
+                raise ValueError(f"{what}[{i}]: an ImageBuf whose data or display window "
+                                 f"differs from the first ImageBuf's")
+            bufs = bufs or found
+    height, width = arrays[0][1].shape[:2]
+    xy = _whole_pixels(origin, 2, "origin") if origin is not None else (bufs or (0, 0))[:2]
+    if display_window is not None:
+        full = _whole_pixels(display_window, 4, "display_window")
+        if full[2] <= 0 or full[3] <= 0:
+            raise ValueError(f"display_window: {full} is empty")
+    else:
+        full = bufs[2:] if bufs else (*xy, width, height)
+    windows = (*xy, *full)
+    if bufs and windows != bufs:
+        raise ValueError(f"{what}: origin and display_window {windows} differ from the "
+                         f"ImageBufs' {bufs}: give them once")
+    return windows
+
+
 def render_layers(layers: Sequence[Any], shot: Union[Shot, Dict[str, Any], None] = None,
                   frame: Optional[int] = None, crop: bool = False,
-                  camera: Optional[Dict[str, Any]] = None, **settings: Any) -> np.ndarray:
+                  camera: Optional[Dict[str, Any]] = None,
+                  origin: Optional[Tuple[int, int]] = None,
+                  display_window: Optional[Tuple[int, int, int, int]] = None,
+                  **settings: Any) -> np.ndarray:
     """Renders layers held in memory, as defocus renders the same layers
-    from a multi-part EXR.
+    from a file.
 
     layers: (rgba, z) or (rgba, z, name) per layer, in any order (they are
     sorted by depth): rgba premultiplied float32, height x width x 4; z
     planar camera-space depth in metres, float32, height x width. Either may
-    be an OpenImageIO.ImageBuf. All layers share one size, which is the
-    display window. The settings come from `shot` (a Shot, whose inputs
-    are unused, or a dict of settings), then `camera` (a dict), then
-    keywords: render_layers(layers, focal=85,
-    fstop=1.4, focus=3.0, aperture="disc"). Returns what render() returns.
+    be an OpenImageIO.ImageBuf. One layer is a flat render, which is cut
+    into depth layers as defocus cuts a file of one part (layers=N sets how
+    many); several are layers, spread as they are, as the parts of a
+    multi-part EXR.
+
+    The arrays cover the data window, which all layers share: `origin` is
+    its top left (x, y), and `display_window` (x, y, width, height) is the
+    frame the camera sees, which sets the blur's scale in pixels, as in
+    OpenImageIO's ImageSpec. By default they are those of the ImageBufs
+    given, else (0, 0) and the arrays' own extent: pass both for a render
+    with overscan.
+
+    The settings come from `shot` (a Shot, whose inputs are unused, or a
+    dict of settings), then `camera` (a dict), then keywords:
+    render_layers(layers, focal=85, fstop=1.4, focus=3.0, aperture="disc").
+    Returns what render() returns.
     """
     s = _settings_shot(shot, camera, settings)
-    return _defocus.render_layers(_layers(layers, "layers"), s._native, frame, crop)[0]
+    arrays = _layers(layers, "layers")
+    windows = _windows(layers, arrays, origin, display_window, "layers")
+    return _defocus.render_layers(arrays, windows, s._native, frame, crop)[0]
 
 
 def decompose(rgba: Any, z: Any, shot: Union[Shot, Dict[str, Any], None] = None,
               frame: Optional[int] = None,
               camera: Optional[Dict[str, Any]] = None,
+              origin: Optional[Tuple[int, int]] = None,
+              display_window: Optional[Tuple[int, int, int, int]] = None,
               **settings: Any) -> List[Tuple[np.ndarray, np.ndarray, str]]:
     """Cuts a flat render (premultiplied RGBA and depth, float32 arrays or
     ImageBufs) into depth layers, as defocus does for a flat input under
-    the camera (settings as for render_layers; layers=N asks for N).
+    the camera (settings, origin and display_window as for render_layers;
+    layers=N asks for N).
 
-    Returns (rgba, z, name) per layer, back to front, each over the whole
-    render (transparent where the layer has nothing), in scene-linear
-    light: render_layers() takes them as they are.
+    Returns (rgba, z, name) per layer, back to front, each over the
+    render's data window (transparent where the layer has nothing), in
+    scene-linear light: render_layers() takes them as they are, with the
+    same origin and display_window.
     """
     s = _settings_shot(shot, camera, settings)
-    layers = _defocus.decompose(_layers([(rgba, z, "render")], "render"), s._native, frame)
+    given = [(rgba, z, "render")]
+    arrays = _layers(given, "render")
+    windows = _windows(given, arrays, origin, display_window, "render")
+    layers = _defocus.decompose(arrays, windows, s._native, frame)
     return [(rgba_, z_, name) for name, rgba_, z_ in layers]

@@ -145,11 +145,16 @@ def layered_arrays(width=96, height=64):
     return [(far, depth(20.0), "far"), (mid, depth(3.0), "mid"), (near, depth(0.8), "near")]
 
 
-def write_layers(layers, path):
-    """A multi-part EXR, one float RGBA+Z part per layer."""
+def write_layers(layers, path, origin=(0, 0), display=None):
+    """A multi-part EXR, one float RGBA+Z part per layer, its data window at
+    `origin` in the display window `display` (x, y, width, height; default
+    the data window)."""
     specs = []
     for rgba, z, name in layers:
         spec = oiio.ImageSpec(rgba.shape[1], rgba.shape[0], 5, oiio.FLOAT)
+        spec.x, spec.y = origin
+        if display:
+            spec.full_x, spec.full_y, spec.full_width, spec.full_height = display
         spec.channelnames = ("R", "G", "B", "A", "Z")
         spec.alpha_channel, spec.z_channel = 3, 4
         spec.attribute("name", name)
@@ -225,17 +230,144 @@ def test_decompose_cuts_a_flat_render_into_layers_that_composite_back():
     assert np.allclose(out[30, 45], rgba[30, 45], rtol=1e-4)
 
 
+def striped_wall_behind_a_bar(height=64, width=96):
+    """A flat render: a near bar in front of a striped wall."""
+    rgba = np.ones((height, width, 4), np.float32)
+    rgba[(np.arange(height) // 4) % 2 == 0, :, :3] = 0.1
+    z = np.full((height, width), 20.0, np.float32)
+    rgba[:, 40:50] = (0.5, 0.5, 0.5, 1.0)
+    z[:, 40:50] = 0.8
+    return rgba, z
+
+
+def test_one_layer_is_a_flat_render_cut_into_layers_as_the_command_does(tmp_path):
+    rgba, z = striped_wall_behind_a_bar()
+    write_layers([(rgba, z, "flat")], tmp_path / "flat.exr")
+    camera = {**SMALL_CAMERA, "focus": 20.0}
+    from_file = defocus.render(defocus.Shot(inputs=[tmp_path / "flat.exr"], **camera))
+    assert np.array_equal(defocus.render_layers([(rgba, z)], **camera), from_file)
+    # The layers decompose() gives render as they are to nearly the same
+    # (they no longer say which of their pixels were rebuilt).
+    layers = defocus.decompose(rgba, z, **camera)
+    assert len(layers) >= 2
+    assert np.allclose(defocus.render_layers(layers, **camera), from_file, atol=0.01)
+
+
+def test_overscan_is_passed_as_origin_and_display_window(tmp_path):
+    # 96x64 arrays: a display window of 80x48 with 8 px of overscan around.
+    layers = layered_arrays()
+    origin, display = (-8, -8), (0, 0, 80, 48)
+    write_layers(layers, tmp_path / "overscan.exr", origin, display)
+    from_file = defocus.render(defocus.Shot(inputs=[tmp_path / "overscan.exr"], **SMALL_CAMERA))
+    ours = defocus.render_layers(layers, origin=origin, display_window=display, **SMALL_CAMERA)
+    assert np.array_equal(ours, from_file)
+    cropped = defocus.render_layers(layers, origin=origin, display_window=display, crop=True,
+                                    **SMALL_CAMERA)
+    assert cropped.shape == (48, 80, 4) and np.array_equal(cropped, from_file[8:56, 8:88])
+    # Without them the arrays are the display window: a wider frame, so
+    # the same lens blurs less in pixels.
+    assert not np.array_equal(defocus.render_layers(layers, **SMALL_CAMERA), from_file)
+    # ImageBufs bring their own windows.
+    bufs = []
+    for rgba, z, name in layers:
+        spec = oiio.ImageSpec(rgba.shape[1], rgba.shape[0], 4, oiio.FLOAT)
+        spec.x, spec.y = origin
+        spec.full_x, spec.full_y, spec.full_width, spec.full_height = display
+        color = oiio.ImageBuf(spec)
+        color.set_pixels(color.roi, rgba)
+        spec.nchannels, spec.channelnames = 1, ("Z",)
+        depth = oiio.ImageBuf(spec)
+        depth.set_pixels(depth.roi, z[..., None])
+        bufs.append((color, depth, name))
+    assert np.array_equal(defocus.render_layers(bufs, **SMALL_CAMERA), from_file)
+    with pytest.raises(ValueError, match=r"differ from the ImageBufs'"):
+        defocus.render_layers(bufs, origin=(0, 0), **SMALL_CAMERA)
+    with pytest.raises(ValueError, match=r"display_window: expected \(x, y, width, height\)"):
+        defocus.render_layers(layers, display_window=(0, 0, 80), **SMALL_CAMERA)
+    with pytest.raises(ValueError, match=r"display_window: \(0, 0, 0, 48\) is empty"):
+        defocus.render_layers(layers, display_window=(0, 0, 0, 48), **SMALL_CAMERA)
+
+
+def test_unset_settings_read_none_and_resolved_gives_what_a_render_uses(tmp_path):
+    # A render whose header records its lens: f/5.6 at 85 mm.
+    spec = oiio.ImageSpec(96, 64, 5, oiio.FLOAT)
+    spec.channelnames = ("R", "G", "B", "A", "Z")
+    spec.alpha_channel, spec.z_channel = 3, 4
+    spec.attribute("FNumber", 5.6)
+    spec.attribute("CameraFocalLength", 85.0)
+    rgba, z = striped_wall_behind_a_bar()
+    out = oiio.ImageOutput.create(str(tmp_path / "lens.exr"))
+    assert out.open(str(tmp_path / "lens.exr"), spec)
+    assert out.write_image(np.concatenate([rgba, z[..., None]], axis=2))
+    out.close()
+    shot = defocus.Shot(inputs=[tmp_path / "lens.exr"], focus={1: 2.0, 11: 8.0}, sensor=5)
+    assert shot.fstop is None and shot.focal is None and shot.aperture is None
+    assert shot.sensor == 5 and shot.focus == {1: 2.0, 11: 8.0}
+    used = defocus.render_imagebuf(shot, frame=6).spec()
+    resolved = shot.resolved(6)
+    assert resolved["fstop"] == pytest.approx(5.6) == used.get_float_attribute("defocus:fNumber")
+    assert resolved["focal"] == pytest.approx(85.0)
+    assert resolved["focus"] == pytest.approx(used.get_float_attribute("defocus:focusDistance"))
+    assert 2.0 < resolved["focus"] < 8.0  # the keyframes taken at frame 6
+    assert resolved["aperture"] == "disc" and resolved["blades"] == 6
+    # Given values win over the header, as in a render.
+    shot.fstop = 2.0
+    assert shot.fstop == 2.0 and shot.resolved(6)["fstop"] == 2.0
+    # Focusing at a pixel measures the depth there.
+    shot.focus_at = (20, 10)
+    assert shot.focus is None and shot.resolved()["focus"] == pytest.approx(20.0)
+    shot.camera_from_file = False
+    assert shot.resolved()["fstop"] == 2.0 and shot.resolved()["focal"] == 50.0
+
+
+def test_polygon_settings_are_refused_alike_everywhere(example, tmp_path):
+    shot = defocus.Shot(inputs=[example], blades=5, **CAMERA)
+    with pytest.raises(defocus.Error, match=r'^blades applies only to aperture="polygon" '
+                                            r'\(the aperture is disc\)$'):
+        shot.check()
+    with pytest.raises(defocus.Error, match=r"blades applies only"):
+        defocus.render(shot)
+    shot.aperture = "polygon"
+    shot.check()
+    code, message = cli(example, "-o", tmp_path / "out.exr", *CAMERA_ARGS, "--roundness", "0.5")
+    assert code != 0 and message.endswith("--roundness applies only to --aperture polygon "
+                                          "(the aperture is disc)")
+    (tmp_path / "shot.dof").write_text(
+        f'{{"version": 1, "inputs": ["{example}"], "camera": {{"focus": 4}}, '
+        f'"aperture": {{"rotation": 10}}}}')
+    code, message = cli(tmp_path / "shot.dof", "-o", tmp_path / "out.exr")
+    assert code != 0 and "aperture.rotation applies only to" in message
+    with pytest.raises(defocus.Error, match=r"aperture.rotation applies only to"):
+        defocus.Shot.load(tmp_path / "shot.dof").check()
+
+
+def test_errors_name_python_keywords(example, tmp_path):
+    cases = [
+        (defocus.Shot(inputs=[example], camera_from_file=False),
+         "focus=DIST or focus_at=X,Y is required: where the focus is"),
+        (defocus.Shot(inputs=[example], focus=3, output="focusmap", aov="confidence"),
+         'aov applies to the defocused image, not to output="focusmap"'),
+        (defocus.Shot(inputs=[example], focus_at=(5000, 10)),
+         "focus_at=(5000, 10) is outside the 1280x720 display window"),
+        (defocus.Shot(inputs=[example], focus=3, memory_limit="1M"),
+         "more than the memory limit of 1 MB (memory_limit)"),
+    ]
+    for shot, words in cases:
+        with pytest.raises(defocus.Error) as raised:
+            defocus.render(shot)
+        assert words in str(raised.value)
+        assert "--" not in str(raised.value)
+    with pytest.raises(defocus.Error, match=r"^focus_at: expected a pixel \(x, y\), got 'a'$"):
+        defocus.Shot(focus_at="a")
+
+
 def test_the_confidence_aov_marks_rebuilt_light_as_the_command_does(example, tmp_path):
     # Layered input hides nothing: the channel is there, and 0.
     layered = defocus.render(defocus.Shot(inputs=[example], aov="confidence", **CAMERA))
     assert layered.shape[2] == 5 and not layered[..., 4].any()
     # A flat render: a near bar, blurred, hides part of a striped wall.
     height, width = 64, 96
-    rgba = np.ones((height, width, 4), np.float32)
-    rgba[(np.arange(height) // 4) % 2 == 0, :, :3] = 0.1
-    z = np.full((height, width), 20.0, np.float32)
-    rgba[:, 40:50] = (0.5, 0.5, 0.5, 1.0)
-    z[:, 40:50] = 0.8
+    rgba, z = striped_wall_behind_a_bar(height, width)
     write_layers([(rgba, z, "flat")], tmp_path / "flat.exr")
     camera = {**SMALL_CAMERA, "focus": 20.0}
     ours = defocus.render(defocus.Shot(inputs=[tmp_path / "flat.exr"], aov="confidence",

@@ -71,6 +71,14 @@ bool prepare_layers(Scene&& scene, const Shot& shot, int frame, const ShotAssets
 bool frame_spec(const Shot& shot, int frame, const ShotAssets& assets, OIIO::ImageSpec& spec,
                 std::string& error);
 
+/// The camera `frame` of a shot renders with, and where each value came
+/// from, as render_frame() finds it: the shot's settings, then the inputs'
+/// headers (camera_from_file). Reads pixels only when the shot focuses at
+/// a pixel, to measure the depth there. False with `error` a one-line
+/// message naming the file and the problem.
+bool frame_camera(const Shot& shot, int frame, Camera& camera, CameraOrigins& origins,
+                  std::string& error);
+
 /// Renders `frame` of a shot (the inputs' frame patterns and the keyframes
 /// are taken at it) with its assets, read once for all frames
 /// (read_shot_assets). False with `error` a one-line message naming the
