@@ -52,18 +52,6 @@ std::vector<std::string> option_names(const ArgParse& ap)
     return names;
 }
 
-/// The terminal's width; $COLUMNS, else 80, when stdout is not a terminal.
-/// (OIIO 2.4's Sysutil::terminal_columns() reads an unset size then.)
-int terminal_columns()
-{
-    struct winsize size = {};
-    if (isatty(STDOUT_FILENO) && ioctl(STDOUT_FILENO, TIOCGWINSZ, &size) == 0 && size.ws_col > 0)
-        return size.ws_col;
-    const char* columns = std::getenv("COLUMNS");
-    const int given = columns ? std::atoi(columns) : 0;
-    return given > 0 ? given : 80;
-}
-
 /// `line` cut into lines of at most `width` characters, the later ones
 /// indented to where its text starts: after the option for an option's
 /// line, else its own indent. No later line starts with '-', which would
@@ -104,6 +92,16 @@ std::string wrap_help_line(const std::string& line, size_t width)
 }
 
 }  // namespace
+
+int terminal_columns()
+{
+    struct winsize size = {};
+    if (isatty(STDOUT_FILENO) && ioctl(STDOUT_FILENO, TIOCGWINSZ, &size) == 0 && size.ws_col > 0)
+        return size.ws_col;
+    const char* columns = std::getenv("COLUMNS");
+    const int given = columns ? std::atoi(columns) : 0;
+    return given > 0 ? given : 80;
+}
 
 std::string unknown_option_hint(const ArgParse& ap, const std::string& error)
 {

@@ -21,6 +21,11 @@ int parse_arguments(OIIO::ArgParse& ap, int argc, const char* argv[]);
 /// ('Invalid option "--focsu": did you mean --focus?').
 std::string unknown_option_hint(const OIIO::ArgParse& ap, const std::string& error);
 
+/// The width of the terminal stdout goes to; $COLUMNS, else 80, when it
+/// is not a terminal. (OIIO 2.4's Sysutil::terminal_columns() reads an
+/// unset size then.)
+int terminal_columns();
+
 /// --help: the help, its long lines wrapped to the terminal's width (80
 /// columns when stdout is not a terminal), and the parse stopped. For an
 /// ArgParse made with add_help(false); OIIO 2.4 prints lines whole.

@@ -4,9 +4,10 @@
 #include <cstdio>
 
 #include <OpenImageIO/strutil.h>
-#include <OpenImageIO/sysutil.h>
 
 #include <defocus/error_line.h>
+
+#include "cli_options.h"
 
 namespace defocus {
 
@@ -14,10 +15,11 @@ using OIIO::Strutil::fmt::format;
 
 namespace {
 
-/// The terminal's width, or 80 where it does not say.
+/// The width of a progress line: the terminal's, less the column a
+/// terminal wraps at.
 size_t line_width()
 {
-    const int columns = OIIO::Sysutil::terminal_columns();
+    const int columns = terminal_columns();
     return size_t(columns >= 40 ? columns - 1 : 79);
 }
 

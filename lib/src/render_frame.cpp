@@ -82,9 +82,9 @@ void describe_output(ImageSpec& spec, const ImageSpec& input, const Shot& shot,
     // stays named, and the image's history gains how this step was made.
     const std::string ours = std::string("defocus ") + version();
     const std::string software = input.get_string_attribute("Software");
-    spec.attribute("Software", software.empty() || Strutil::ends_with(software, ours)
-                                   ? (software.empty() ? ours : software)
-                                   : software + "; " + ours);
+    spec.attribute("Software", software.empty()                    ? ours
+                               : Strutil::ends_with(software, ours) ? software
+                                                                    : software + "; " + ours);
     std::string history = input.get_string_attribute("Exif:ImageHistory");
     if (!history.empty() && !Strutil::ends_with(history, "\n"))
         history += "\n";
