@@ -32,21 +32,33 @@ BlurField::BlurField(const Layer& flat, const CircleOfConfusion& coc, int nthrea
     }, by_rows(nthreads));
     // A pixel is at a discontinuity where any 3x3 neighbour's CoC differs
     // from its own by more than the threshold (NaN, nothing there, never
-    // does).
+    // does): where the neighbourhood's largest CoC lies more than it above
+    // its own, or the least more than it below. Rounding keeps the order
+    // of differences, so this is the test of each neighbour, exactly.
     const int width = m_roi.width();
     parallel_for(0, m_roi.height(), [&](int y) {
         const float* rows[3];
         for (int j = 0; j < 3; ++j)
             rows[j] = &m_blur[size_t(std::clamp(y + j - 1, 0, m_roi.height() - 1)) * width];
+        // Per column, the largest and least CoC of the three rows (NaN
+        // compares false, so it never wins).
+        std::vector<float> most(width), least(width);
+        for (int x = 0; x < width; ++x) {
+            float hi = -INFINITY, lo = INFINITY;
+            for (const float* row : rows) {
+                hi = row[x] > hi ? row[x] : hi;
+                lo = row[x] < lo ? row[x] : lo;
+            }
+            most[x] = hi;
+            least[x] = lo;
+        }
         uint8_t* out = &m_discontinuity[size_t(y) * width];
         for (int x = 0; x < width; ++x) {
-            const float own = rows[1][x];
             const int x0 = std::max(x - 1, 0), x1 = std::min(x + 1, width - 1);
-            bool step = false;
-            for (int j = 0; j < 3 && !step; ++j)
-                for (int nx = x0; nx <= x1; ++nx)
-                    step |= std::abs(rows[j][nx] - own) > discontinuity;
-            out[x] = step;
+            const float hi = std::max({ most[x0], most[x], most[x1] });
+            const float lo = std::min({ least[x0], least[x], least[x1] });
+            const float own = rows[1][x];
+            out[x] = hi - own > discontinuity || own - lo > discontinuity;
         }
     }, by_rows(nthreads));
 }

@@ -13,6 +13,7 @@
 #include <defocus/spread/footprint.h>
 
 #include "layers/blur_field.h"
+#include "util/fresh_image.h"
 #include "util/parallel_rows.h"
 
 namespace defocus {
@@ -310,8 +311,8 @@ std::vector<uint8_t> extract_layer(const Source& frags, int k, const ROI& window
     depth_spec.nchannels = 1;
     depth_spec.channelnames = { "Z" };
     // Every pixel is written below.
-    layer.color.reset(color_spec, InitializePixels::No);
-    layer.depth.reset(depth_spec, InitializePixels::No);
+    reset_for_overwrite(layer.color, color_spec, nthreads);
+    reset_for_overwrite(layer.depth, depth_spec, nthreads);
     float* const color = static_cast<float*>(layer.color.localpixels());
     float* const depth = static_cast<float*>(layer.depth.localpixels());
     std::vector<uint8_t> hidden(window.npixels());
