@@ -6,13 +6,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <iterator>
 #include <numeric>
 
 #include <OpenImageIO/parallel.h>
 
 #include "layers/continued_lines.h"
+#include "util/bounding_box.h"
 #include "util/float_pixels.h"
+#include "util/fresh_image.h"
 #include "util/parallel_rows.h"
 
 namespace defocus {
@@ -114,28 +115,6 @@ bool pull(const Level& coarse, int x, int y, float mean[5])
     return true;
 }
 
-/// The bounding box of the hidden pixels of `roi`; empty (width 0) when
-/// there are none.
-ROI hidden_extent(const std::vector<uint8_t>& holes, const ROI& roi)
-{
-    int x0 = roi.xend, x1 = roi.xbegin, y0 = roi.yend, y1 = roi.ybegin;
-    for (int y = roi.ybegin; y < roi.yend; ++y) {
-        const uint8_t* row = &holes[size_t(y - roi.ybegin) * roi.width()];
-        auto flagged = [](uint8_t h) { return h != 0; };
-        const uint8_t* first = std::find_if(row, row + roi.width(), flagged);
-        if (first == row + roi.width())
-            continue;
-        const int last = int(std::find_if(std::make_reverse_iterator(row + roi.width()),
-                                          std::make_reverse_iterator(first), flagged).base()
-                             - row) - 1;
-        x0 = std::min(x0, roi.xbegin + int(first - row));
-        x1 = std::max(x1, roi.xbegin + last + 1);
-        y0 = std::min(y0, y);
-        y1 = y + 1;
-    }
-    return x1 > x0 ? ROI(x0, x1, y0, y1, 0, 1, 0, 4) : ROI(0, 0, 0, 0, 0, 1, 0, 4);
-}
-
 /// Push-pull levels above the pixels for a fill up to `max_distance`:
 /// as many as make a cell span it.
 int pyramid_levels(double max_distance)
@@ -190,13 +169,13 @@ void fill_hidden_background(Layer& layer, const std::vector<uint8_t>& holes,
     const FloatPixels depth(layer.depth, ROI(roi.xbegin, roi.xend, roi.ybegin, roi.yend, 0, 1, 0, 1));
     const float highlight = mean_brightness(color, holes, nthreads);
     // Only the pixels around the holes matter, as far as the fill reaches.
-    const ROI hidden = hidden_extent(holes, roi);
+    auto is_hidden = [&](int x, int y) {
+        return holes[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)] != 0;
+    };
+    const ROI hidden = bounding_box(roi, is_hidden, nthreads);
     if (hidden.width() == 0)
         return;
     const ROI window = hidden_background_window(hidden, roi, max_distance);
-    auto is_hidden = [&](int x, int y) {
-        return holes[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)];
-    };
 
     // The pyramid starts at 2x2 pixels a cell: the pixels themselves are
     // read where they are, and only the hidden ones are written.
@@ -261,7 +240,7 @@ void fill_hidden_background(Layer& layer, const std::vector<uint8_t>& holes,
     ImageSpec rebuilt_spec(window, TypeUInt8);
     rebuilt_spec.nchannels = 1;
     rebuilt_spec.channelnames = { "rebuilt" };
-    layer.rebuilt.reset(rebuilt_spec, InitializePixels::Yes);
+    reset_zeroed_except(layer.rebuilt, rebuilt_spec, ROI(), nthreads);
     parallel_for(window.ybegin, window.yend, [&](int y) {
         for (int x = window.xbegin; x < window.xend; ++x) {
             if (!is_hidden(x, y))

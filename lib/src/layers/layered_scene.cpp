@@ -7,6 +7,7 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/parallel.h>
 
+#include "util/bounding_box.h"
 #include "util/float_pixels.h"
 #include "util/parallel_rows.h"
 
@@ -82,32 +83,11 @@ void crop_to_content(Layer& layer, int nthreads)
 {
     const ROI roi = layer.color.roi();
     const FloatPixels pixels(layer.color, roi);
-    // Per row, the first and last pixel with any channel not zero.
-    std::vector<std::pair<int, int>> rows(roi.height(), { roi.xend, roi.xbegin - 1 });
-    parallel_for(roi.ybegin, roi.yend, [&](int y) {
-        auto carries_light = [&](int x) {
-            const float* c = pixels(x, y);
-            return c[0] != 0.0f || c[1] != 0.0f || c[2] != 0.0f || c[3] != 0.0f;
-        };
-        int first = roi.xbegin;
-        while (first < roi.xend && !carries_light(first))
-            ++first;
-        if (first == roi.xend)
-            return;
-        int last = roi.xend - 1;
-        while (!carries_light(last))
-            --last;
-        rows[y - roi.ybegin] = { first, last };
-    }, by_rows(nthreads));
-    ROI content(roi.xend, roi.xbegin, roi.yend, roi.ybegin, 0, 1, 0, 4);
-    for (int y = roi.ybegin; y < roi.yend; ++y)
-        if (const auto& [first, last] = rows[y - roi.ybegin]; first < roi.xend) {
-            content.xbegin = std::min(content.xbegin, first);
-            content.xend = std::max(content.xend, last + 1);
-            content.ybegin = std::min(content.ybegin, y);
-            content.yend = y + 1;
-        }
-    if (content.xend <= content.xbegin)
+    ROI content = bounding_box(roi, [&](int x, int y) {
+        const float* c = pixels(x, y);
+        return c[0] != 0.0f || c[1] != 0.0f || c[2] != 0.0f || c[3] != 0.0f;
+    }, nthreads);
+    if (content.width() == 0)
         content = ROI(roi.xbegin, roi.xbegin, roi.ybegin, roi.ybegin, 0, 1, 0, 4);
     if (content == roi)
         return;
