@@ -162,6 +162,13 @@ bool layer_scene(Scene&& scene, const Shot& shot, int frame, const ShotAssets& a
 
 namespace {
 
+/// What spreading holds besides the layers: the image a frame is spread
+/// into and its accumulator, float RGBA each, over `pixels`.
+double result_bytes(double pixels)
+{
+    return 2.0 * float_bytes(pixels, 4);
+}
+
 /// Whether the image a frame is spread into and its accumulator, over the
 /// inputs' data window, fit the memory limit: checked from the headers, so
 /// that a scene too large to spread is not read and sliced first (a 41
@@ -174,7 +181,7 @@ bool spread_fits(const Shot& shot, int frame, std::string& error)
     ImageSpec input;
     if (!read_scene_spec(inputs, frame_read_options(shot, frame), input, error))
         return false;
-    const double bytes = 2.0 * float_bytes(input.image_pixels(), 4);
+    const double bytes = result_bytes(double(input.image_pixels()));
     if (shot.read.memory_limit.allows(bytes))
         return true;
     error = format("{}: {}", Strutil::join(inputs, " "),
@@ -246,7 +253,7 @@ double spread_bytes(const LayeredScene& layered)
         bytes += float_bytes(grown.npixels(), 5);
         all = roi_union(all, grown);
     }
-    return bytes + 2.0 * float_bytes(all.npixels(), 4);
+    return bytes + result_bytes(double(all.npixels()));
 }
 
 /// The confidence AOV of `image`, defocused from `layered` as the shot
