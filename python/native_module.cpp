@@ -46,12 +46,14 @@ using OIIO::Strutil::fmt::format;
 
 namespace {
 
-/// A setting's value as a Python literal: a number, a pixel (x, y), or
-/// quoted text.
+/// A setting's value as a Python literal: a number, a pixel (x, y), a
+/// bool, or quoted text.
 std::string python_literal(const ShotSetting& setting, const std::string& value)
 {
     if (setting.kind == ShotValueKind::Point)
         return "(" + Strutil::replace(value, ",", ", ") + ")";
+    if (setting.kind == ShotValueKind::Switch)
+        return value == "on" ? "True" : "False";
     return Strutil::string_is<double>(value) ? value : "\"" + value + "\"";
 }
 

@@ -66,7 +66,7 @@ Error.__doc__ = """A shot, a file or a frame failed, with the defocus command's 
 message (the file and the problem). A subclass of RuntimeError."""
 
 # How each setting's value is written (ShotValueKind in shot.h).
-_NUMBER, _KEYFRAMES, _POINT, _TEXT, _PATH, _FILE_OR_NAME = range(6)
+_NUMBER, _KEYFRAMES, _POINT, _TEXT, _PATH, _FILE_OR_NAME, _SWITCH = range(7)
 _SETTINGS = {name.replace("-", "_"): (name, section, key, kind)
              for name, section, key, kind in _defocus.settings()}
 
@@ -160,6 +160,8 @@ def _from_text(python_name: str, text: str) -> Any:
         return None
     if kind == _NUMBER:
         return _number(text)
+    if kind == _SWITCH:
+        return text == "on"
     if kind in (_KEYFRAMES, _POINT):
         arity = 1 if kind == _KEYFRAMES else 2
         parts = text.split(",")

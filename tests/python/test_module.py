@@ -310,6 +310,7 @@ def test_unset_settings_read_none_and_resolved_gives_what_a_render_uses(tmp_path
     assert resolved["focus"] == pytest.approx(used.get_float_attribute("defocus:focusDistance"))
     assert 2.0 < resolved["focus"] < 8.0  # the keyframes taken at frame 6
     assert resolved["aperture"] == "disc" and resolved["blades"] == 6
+    assert resolved["camera_from_file"] is True and shot.camera_from_file is None
     # Given values win over the header, as in a render.
     shot.fstop = 2.0
     assert shot.fstop == 2.0 and shot.resolved(6)["fstop"] == 2.0
@@ -317,7 +318,12 @@ def test_unset_settings_read_none_and_resolved_gives_what_a_render_uses(tmp_path
     shot.focus_at = (20, 10)
     assert shot.focus is None and shot.resolved()["focus"] == pytest.approx(20.0)
     shot.camera_from_file = False
+    assert shot.camera_from_file is False  # a bool, not the text "off", which is true
     assert shot.resolved()["fstop"] == 2.0 and shot.resolved()["focal"] == 50.0
+    # A .dof file may say it in JSON's own words.
+    (tmp_path / "shot.dof").write_text(
+        f'{{"version": 1, "inputs": ["lens.exr"], "camera": {{"focus": 3, "from_file": false}}}}')
+    assert defocus.Shot.load(tmp_path / "shot.dof").resolved()["fstop"] == 2.8
 
 
 def test_polygon_settings_are_refused_alike_everywhere(example, tmp_path):

@@ -163,7 +163,7 @@ const std::vector<SettingRule>& rules()
         keyframes({ "focal", "camera", "focal", K::Keyframes }, &Shot::focal_length_mm, 1,
                   1e-3, 1e5),
         keyframes({ "fstop", "camera", "fstop", K::Keyframes }, &Shot::fstop, 1, 0.1, 1e4),
-        choice({ "camera-from-file", "camera", "from_file", K::Text },
+        choice({ "camera-from-file", "camera", "from_file", K::Switch },
                [](auto& s) -> auto& { return s.camera_from_file; }, parse_switch, switch_name,
                "value", "on or off"),
         number({ "sensor", "camera", "sensor", K::Number },

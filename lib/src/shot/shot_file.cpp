@@ -111,11 +111,19 @@ bool to_text(const json& value, ShotValueKind kind, std::string& text, std::stri
             break;
         text = value.get<std::string>();
         return true;
+    case ShotValueKind::Switch:
+        if (value.is_boolean())
+            text = value.get<bool>() ? "on" : "off";
+        else if (value.is_string())
+            text = value.get<std::string>();
+        else
+            break;
+        return true;
     }
     static const char* expected[] = {
         "a number", "a number or keyframes {\"frame\": number, ...}",
         "[x, y] or keyframes {\"frame\": [x, y], ...}", "a string", "a file name",
-        "a file or channel name",
+        "a file or channel name", "\"on\", \"off\", true or false",
     };
     error = format("expected {}, not {}", expected[int(kind)], value.type_name());
     return false;
@@ -135,7 +143,8 @@ json to_json(const std::string& text, ShotValueKind kind)
     case ShotValueKind::Number: return number_json(std::stod(text));
     case ShotValueKind::Text:
     case ShotValueKind::Path:
-    case ShotValueKind::FileOrName: return text;
+    case ShotValueKind::FileOrName:
+    case ShotValueKind::Switch: return text;
     case ShotValueKind::Keyframes:
     case ShotValueKind::Point: break;
     }

@@ -84,6 +84,7 @@ enum class ShotValueKind {
     Text,       ///< a JSON string
     Path,       ///< a JSON string naming a file, relative to the .dof file
     FileOrName, ///< a JSON string: a file as Path when one is there, else a name
+    Switch,     ///< "on" or "off" (true or false is read too)
 };
 
 /// One setting of a shot: its option name (the defocus command's long
