@@ -7,7 +7,6 @@
 // cancels the render at its next stage and raises KeyboardInterrupt.
 #include <algorithm>
 #include <atomic>
-#include <cmath>
 #include <chrono>
 #include <condition_variable>
 #include <exception>
@@ -344,17 +343,17 @@ py::dict resolved_camera(const Shot& shot, std::optional<int> frame)
         found = frame_camera(shot, at, camera, origins, error);
     }
     check(found, error);
-    auto pixel = [](double x, double y) -> py::object {
-        return std::isnan(x) ? py::none() : py::object(py::make_tuple(x, y));
+    auto pixel = [](const std::optional<Imath::V2d>& p) -> py::object {
+        return p ? py::object(py::make_tuple(p->x, p->y)) : py::none();
     };
     py::dict values;
     values["focal"]          = camera.focal_length_mm;
     values["fstop"]          = camera.fstop;
     values["focus"]          = camera.focus_distance;
     values["sensor"]         = camera.sensor_width_mm;
-    values["focus_at"]       = pixel(camera.focus_x, camera.focus_y);
+    values["focus_at"]       = pixel(camera.focus_pixel);
     values["focus_tilt"]     = py::make_tuple(camera.tilt_deg[0], camera.tilt_deg[1]);
-    values["optical_centre"] = pixel(camera.optical_x, camera.optical_y);
+    values["optical_centre"] = pixel(camera.axis_pixel);
     return values;
 }
 

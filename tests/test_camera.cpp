@@ -67,8 +67,8 @@ TEST_CASE("invalid cameras are named")
     CHECK_FALSE(check_camera(cam, frame, error));
     CHECK_THAT(error, Catch::Contains("optical"));
     cam = Camera();
-    cam.focus_x = 0;  // far left, on a wide lens: the plane seen edge-on there
-    cam.focus_y = 270;
+    // Far left, on a wide lens: the plane seen edge-on there.
+    cam.focus_pixel = Imath::V2d(0, 270);
     cam.focal_length_mm = 18;
     cam.tilt_deg[1] = -70;
     CHECK_FALSE(check_camera(cam, frame, error));
@@ -88,8 +88,7 @@ TEST_CASE("a tilted plane of focus is in focus where the ray of each pixel meets
     cam.focus_distance = 4.0;
     cam.tilt_deg[0] = 10.0;  // the top away from the camera
     cam.tilt_deg[1] = -5.0;  // the right side nearer
-    cam.focus_x = 700;
-    cam.focus_y = 100;
+    cam.focus_pixel = Imath::V2d(700, 100);
     const CircleOfConfusion coc(cam, frame);
     const double fpx = 50.0 / 36.0 * 960.0;
     // The plane through the focus point P0 with normal

@@ -314,8 +314,7 @@ TEST_CASE("lateral chromatic aberration: red and blue land magnified about the o
     const int light[2] = { 80, 30 };
     Camera camera = synthetic_camera(1.0);
     camera.lateral_ca = 0.02;
-    camera.optical_x = 40;  // the axis off the frame's centre
-    camera.optical_y = 60;
+    camera.axis_pixel = Imath::V2d(40, 60);  // the axis off the frame's centre
     const double ox = 40.5, oy = 60.5;
     auto centroid = [](const ImageBuf& image, int c) {
         double sum = 0.0, sx = 0.0, sy = 0.0;

@@ -118,8 +118,7 @@ bool shot_camera(const Shot& shot, const Scene& scene, int frame, Camera& camera
         if (!focus_distance_at(scene, at[0], at[1], camera.focus_distance, error,
                                2 * shot.focus_at_radius + 1))
             return false;
-        camera.focus_x = at[0];
-        camera.focus_y = at[1];
+        camera.focus_pixel = Imath::V2d(at[0], at[1]);
         origins.focus = setting_origin(shot, "focus-at");
         has_focus = true;
     }

@@ -12,11 +12,12 @@ namespace defocus {
 namespace {
 
 /// A display-window pixel as a point (its centre, pixel i's at i + 1/2);
-/// NaN: the display window's centre.
-Imath::V2d pixel_point(double x, double y, const OIIO::ROI& display)
+/// none: the display window's centre.
+Imath::V2d pixel_point(const std::optional<Imath::V2d>& pixel, const OIIO::ROI& display)
 {
-    return { std::isnan(x) ? display.xbegin + 0.5 * display.width() : x + 0.5,
-             std::isnan(y) ? display.ybegin + 0.5 * display.height() : y + 0.5 };
+    if (!pixel)
+        return { display.xbegin + 0.5 * display.width(), display.ybegin + 0.5 * display.height() };
+    return *pixel + Imath::V2d(0.5, 0.5);
 }
 
 /// The focus point's share of the tilted plane's 1/z_f: 1/z_f along the
@@ -38,7 +39,7 @@ TiltedPlane tilted_plane(const Camera& camera, const OIIO::ROI& display)
     p.centre_x = display.xbegin + 0.5 * display.width();
     p.centre_y = display.ybegin + 0.5 * display.height();
     p.focal_px = camera.focal_length_mm / camera.sensor_width_mm * display.width();
-    const Imath::V2d focus = pixel_point(camera.focus_x, camera.focus_y, display);
+    const Imath::V2d focus = pixel_point(camera.focus_pixel, display);
     p.focus_term = 1.0 - p.tan_v * (focus.x - p.centre_x) / p.focal_px
                    + p.tan_h * (focus.y - p.centre_y) / p.focal_px;
     return p;
@@ -48,7 +49,7 @@ TiltedPlane tilted_plane(const Camera& camera, const OIIO::ROI& display)
 
 Imath::V2d optical_centre(const Camera& camera, const OIIO::ROI& display)
 {
-    return pixel_point(camera.optical_x, camera.optical_y, display);
+    return pixel_point(camera.axis_pixel, display);
 }
 
 CircleOfConfusion::CircleOfConfusion(const Camera& camera, const OIIO::ROI& display)

@@ -387,8 +387,7 @@ Camera camera_at(const Shot& shot, int frame)
     }
     if (!shot.optical_centre.empty()) {
         const Keyframes::Value centre = shot.optical_centre.at(frame, Interpolation::Linear);
-        camera.optical_x = centre[0];
-        camera.optical_y = centre[1];
+        camera.axis_pixel = Imath::V2d(centre[0], centre[1]);
     }
     const Shot::SplitDiopterSetting& split = shot.split_diopter;
     if (!split.focus.empty())

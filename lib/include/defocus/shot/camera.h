@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 
 #include <Imath/ImathVec.h>
@@ -62,17 +63,18 @@ struct Camera : CameraBody {
     double focal_length_mm = 50.0;
     double fstop           = 2.8;
     double focus_distance  = 1.0;
-    /// Where the focus distance is measured, in display-window pixels;
-    /// NaN: the display window's centre (the optical axis).
-    double focus_x = NAN, focus_y = NAN;
+    /// The pixel where the focus distance is measured, in display-window
+    /// pixels; none: the display window's centre (the optical axis).
+    std::optional<Imath::V2d> focus_pixel;
     /// The plane of focus tilted (Scheimpflug) about the horizontal and
     /// the vertical axis through the focus point, in degrees: positive
     /// turns its top, and its right side, away from the camera.
     double tilt_deg[2] = { 0.0, 0.0 };
     SplitDiopter split;
-    /// Where the lens's axis meets the image, in display-window pixels,
-    /// for lateral chromatic aberration; NaN: the display window's centre.
-    double optical_x = NAN, optical_y = NAN;
+    /// The pixel where the lens's axis meets the image, in display-window
+    /// pixels, for lateral chromatic aberration; none: the display
+    /// window's centre.
+    std::optional<Imath::V2d> axis_pixel;
 };
 
 /// The circle of confusion of one camera over a display window, precomputed
@@ -158,8 +160,8 @@ const char* lens_model_name(LensModel lens);
 /// defocus:lens.
 void record_camera(OIIO::ImageSpec& spec, const Camera& camera);
 
-/// Where the lens's axis meets the image (Camera::optical_x, optical_y,
-/// else the display window's centre), with pixel i's centre at i + 1/2.
+/// Where the lens's axis meets the image (Camera::axis_pixel, else the
+/// display window's centre), with pixel i's centre at i + 1/2.
 Imath::V2d optical_centre(const Camera& camera, const OIIO::ROI& display);
 
 /// True when the camera's settings are valid over the display window; else

@@ -42,7 +42,7 @@ struct Shot {
     /// The plane of focus tilted about the horizontal and the vertical
     /// axis, degrees (Camera::tilt_deg); empty: not tilted.
     Keyframes focus_tilt;
-    /// Camera::optical_x, optical_y; empty: the display window's centre.
+    /// Camera::axis_pixel; empty: the display window's centre.
     Keyframes optical_centre;
     /// A split diopter: its line (x0, y0, x1, y1 in display-window pixels,
     /// see SplitDiopter) and the focus beyond it; empty focus: none.
