@@ -45,7 +45,7 @@
 #include <defocus/io/frames.h>
 #include <defocus/io/scene_io.h>
 #include <defocus/layers/layering.h>
-#include <defocus/shot/shot_file.h>
+#include <defocus/io/shot_file.h>
 #include <defocus/spread/spread.h>
 
 #include "memory_floor.h"

@@ -18,7 +18,7 @@
 #include <defocus/io/frames.h>
 #include <defocus/render_frame.h>
 #include <defocus/shot/option_value.h>
-#include <defocus/shot/shot_file.h>
+#include <defocus/io/shot_file.h>
 
 OIIO_PLUGIN_NAMESPACE_BEGIN
 

@@ -31,7 +31,7 @@
 #include <defocus/io/scene_io.h>
 #include <defocus/io/settings_hash.h>
 #include <defocus/render_frame.h>
-#include <defocus/shot/shot_file.h>
+#include <defocus/io/shot_file.h>
 #include <defocus/version.h>
 
 namespace py = pybind11;

@@ -10,7 +10,7 @@
 #include <defocus/io/frames.h>
 #include <defocus/io/image_output.h>
 #include <defocus/io/settings_hash.h>
-#include <defocus/shot/shot_file.h>
+#include <defocus/io/shot_file.h>
 
 #include "test_support.h"
 

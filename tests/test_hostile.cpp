@@ -9,7 +9,7 @@
 #include <defocus/io/frames.h>
 #include <defocus/shot/option_value.h>
 #include <defocus/shot/shot.h>
-#include <defocus/shot/shot_file.h>
+#include <defocus/io/shot_file.h>
 
 #include "test_support.h"
 

@@ -17,7 +17,7 @@
 #include <defocus/io/frames.h>
 #include <defocus/shot/keyframes.h>
 #include <defocus/shot/shot.h>
-#include <defocus/shot/shot_file.h>
+#include <defocus/io/shot_file.h>
 #include <defocus/shot/shot_options.h>
 
 #include "test_support.h"

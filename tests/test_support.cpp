@@ -16,7 +16,7 @@
 
 #include <defocus/io/image_input.h>
 #include <defocus/layers/layering.h>
-#include <defocus/shot/shot_file.h>
+#include <defocus/io/shot_file.h>
 
 namespace defocus_test {
 

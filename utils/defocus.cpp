@@ -23,7 +23,7 @@
 #include <defocus/io/scene_io.h>
 #include <defocus/render_frame.h>
 #include <defocus/io/settings_hash.h>
-#include <defocus/shot/shot_file.h>
+#include <defocus/io/shot_file.h>
 #include <defocus/version.h>
 
 #include "cli_options.h"

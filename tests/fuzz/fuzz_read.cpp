@@ -16,7 +16,7 @@
 #include <defocus/io/image_output.h>
 #include <defocus/io/scene_io.h>
 #include <defocus/shot/shot.h>
-#include <defocus/shot/shot_file.h>
+#include <defocus/io/shot_file.h>
 
 #include "fuzz_check.h"
 

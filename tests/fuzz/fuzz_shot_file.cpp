@@ -6,7 +6,7 @@
 #include <OpenImageIO/filesystem.h>
 
 #include <defocus/shot/shot.h>
-#include <defocus/shot/shot_file.h>
+#include <defocus/io/shot_file.h>
 
 #include "fuzz_check.h"
 

@@ -1,4 +1,4 @@
-#include <defocus/shot/shot_file.h>
+#include <defocus/io/shot_file.h>
 
 #include <algorithm>
 #include <cmath>
