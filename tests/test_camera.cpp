@@ -4,7 +4,7 @@
 #include <array>
 #include <cmath>
 
-#include <defocus/shot/camera.h>
+#include <defocus/optics/camera.h>
 
 using namespace defocus;
 using OIIO::ROI;

@@ -18,7 +18,7 @@
 
 #include <defocus/color/color.h>
 #include <defocus/io/scene_io.h>
-#include <defocus/shot/camera.h>
+#include <defocus/optics/camera.h>
 
 #include "test_support.h"
 

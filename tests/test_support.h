@@ -10,7 +10,7 @@
 
 #include <defocus/layers/layered_scene.h>
 #include <defocus/scene.h>
-#include <defocus/shot/camera.h>
+#include <defocus/optics/camera.h>
 
 namespace defocus_test {
 

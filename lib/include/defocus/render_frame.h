@@ -18,7 +18,7 @@
 #include <defocus/io/shot_assets.h>
 #include <defocus/layers/layered_scene.h>
 #include <defocus/scene.h>
-#include <defocus/shot/camera_metadata.h>
+#include <defocus/io/camera_metadata.h>
 #include <defocus/shot/shot.h>
 
 namespace defocus {

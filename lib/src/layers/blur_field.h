@@ -6,7 +6,7 @@
 
 #include <defocus/layers/mixed_pixels.h>
 #include <defocus/scene.h>
-#include <defocus/shot/camera.h>
+#include <defocus/optics/camera.h>
 
 #include "util/float_pixels.h"
 

@@ -5,8 +5,8 @@
 #include <string>
 
 #include <defocus/scene.h>
-#include <defocus/shot/camera.h>
-#include <defocus/shot/camera_metadata.h>
+#include <defocus/optics/camera.h>
+#include <defocus/io/camera_metadata.h>
 #include <defocus/shot/shot.h>
 
 namespace defocus {

@@ -4,7 +4,7 @@
 #include <OpenImageIO/imagebuf.h>
 
 #include <defocus/layers/layered_scene.h>
-#include <defocus/shot/camera.h>
+#include <defocus/optics/camera.h>
 
 namespace defocus {
 

@@ -4,7 +4,7 @@
 #include <string>
 
 #include <defocus/layers/layered_scene.h>
-#include <defocus/shot/camera.h>
+#include <defocus/optics/camera.h>
 #include <defocus/shot/options.h>
 
 namespace defocus {

@@ -12,7 +12,7 @@
 
 #include <defocus/color/color.h>
 #include <defocus/scene.h>
-#include <defocus/shot/camera.h>
+#include <defocus/optics/camera.h>
 
 namespace defocus {
 

@@ -8,7 +8,7 @@
 
 #include <defocus/layers/layered_scene.h>
 #include <defocus/scene.h>
-#include <defocus/shot/camera.h>
+#include <defocus/optics/camera.h>
 #include <defocus/shot/options.h>
 
 namespace defocus {

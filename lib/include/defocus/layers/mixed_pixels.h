@@ -5,7 +5,7 @@
 #include <vector>
 
 #include <defocus/scene.h>
-#include <defocus/shot/camera.h>
+#include <defocus/optics/camera.h>
 
 namespace defocus {
 

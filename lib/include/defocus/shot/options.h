@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include <defocus/shot/aperture.h>
+#include <defocus/optics/aperture.h>
 #include <defocus/shot/memory_limit.h>
 
 namespace defocus {

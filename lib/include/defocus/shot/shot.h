@@ -9,8 +9,8 @@
 
 #include <OpenImageIO/typedesc.h>
 
-#include <defocus/shot/aperture.h>
-#include <defocus/shot/camera.h>
+#include <defocus/optics/aperture.h>
+#include <defocus/optics/camera.h>
 #include <defocus/shot/keyframes.h>
 #include <defocus/shot/options.h>
 

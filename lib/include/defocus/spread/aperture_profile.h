@@ -8,7 +8,7 @@
 #include <Imath/ImathVec.h>
 #include <OpenImageIO/imagebuf.h>
 
-#include <defocus/shot/aperture.h>
+#include <defocus/optics/aperture.h>
 #include <defocus/spread/footprint.h>
 
 namespace defocus {

@@ -1,4 +1,4 @@
-#include <defocus/shot/aperture.h>
+#include <defocus/optics/aperture.h>
 
 #include <defocus/shot/option_value.h>
 

@@ -1,4 +1,4 @@
-#include <defocus/shot/camera.h>
+#include <defocus/optics/camera.h>
 
 #include <algorithm>
 #include <cmath>

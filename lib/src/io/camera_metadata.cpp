@@ -1,4 +1,4 @@
-#include <defocus/shot/camera_metadata.h>
+#include <defocus/io/camera_metadata.h>
 
 #include <cmath>
 #include <cstdlib>
