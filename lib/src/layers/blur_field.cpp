@@ -10,13 +10,6 @@ namespace defocus {
 
 using namespace OIIO;
 
-namespace {
-
-/// Blurs closer than a pixel of CoC look alike.
-constexpr float discontinuity = 1.0f;
-
-}  // namespace
-
 BlurField::BlurField(const Layer& flat, const CircleOfConfusion& coc, int nthreads)
     : m_roi(flat.color.roi())
     , m_color(flat.color, m_roi)
@@ -24,12 +17,25 @@ BlurField::BlurField(const Layer& flat, const CircleOfConfusion& coc, int nthrea
     , m_blur(m_roi.npixels())
     , m_discontinuity(m_roi.npixels(), 0)
 {
+    // Per row, the least and largest CoC, reduced after.
+    std::vector<std::pair<float, float>> ranges(m_roi.height(), { INFINITY, -INFINITY });
     parallel_for(m_roi.ybegin, m_roi.yend, [&](int y) {
-        for (int x = m_roi.xbegin; x < m_roi.xend; ++x)
-            m_blur[index(x, y)] = m_color(x, y)[3] > 0.0f
-                                      ? float(coc.diameter(depth(x, y), x, y))
-                                      : std::numeric_limits<float>::quiet_NaN();
+        auto& [least, largest] = ranges[y - m_roi.ybegin];
+        for (int x = m_roi.xbegin; x < m_roi.xend; ++x) {
+            float& c = m_blur[index(x, y)];
+            if (!(m_color(x, y)[3] > 0.0f)) {
+                c = std::numeric_limits<float>::quiet_NaN();
+                continue;
+            }
+            c = float(coc.diameter(depth(x, y), x, y));
+            least = std::min(least, c);
+            largest = std::max(largest, c);
+        }
     }, by_rows(nthreads));
+    for (const auto& [least, largest] : ranges) {
+        m_least = std::min(m_least, least);
+        m_largest = std::max(m_largest, largest);
+    }
     // A pixel is at a discontinuity where any 3x3 neighbour's CoC differs
     // from its own by more than the threshold (NaN, nothing there, never
     // does): where the neighbourhood's largest CoC lies more than it above
@@ -58,7 +64,7 @@ BlurField::BlurField(const Layer& flat, const CircleOfConfusion& coc, int nthrea
             const float hi = std::max({ most[x0], most[x], most[x1] });
             const float lo = std::min({ least[x0], least[x], least[x1] });
             const float own = rows[1][x];
-            out[x] = hi - own > discontinuity || own - lo > discontinuity;
+            out[x] = hi - own > discontinuity_step || own - lo > discontinuity_step;
         }
     }, by_rows(nthreads));
 }

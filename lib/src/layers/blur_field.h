@@ -1,6 +1,7 @@
 // Internal: a flat render's blur map, made once for all that slices it.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -26,8 +27,14 @@ public:
     float blur(int x, int y) const { return m_blur[index(x, y)]; }
     /// Every pixel's CoC, row by row over roi().
     const std::vector<float>& blurs() const { return m_blur; }
+    /// The least and largest CoC of the covered pixels (+inf and -inf
+    /// when none is covered).
+    float least_blur() const { return m_least; }
+    float largest_blur() const { return m_largest; }
+    /// Blurs closer than a pixel of CoC look alike.
+    static constexpr float discontinuity_step = 1.0f;
     /// True where a 3x3 neighbour's CoC differs from the pixel's by more
-    /// than a pixel (less is no visible difference in blur).
+    /// than discontinuity_step.
     bool at_discontinuity(int x, int y) const { return m_discontinuity[index(x, y)]; }
 
     /// Row y's pixels from the window's first column on.
@@ -58,6 +65,7 @@ private:
     FloatPixels m_color, m_depth;
     std::vector<float> m_blur;
     std::vector<uint8_t> m_discontinuity;
+    float m_least = INFINITY, m_largest = -INFINITY;
 };
 
 /// find_mixed_pixels (mixed_pixels.h) over a blur field already made.

@@ -422,37 +422,32 @@ struct CocHistogram {
     int index(double c) const { return std::clamp(int((c - lo) / bin), 0, int(weight.size()) - 1); }
 };
 
-/// Folds every covered flat pixel and deep sample (both ends of a volume
-/// sample) into a tally: visit(tally, c, alpha) with its CoC c. Bands of
+/// Folds rows into a tally: row(tally, y) for each row of `roi`. Bands of
 /// rows run in parallel, each into its own copy of `empty`, and their
-/// tallies are merged into one, merge(total, tally): a lock per pixel, as
-/// this once took, made the histogram a good part of slicing a 4K frame.
-template<typename Tally, typename Visit, typename Merge>
-Tally tally_cocs(const Scene& scene, const std::vector<BlurField>& flats,
-                 const CircleOfConfusion& coc, const Tally& empty, int nthreads, Visit&& visit,
-                 Merge&& merge)
+/// tallies are merged into `total`, merge(total, tally): a lock per pixel,
+/// as this once took, made the histogram a good part of slicing a 4K frame.
+template<typename Tally, typename Row, typename Merge>
+void tally_rows(const ROI& roi, Tally& total, const Tally& empty, int nthreads, Row&& row,
+                Merge&& merge)
 {
-    Tally total = empty;
     std::mutex mutex;
-    auto bands = [&](const ROI& roi, auto&& row) {
-        parallel_for_chunked(roi.ybegin, roi.yend, 0, [&](int64_t first, int64_t last) {
-            Tally tally = empty;
-            for (int64_t y = first; y < last; ++y)
-                row(tally, int(y));
-            std::lock_guard<std::mutex> lock(mutex);
-            merge(total, tally);
-        }, paropt(nthreads));
-    };
-    for (const BlurField& flat : flats)
-        bands(flat.roi(), [&](Tally& tally, int y) {
-            for (int x = flat.roi().xbegin; x < flat.roi().xend; ++x) {
-                const float a = flat.color(x, y)[3];
-                if (a > 0.0f)
-                    visit(tally, flat.blur(x, y), a);
-            }
-        });
+    parallel_for_chunked(roi.ybegin, roi.yend, 0, [&](int64_t first, int64_t last) {
+        Tally tally = empty;
+        for (int64_t y = first; y < last; ++y)
+            row(tally, int(y));
+        std::lock_guard<std::mutex> lock(mutex);
+        merge(total, tally);
+    }, paropt(nthreads));
+}
+
+/// Folds every covered deep sample (both ends of a volume sample) into
+/// `total`: visit(tally, c, alpha) with its CoC c.
+template<typename Tally, typename Visit, typename Merge>
+void tally_deep_cocs(const Scene& scene, const CircleOfConfusion& coc, Tally& total,
+                     const Tally& empty, int nthreads, Visit&& visit, Merge&& merge)
+{
     for (const DeepImage& deep : scene.deep)
-        bands(deep.roi, [&](Tally& tally, int y) {
+        tally_rows(deep.roi, total, empty, nthreads, [&](Tally& tally, int y) {
             for (int x = deep.roi.xbegin; x < deep.roi.xend; ++x) {
                 const int64_t p = deep.pixel_index(x, y);
                 for (uint64_t i = deep.offsets[p]; i < deep.offsets[p + 1]; ++i) {
@@ -464,16 +459,19 @@ Tally tally_cocs(const Scene& scene, const std::vector<BlurField>& flats,
                     }
                 }
             }
-        });
-    return total;
+        }, merge);
 }
 
 CocHistogram coc_histogram(const Scene& scene, const std::vector<BlurField>& flats,
                            const CircleOfConfusion& coc, int nthreads)
 {
     using Range = std::pair<double, double>;
-    const Range range = tally_cocs(
-        scene, flats, coc, Range { INFINITY, -INFINITY }, nthreads,
+    Range range { INFINITY, -INFINITY };
+    for (const BlurField& flat : flats)
+        range = { std::min(range.first, double(flat.least_blur())),
+                  std::max(range.second, double(flat.largest_blur())) };
+    tally_deep_cocs(
+        scene, coc, range, Range { INFINITY, -INFINITY }, nthreads,
         [](Range& r, double c, float) {
             r.first = std::min(r.first, c);
             r.second = std::max(r.second, c);
@@ -487,14 +485,24 @@ CocHistogram coc_histogram(const Scene& scene, const std::vector<BlurField>& fla
     h.hi = range.second;
     if (!(h.hi > h.lo))
         return h;
-    h.weight.assign(size_t((h.hi - h.lo) / CocHistogram::bin) + 1, 0.0);
-    h.weight = tally_cocs(
-        scene, flats, coc, h.weight, nthreads,
-        [&](std::vector<double>& weight, double c, float a) { weight[h.index(c)] += a; },
-        [](std::vector<double>& total, const std::vector<double>& weight) {
-            for (size_t i = 0; i < total.size(); ++i)
-                total[i] += weight[i];
-        });
+    const std::vector<double> empty(size_t((h.hi - h.lo) / CocHistogram::bin) + 1, 0.0);
+    h.weight = empty;
+    auto add = [](std::vector<double>& total, const std::vector<double>& weight) {
+        for (size_t i = 0; i < total.size(); ++i)
+            total[i] += weight[i];
+    };
+    for (const BlurField& flat : flats)
+        tally_rows(flat.roi(), h.weight, empty, nthreads, [&](std::vector<double>& weight, int y) {
+            const BlurField::Row row = flat.row(y);
+            for (int i = 0; i < flat.roi().width(); ++i) {
+                const float a = row.color[4 * size_t(i) + 3];
+                if (a > 0.0f)
+                    weight[h.index(row.blur[i])] += a;
+            }
+        }, add);
+    tally_deep_cocs(
+        scene, coc, h.weight, empty, nthreads,
+        [&](std::vector<double>& weight, double c, float a) { weight[h.index(c)] += a; }, add);
     return h;
 }
 
@@ -544,7 +552,11 @@ std::vector<Occlusion> find_occlusions(const Scene& scene, const std::vector<Blu
     };
     // The CoC of every pixel's front surface (NaN where nothing is), row
     // by row over `roi`, each pixel against its right and lower neighbours.
-    auto scan = [&](const ROI& roi, const std::vector<float>& front_coc) {
+    // Where `discontinuity` is given, only the pixels it flags: elsewhere
+    // no neighbour's CoC differs by more than its step, and min_step is
+    // larger (by more than the rounding of a difference in float).
+    auto scan = [&](const ROI& roi, const std::vector<float>& front_coc,
+                    const BlurField* discontinuity) {
         const size_t first = rows.size();
         rows.resize(first + roi.height());
         const int width = roi.width(), height = roi.height();
@@ -556,7 +568,12 @@ std::vector<Occlusion> find_occlusions(const Scene& scene, const std::vector<Blu
                            ? double(front_coc[size_t(y) * width + x])
                            : nothing;
             };
+            const uint8_t* flagged = discontinuity
+                                         ? discontinuity->row(roi.ybegin + y).discontinuity
+                                         : nullptr;
             for (int x = 0; x < width; ++x) {
+                if (flagged && !flagged[x])
+                    continue;
                 const double c = at(x, y);
                 if (std::isnan(c))
                     continue;
@@ -566,7 +583,8 @@ std::vector<Occlusion> find_occlusions(const Scene& scene, const std::vector<Blu
         }, by_rows(nthreads));
     };
     for (const BlurField& flat : flats)
-        scan(flat.roi(), flat.blurs());
+        scan(flat.roi(), flat.blurs(),
+             min_step > 1.000001 * BlurField::discontinuity_step ? &flat : nullptr);
     for (const DeepImage& deep : scene.deep) {
         std::vector<float> front(deep.roi.npixels(), std::numeric_limits<float>::quiet_NaN());
         parallel_for(deep.roi.ybegin, deep.roi.yend, [&](int y) {
@@ -581,7 +599,7 @@ std::vector<Occlusion> find_occlusions(const Scene& scene, const std::vector<Blu
                     }
             }
         }, by_rows(nthreads));
-        scan(deep.roi, front);
+        scan(deep.roi, front, nullptr);
         const size_t first = rows.size();
         rows.resize(first + deep.roi.height());
         parallel_for(deep.roi.ybegin, deep.roi.yend, [&](int y) {
