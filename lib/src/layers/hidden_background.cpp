@@ -242,25 +242,30 @@ void fill_hidden_background(Layer& layer, const std::vector<uint8_t>& holes,
     rebuilt_spec.channelnames = { "rebuilt" };
     reset_zeroed_except(layer.rebuilt, rebuilt_spec, ROI(), nthreads);
     parallel_for(window.ybegin, window.yend, [&](int y) {
-        for (int x = window.xbegin; x < window.xend; ++x) {
-            if (!is_hidden(x, y))
+        // Row y's pixels from the window's first column on.
+        const uint8_t* const hidden_row
+            = &holes[size_t(y - roi.ybegin) * roi.width() + (window.xbegin - roi.xbegin)];
+        float* const color_row = static_cast<float*>(layer.color.pixeladdr(window.xbegin, y));
+        float* const depth_row = static_cast<float*>(layer.depth.pixeladdr(window.xbegin, y));
+        uint8_t* const rebuilt_row = static_cast<uint8_t*>(layer.rebuilt.pixeladdr(window.xbegin, y));
+        for (int i = 0; i < window.width(); ++i) {
+            if (!hidden_row[i])
                 continue;
+            const int x = window.xbegin + i;
             float mean[5], line[5], trust = 0.0f;
-            const bool pulled = pull(pyramid[0], x - window.xbegin, y - window.ybegin, mean);
+            const bool pulled = pull(pyramid[0], i, y - window.ybegin, mean);
             if (lines.at(x, y, line, trust)) {
                 if (!pulled)
                     trust = 1.0f;
-                for (int i = 0; i < 5; ++i)
-                    mean[i] = trust * line[i] + (1 - trust) * (pulled ? mean[i] : 0.0f);
+                for (int c = 0; c < 5; ++c)
+                    mean[c] = trust * line[c] + (1 - trust) * (pulled ? mean[c] : 0.0f);
             } else if (!pulled)
                 continue;
             if (mean[3] <= 0.0f)
                 continue;
-            float* c = static_cast<float*>(layer.color.pixeladdr(x, y));
-            for (int i = 0; i < 4; ++i)
-                c[i] = mean[i];
-            *static_cast<float*>(layer.depth.pixeladdr(x, y)) = mean[4] / mean[3];
-            *static_cast<uint8_t*>(layer.rebuilt.pixeladdr(x, y)) = 1;
+            std::copy(mean, mean + 4, color_row + 4 * size_t(i));
+            depth_row[i] = mean[4] / mean[3];
+            rebuilt_row[i] = 1;
         }
     }, by_rows(nthreads));
 }
