@@ -58,8 +58,9 @@ ContinuedLines::ContinuedLines(const FloatPixels& color, const FloatPixels& dept
     , m_holes(holes)
     , m_window(window)
     , m_max_length(std::clamp(max_length, 0, 65535))
-    // Every entry is written below, by the threads that will read it.
-    , m_slot(new uint32_t[window.npixels()])
+    , m_words((window.width() + 63) / 64)
+    , m_tracked(size_t(m_words) * window.height(), 0)
+    , m_rank(m_tracked.size())
 {
     // A line crosses a band of width w in at least w pixels, and the band's
     // row and column runs are at most sqrt(2) w: a hidden pixel whose row
@@ -68,26 +69,32 @@ ContinuedLines::ContinuedLines(const FloatPixels& color, const FloatPixels& dept
     const std::vector<uint8_t> wide = in_wide_holes(int(std::ceil(std::sqrt(2.0) * m_max_length)),
                                                     nthreads);
     // Numbered in raster order: each row's count, then its first number.
-    std::vector<uint32_t> first(window.height() + 1, 0);
-    auto tracked = [&](int x, int y) { return hidden(x, y) && !wide[index(x, y)]; };
-    parallel_for(window.ybegin, window.yend, [&](int y) {
+    std::vector<uint32_t>& first = m_first;
+    first.assign(window.height() + 1, 0);
+    parallel_for(0, window.height(), [&](int row) {
+        uint64_t* bits = &m_tracked[size_t(row) * m_words];
+        const int y = window.ybegin + row;
+        for (int i = 0; i < window.width(); ++i)
+            if (hidden(window.xbegin + i, y) && !wide[size_t(row) * window.width() + i])
+                bits[i / 64] |= uint64_t(1) << (i % 64);
         uint32_t count = 0;
-        for (int x = window.xbegin; x < window.xend; ++x)
-            count += tracked(x, y);
-        first[y - window.ybegin + 1] = count;
+        for (int w = 0; w < m_words; ++w)
+            count += uint32_t(__builtin_popcountll(bits[w]));
+        first[row + 1] = count;
     }, by_rows(nthreads));
     for (size_t r = 1; r < first.size(); ++r)
         first[r] += first[r - 1];
     m_pixels.resize(first.back());
     m_estimates.resize(first.back());
-    parallel_for(window.ybegin, window.yend, [&](int y) {
-        uint32_t n = first[y - window.ybegin];
-        for (int x = window.xbegin; x < window.xend; ++x)
-            if (tracked(x, y)) {
-                m_pixels[n] = { x, y };
-                m_slot[index(x, y)] = ++n;
-            } else
-                m_slot[index(x, y)] = wide[index(x, y)] ? blocked : 0;
+    parallel_for(0, window.height(), [&](int row) {
+        uint32_t n = first[row];
+        for (int w = 0; w < m_words; ++w) {
+            const size_t word = size_t(row) * m_words + w;
+            m_rank[word] = n;
+            for (uint64_t bits = m_tracked[word]; bits; bits &= bits - 1)
+                m_pixels[n++] = { window.xbegin + 64 * w + __builtin_ctzll(bits),
+                                  window.ybegin + row };
+        }
     }, by_rows(nthreads));
     if (m_estimates.empty() || m_max_length < 2)
         return;
@@ -152,20 +159,21 @@ int ContinuedLines::reach(int max_length)
     return max_length + 2 * straight_run + 1;
 }
 
-bool ContinuedLines::hidden(int x, int y) const
+uint32_t ContinuedLines::slot(int x, int y) const
 {
-    const ROI& roi = m_color.roi();
-    return m_holes[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)] != 0;
-}
-
-size_t ContinuedLines::index(int x, int y) const
-{
-    return size_t(y - m_window.ybegin) * m_window.width() + (x - m_window.xbegin);
+    if (!hidden(x, y))
+        return 0;
+    const int i = x - m_window.xbegin;
+    const size_t word = size_t(y - m_window.ybegin) * m_words + i / 64;
+    const uint64_t bit = uint64_t(1) << (i % 64);
+    if (!(m_tracked[word] & bit))
+        return blocked;
+    return m_rank[word] + uint32_t(__builtin_popcountll(m_tracked[word] & (bit - 1))) + 1;
 }
 
 bool ContinuedLines::at(int x, int y, float value[5], float& trust) const
 {
-    const uint32_t slot = m_slot[index(x, y)];
+    const uint32_t slot = this->slot(x, y);
     if (!slot || slot == blocked || !(m_estimates[slot - 1].weight > 0.0f))
         return false;
     const Estimate& e = m_estimates[slot - 1];
@@ -182,18 +190,45 @@ void ContinuedLines::steps_to_observed(int dx, int dy, std::vector<uint16_t>& st
     // max_length. Each pixel's count follows from that of the pixel one
     // step on, so the hidden pixels are visited in raster order from that
     // end: one pass over them whatever the holes' width.
+    // The pixel one step on is found by walking its row's tracked pixels
+    // alongside, as x + dx moves the same way as x.
     steps.assign(m_pixels.size(), 0);
     const int limit = int(m_max_length / std::hypot(dx, dy));
     const bool from_end = dy > 0 || (dy == 0 && dx > 0);
-    const size_t count = m_pixels.size();
-    for (size_t n = 0; n < count; ++n) {
-        const size_t i = from_end ? count - 1 - n : n;
-        const int u = m_pixels[i].x + dx, v = m_pixels[i].y + dy;
-        if (!m_window.contains(u, v))
+    const int height = m_window.height();
+    for (int n = 0; n < height; ++n) {
+        const int row = from_end ? height - 1 - n : n, next_row = row + dy;
+        if (next_row < 0 || next_row >= height)
             continue;
-        const uint32_t next = m_slot[index(u, v)];
-        const int k = !next ? 1 : next == blocked ? 0 : steps[next - 1] ? steps[next - 1] + 1 : 0;
-        steps[i] = uint16_t(k <= limit ? k : 0);
+        const int v = m_window.ybegin + next_row;
+        const uint32_t lo = m_first[next_row], hi = m_first[next_row + 1];
+        uint32_t j = from_end ? hi : lo;  // the walk through row next_row
+        const uint32_t count = m_first[row + 1] - m_first[row];
+        for (uint32_t c = 0; c < count; ++c) {
+            const uint32_t i = from_end ? m_first[row + 1] - 1 - c : m_first[row] + c;
+            const int u = m_pixels[i].x + dx;
+            if (u < m_window.xbegin || u >= m_window.xend)
+                continue;
+            int k = 1;
+            if (hidden(u, v)) {
+                // Tracked, or in a wide hole, which blocks the line.
+                bool tracked;
+                uint32_t next;
+                if (from_end) {
+                    while (j > lo && m_pixels[j - 1].x > u)
+                        --j;
+                    tracked = j > lo && m_pixels[j - 1].x == u;
+                    next = j - 1;
+                } else {
+                    while (j < hi && m_pixels[j].x < u)
+                        ++j;
+                    tracked = j < hi && m_pixels[j].x == u;
+                    next = j;
+                }
+                k = tracked && steps[next] ? steps[next] + 1 : 0;
+            }
+            steps[i] = uint16_t(k <= limit ? k : 0);
+        }
     }
 }
 
@@ -272,7 +307,7 @@ void ContinuedLines::add_lines(int dx, int dy, const std::vector<uint16_t>& forw
             return;
         const int x = m_pixels[i].x, y = m_pixels[i].y;
         const int kf = forward[i], kb = backward[i];
-        const float m = line_disagreement[m_slot[index(x - (kb - 1) * dx, y - (kb - 1) * dy)] - 1];
+        const float m = line_disagreement[slot(x - (kb - 1) * dx, y - (kb - 1) * dy) - 1];
         // A soft minimum over the lines: each weighs exp(-m / tau)
         // relative to the best so far, and less the longer it is. A line
         // 20 tau worse than the best, or untrusted by exp(-10), adds

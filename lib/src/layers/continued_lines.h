@@ -4,7 +4,6 @@
 
 #include <cmath>
 #include <cstdint>
-#include <memory>
 #include <vector>
 
 #include <OpenImageIO/imagebuf.h>
@@ -47,12 +46,18 @@ private:
         float best = INFINITY;  ///< the least disagreement of a line so far
     };
 
-    /// m_slot of a hidden pixel in a hole too wide for any line.
+    /// slot() of a hidden pixel in a hole too wide for any line.
     static constexpr uint32_t blocked = UINT32_MAX;
 
     std::vector<uint8_t> in_wide_holes(int limit, int nthreads) const;
-    bool hidden(int x, int y) const;
-    size_t index(int x, int y) const;
+    bool hidden(int x, int y) const
+    {
+        const OIIO::ROI& roi = m_color.roi();
+        return m_holes[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)] != 0;
+    }
+    /// Of a window pixel: its index in m_pixels + 1 where it is tracked,
+    /// 0 where it is observed, `blocked` where it lies in a wide hole.
+    uint32_t slot(int x, int y) const;
     void observation(int x, int y, float value[5]) const;
     float change_beyond(int x, int y, int dx, int dy, const float end[5]) const;
     float disagreement_of_line(int ax, int ay, int bx, int by, int dx, int dy) const;
@@ -69,10 +74,13 @@ private:
     struct Pixel {
         int x, y;
     };
-    std::vector<Pixel> m_pixels;   ///< the hidden pixels of the window, in raster order
-    /// per window pixel: its index in m_pixels + 1, 0 where observed, or
-    /// `blocked`
-    std::unique_ptr<uint32_t[]> m_slot;
+    std::vector<Pixel> m_pixels;   ///< the tracked pixels of the window, in raster order
+    /// Which window pixels are tracked, 64 to a word, m_words words a row
+    /// (2 MB for a 4K frame, where a slot per pixel took 40 MB).
+    int m_words;
+    std::vector<uint64_t> m_tracked;
+    std::vector<uint32_t> m_rank;  ///< per word: the tracked pixels before it
+    std::vector<uint32_t> m_first;  ///< per window row: its first tracked pixel
     std::vector<Estimate> m_estimates;  ///< per hidden pixel
 };
 
