@@ -6,10 +6,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <numeric>
 
 #include <OpenImageIO/parallel.h>
 
+#include "layers/brightness.h"
 #include "layers/continued_lines.h"
 #include "util/bounding_box.h"
 #include "util/float_pixels.h"
@@ -42,33 +42,6 @@ struct Level {
     Cell& at(int x, int y) { return cells[size_t(y) * width + x]; }
     const Cell& at(int x, int y) const { return cells[size_t(y) * width + x]; }
 };
-
-float brightness(const float* rgba)
-{
-    return std::max(0.0f, (rgba[0] + rgba[1] + rgba[2]) / 3.0f);
-}
-
-/// The mean brightness of the layer's observed covered pixels, per unit
-/// of coverage.
-float mean_brightness(const FloatPixels& color, const std::vector<uint8_t>& holes, int nthreads)
-{
-    const ROI& roi = color.roi();
-    // Per row, then added in order: the same sum on any number of threads.
-    std::vector<double> light(roi.height(), 0.0), coverage(roi.height(), 0.0);
-    parallel_for(roi.ybegin, roi.yend, [&](int y) {
-        const int row = y - roi.ybegin;
-        const uint8_t* hidden = &holes[size_t(row) * roi.width()];
-        const float* c = color(roi.xbegin, y);
-        for (int i = 0; i < roi.width(); ++i, c += 4)
-            if (!hidden[i] && c[3] > 0.0f) {
-                light[row] += brightness(c);
-                coverage[row] += c[3];
-            }
-    }, by_rows(nthreads));
-    const double all_light = std::accumulate(light.begin(), light.end(), 0.0);
-    const double all_coverage = std::accumulate(coverage.begin(), coverage.end(), 0.0);
-    return all_coverage > 0.0 ? float(all_light / all_coverage) : 1.0f;
-}
 
 /// The finer level's 2x2 cells, summed.
 Level coarser(const Level& fine, int nthreads)
@@ -161,13 +134,14 @@ ROI hidden_background_window(const ROI& content, const ROI& frame, double max_di
                0, 1, 0, 4);
 }
 
-void fill_hidden_background(Layer& layer, const std::vector<uint8_t>& holes,
+void fill_hidden_background(Layer& layer, const HiddenPixels& hidden_pixels,
                             double max_distance, int nthreads)
 {
+    const std::vector<uint8_t>& holes = hidden_pixels.flags;
     const ROI roi = layer.color.roi();
     const FloatPixels color(layer.color, roi);
     const FloatPixels depth(layer.depth, ROI(roi.xbegin, roi.xend, roi.ybegin, roi.yend, 0, 1, 0, 1));
-    const float highlight = mean_brightness(color, holes, nthreads);
+    const float highlight = hidden_pixels.seen_brightness;
     // Only the pixels around the holes matter, as far as the fill reaches.
     auto is_hidden = [&](int x, int y) {
         return holes[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)] != 0;

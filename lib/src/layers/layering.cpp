@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
+#include <numeric>
 #include <utility>
 
 #include <OpenImageIO/parallel.h>
@@ -13,6 +14,7 @@
 #include <defocus/spread/footprint.h>
 
 #include "layers/blur_field.h"
+#include "layers/brightness.h"
 #include "util/fresh_image.h"
 #include "util/parallel_rows.h"
 
@@ -300,7 +302,7 @@ std::vector<ROI> layer_extents(const Source& frags, int layers, int nthreads)
 /// pixels that a nearer layer covers and layer k does not: where its
 /// hidden background lies.
 template<typename Source>
-std::vector<uint8_t> extract_layer(const Source& frags, int k, const ROI& window, Layer& layer,
+HiddenPixels extract_layer(const Source& frags, int k, const ROI& window, Layer& layer,
                                    int nthreads)
 {
     ImageSpec color_spec(window, TypeFloat);
@@ -316,6 +318,8 @@ std::vector<uint8_t> extract_layer(const Source& frags, int k, const ROI& window
     float* const color = static_cast<float*>(layer.color.localpixels());
     float* const depth = static_cast<float*>(layer.depth.localpixels());
     std::vector<uint8_t> hidden(window.npixels());
+    // Per row, then added in order: the same sums on any number of threads.
+    std::vector<double> light(window.height(), 0.0), coverage(window.height(), 0.0);
     parallel_for(window.ybegin, window.yend, [&](int y) {
         const size_t row = size_t(y - window.ybegin) * window.width();
         frags.row(y, window.xbegin, window.xend, [&](int x, const Fragment* f, int count) {
@@ -341,9 +345,16 @@ std::vector<uint8_t> extract_layer(const Source& frags, int k, const ROI& window
             // Infinite depths (the sky) stay infinite.
             depth[p] = wsum > 0 ? float(std::isinf(zsum) ? INFINITY : zsum / wsum) : 0.0f;
             hidden[p] = nearer && !(color[4 * p + 3] > 0.0f);
+            if (!hidden[p] && color[4 * p + 3] > 0.0f) {
+                const float* c = &color[4 * p];
+                light[y - window.ybegin] += brightness(c);
+                coverage[y - window.ybegin] += c[3];
+            }
         });
     }, by_rows(nthreads));
-    return hidden;
+    const double all_light = std::accumulate(light.begin(), light.end(), 0.0);
+    const double all_coverage = std::accumulate(coverage.begin(), coverage.end(), 0.0);
+    return { std::move(hidden), all_coverage > 0.0 ? float(all_light / all_coverage) : 1.0f };
 }
 
 /// A bound on the bytes of a deep image's fragments: volume samples are
@@ -399,7 +410,7 @@ bool slice(const Source& frags, const std::string& base, const LayerBounds& boun
         }
         Layer layer;
         layer.name = Strutil::fmt::format("{}.{:02d}", base, k);
-        const std::vector<uint8_t> hidden = extract_layer(frags, k, window, layer, nthreads);
+        const HiddenPixels hidden = extract_layer(frags, k, window, layer, nthreads);
         if (k > 0)
             fill_hidden_background(layer, hidden, fill_distance, nthreads);
         crop_to_content(layer, nthreads);

@@ -84,6 +84,17 @@ bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
                       const LayeringOptions& options, LayeredScene& layered,
                       Slicing& slicing, std::string& error, int nthreads = 0);
 
+/// The pixels of a layer that nearer layers hide and it does not cover,
+/// and what the layer shows elsewhere, as cutting it finds them.
+struct HiddenPixels {
+    std::vector<uint8_t> flags;  ///< per pixel of the layer's window, row by row
+    /// Mean brightness ((R + G + B) / 3, at least 0) per unit of alpha of
+    /// the covered pixels not hidden (1 where there are none): the fill
+    /// weighs brighter pixels down to it, so that a small light beside a
+    /// hole does not flood it.
+    float seen_brightness = 1.0f;
+};
+
 /// Hidden-surface filling: the pixels of `layer` flagged in `holes` (hidden
 /// behind nearer layers) are rebuilt from the layer's observed pixels around
 /// them, covered or empty. Where a straight line crosses the hole within
@@ -94,8 +105,8 @@ bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
 /// 1996) found on the coarsest pyramid level needed, up to `max_distance`
 /// pixels away. Premultiplied colour and alpha are filled, and the
 /// alpha-weighted depth; the pixels filled are marked in layer.rebuilt.
-void fill_hidden_background(Layer& layer, const std::vector<uint8_t>& holes,
-                            double max_distance, int nthreads = 0);
+void fill_hidden_background(Layer& layer, const HiddenPixels& holes, double max_distance,
+                            int nthreads = 0);
 
 /// The window over which fill_hidden_background(layer, holes,
 /// max_distance) gives the same result as over all of `frame`, for a layer
