@@ -92,6 +92,22 @@ struct Fragments {
     {
         return double(items.size()) * sizeof(Fragment) + double(offsets.size()) * sizeof(uint64_t);
     }
+
+    /// visit(x, k) for each layer k that pixel x of row y has a share of
+    /// (more than once where several fragments share it).
+    template<typename Visit>
+    void shares(int y, Visit&& visit) const
+    {
+        row(y, pixels.xbegin, pixels.xend, [&](int x, const Fragment* f, int count) {
+            for (const Fragment* end = f + count; f < end; ++f)
+                if (f->a > 0.0f) {
+                    if (f->front_weight > 0.0f)
+                        visit(x, f->front);
+                    if (f->back_weight > 0.0f)
+                        visit(x, f->front + 1);
+                }
+        });
+    }
 };
 
 /// The layers of a fragment whose signed CoC is `c`.
@@ -171,6 +187,44 @@ public:
     {
         return double(m_split.size()) * sizeof(Fragment)
                + double(m_mixed.size()) * sizeof(m_mixed[0]);
+    }
+
+    /// As Fragments::shares, from the CoC alone where a pixel is not
+    /// split: a covered pixel (one whose CoC is not NaN) has a share of the
+    /// front layer of its CoC, and of the one behind where that share is
+    /// less than all (see split_weights), whatever its colour. (The colours
+    /// are four times the bytes of the CoCs, and this pass is memory-bound.)
+    template<typename Visit>
+    void shares(int y, Visit&& visit) const
+    {
+        const BlurField::Row pixels = m_field.row(y);
+        const ROI& roi = m_field.roi();
+        auto mixed = std::lower_bound(m_mixed.begin(), m_mixed.end(), std::pair { y, roi.xbegin });
+        for (int i = 0; i < roi.width(); ++i) {
+            const int x = roi.xbegin + i;
+            if (pixels.discontinuity[i]) {
+                while (mixed != m_mixed.end() && *mixed < std::pair { y, x })
+                    ++mixed;
+                if (mixed != m_mixed.end() && *mixed == std::pair { y, x }) {
+                    for (const Fragment& f : { m_split[2 * size_t(mixed - m_mixed.begin())],
+                                               m_split[2 * size_t(mixed - m_mixed.begin()) + 1] })
+                        if (f.a > 0.0f) {
+                            if (f.front_weight > 0.0f)
+                                visit(x, f.front);
+                            if (f.back_weight > 0.0f)
+                                visit(x, f.front + 1);
+                        }
+                    continue;
+                }
+            }
+            if (std::isnan(pixels.blur[i]))
+                continue;
+            const LayerBounds::Share share = m_bounds.share(pixels.blur[i]);
+            if (share.front_weight > 0.0f)
+                visit(x, share.front);
+            if (share.front_weight < 1.0f)
+                visit(x, share.front + 1);
+        }
     }
 
 private:
@@ -270,16 +324,10 @@ std::vector<ROI> layer_extents(const Source& frags, int layers, int nthreads)
     std::vector<int> last(n, std::numeric_limits<int>::min());
     parallel_for(roi.ybegin, roi.yend, [&](int y) {
         const size_t row = size_t(y - roi.ybegin) * layers;
-        frags.row(y, roi.xbegin, roi.xend, [&](int x, const Fragment* f, int count) {
-            for (const Fragment* end = f + count; f < end; ++f) {
-                if (f->a <= 0.0f)
-                    continue;
-                for (const auto& [k, w] : { std::pair { f->front, f->front_weight },
-                                            std::pair { f->front + 1, f->back_weight } })
-                    if (w > 0.0f && k < layers) {
-                        first[row + k] = std::min(first[row + k], x);
-                        last[row + k] = std::max(last[row + k], x);
-                    }
+        frags.shares(y, [&](int x, int k) {
+            if (k < layers) {
+                first[row + k] = std::min(first[row + k], x);
+                last[row + k] = std::max(last[row + k], x);
             }
         });
     }, by_rows(nthreads));

@@ -67,7 +67,8 @@ struct Slicing {
     int64_t mixed_pixels = 0;  ///< flat pixels split into two surfaces
 };
 
-/// Cuts `scene` into depth layers: its layers as they are, and its flat
+/// Cuts `scene`, sanitized (sanitize(): finite colour, depths positive or
+/// +inf), into depth layers: its layers as they are, and its flat
 /// renders and deep images cut at the bounds, cropped to their content,
 /// all described and ordered back to front (order_layers) into `layered`.
 /// Deep pixels follow OpenEXR's "Interpreting OpenEXR Deep Pixels":
