@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "util/fresh_array.h"
 #include "util/parallel_rows.h"
 
 namespace defocus {
@@ -14,8 +15,9 @@ BlurField::BlurField(const Layer& flat, const CircleOfConfusion& coc, int nthrea
     : m_roi(flat.color.roi())
     , m_color(flat.color, m_roi)
     , m_depth(flat.depth, ROI(m_roi.xbegin, m_roi.xend, m_roi.ybegin, m_roi.yend, 0, 1, 0, 1))
-    , m_blur(m_roi.npixels())
-    , m_discontinuity(m_roi.npixels(), 0)
+    // Every value is written below.
+    , m_blur(fresh_array<float>(m_roi.npixels(), nthreads))
+    , m_discontinuity(fresh_array<uint8_t>(m_roi.npixels(), nthreads))
 {
     // Per row, the least and largest CoC, reduced after.
     std::vector<std::pair<float, float>> ranges(m_roi.height(), { INFINITY, -INFINITY });

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <defocus/layers/mixed_pixels.h>
@@ -26,7 +27,7 @@ public:
     float depth(int x, int y) const { return *m_depth(x, y); }
     float blur(int x, int y) const { return m_blur[index(x, y)]; }
     /// Every pixel's CoC, row by row over roi().
-    const std::vector<float>& blurs() const { return m_blur; }
+    const float* blurs() const { return m_blur.get(); }
     /// The least and largest CoC of the covered pixels (+inf and -inf
     /// when none is covered).
     float least_blur() const { return m_least; }
@@ -63,8 +64,8 @@ private:
 
     OIIO::ROI m_roi;
     FloatPixels m_color, m_depth;
-    std::vector<float> m_blur;
-    std::vector<uint8_t> m_discontinuity;
+    std::unique_ptr<float[]> m_blur;
+    std::unique_ptr<uint8_t[]> m_discontinuity;
     float m_least = INFINITY, m_largest = -INFINITY;
 };
 

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 
 #include <OpenImageIO/parallel.h>
 
@@ -13,6 +14,7 @@
 #include "layers/continued_lines.h"
 #include "util/bounding_box.h"
 #include "util/float_pixels.h"
+#include "util/fresh_array.h"
 #include "util/fresh_image.h"
 #include "util/parallel_rows.h"
 
@@ -25,8 +27,8 @@ namespace {
 /// One pyramid cell: sums over the observed pixels of premultiplied
 /// R, G, B, A and of A·Z, and their count.
 struct Cell {
-    float v[5] = { 0, 0, 0, 0, 0 };
-    float w = 0;
+    float v[5];
+    float w;
 
     void add(const Cell& c)
     {
@@ -36,9 +38,18 @@ struct Cell {
     }
 };
 
+/// A pyramid level, width x height cells, every one written where it is
+/// made.
 struct Level {
     int width, height;
-    std::vector<Cell> cells;
+    std::unique_ptr<Cell[]> cells;
+
+    Level(int width, int height, int nthreads)
+        : width(width)
+        , height(height)
+        , cells(fresh_array<Cell>(size_t(width) * height, nthreads))
+    {
+    }
     Cell& at(int x, int y) { return cells[size_t(y) * width + x]; }
     const Cell& at(int x, int y) const { return cells[size_t(y) * width + x]; }
 };
@@ -46,11 +57,11 @@ struct Level {
 /// The finer level's 2x2 cells, summed.
 Level coarser(const Level& fine, int nthreads)
 {
-    Level coarse { (fine.width + 1) / 2, (fine.height + 1) / 2, {} };
-    coarse.cells.resize(size_t(coarse.width) * coarse.height);
+    Level coarse((fine.width + 1) / 2, (fine.height + 1) / 2, nthreads);
     parallel_for(0, coarse.height, [&](int y) {
         for (int x = 0; x < coarse.width; ++x) {
             Cell& c = coarse.at(x, y);
+            c = Cell {};
             for (int fy = 2 * y; fy < std::min(2 * y + 2, fine.height); ++fy)
                 for (int fx = 2 * x; fx < std::min(2 * x + 2, fine.width); ++fx)
                     c.add(fine.at(fx, fy));
@@ -154,11 +165,11 @@ void fill_hidden_background(Layer& layer, const HiddenPixels& hidden_pixels,
     // The pyramid starts at 2x2 pixels a cell: the pixels themselves are
     // read where they are, and only the hidden ones are written.
     std::vector<Level> pyramid;
-    Level first { (window.width() + 1) / 2, (window.height() + 1) / 2, {} };
-    first.cells.resize(size_t(first.width) * first.height);
+    Level first((window.width() + 1) / 2, (window.height() + 1) / 2, nthreads);
     parallel_for(0, first.height, [&](int y) {
         for (int x = 0; x < first.width; ++x) {
             Cell& cell = first.at(x, y);
+            cell = Cell {};
             const int x0 = window.xbegin + 2 * x, y0 = window.ybegin + 2 * y;
             for (int py = y0; py < std::min(y0 + 2, window.yend); ++py)
                 for (int px = x0; px < std::min(x0 + 2, window.xend); ++px) {

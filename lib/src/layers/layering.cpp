@@ -428,16 +428,23 @@ std::string cutting_exceeds(const MemoryLimit& limit, const std::string& name,
 
 /// Cuts one flat render's or deep image's fragments into layers, appended
 /// to `layers`. `held` counts the bytes the layers cut so far hold; false
-/// with `error` when the next layer would take them past `limit`.
+/// with `error` when the next layer would take them past `limit`. The last
+/// layer takes the pixels of `render` (if given: the flat render the
+/// fragments read, which nothing reads after) where it covers all of it:
+/// each of its pixels is read before it is written, and a 4K frame's last
+/// layer is 214 MB of fresh pages otherwise.
 template<typename Source>
 bool slice(const Source& frags, const std::string& base, const LayerBounds& bounds,
            const MemoryLimit& limit, double& held, std::vector<Layer>& layers,
-           std::string& error, int nthreads)
+           std::string& error, Layer* render, int nthreads)
 {
     const double fragment_bytes = frags.bytes();
     // ImageBuf's move may throw, so a vector that grows copies its layers.
     layers.reserve(layers.size() + bounds.count());
     const std::vector<ROI> extents = layer_extents(frags, bounds.count(), nthreads);
+    int last = bounds.count() - 1;
+    while (last > 0 && extents[last].width() == 0)
+        --last;
     for (int k = 0; k < bounds.count(); ++k) {
         if (extents[k].width() == 0)
             continue;
@@ -458,6 +465,12 @@ bool slice(const Source& frags, const std::string& base, const LayerBounds& boun
         }
         Layer layer;
         layer.name = Strutil::fmt::format("{}.{:02d}", base, k);
+        const ROI& all = frags.roi();
+        if (render && k == last && window.xbegin == all.xbegin && window.xend == all.xend
+            && window.ybegin == all.ybegin && window.yend == all.yend) {
+            layer.color = std::move(render->color);
+            layer.depth = std::move(render->depth);
+        }
         const HiddenPixels hidden = extract_layer(frags, k, window, layer, nthreads);
         if (k > 0)
             fill_hidden_background(layer, hidden, fill_distance, nthreads);
@@ -614,8 +627,7 @@ std::vector<Occlusion> find_occlusions(const Scene& scene, const std::vector<Blu
     // Where `discontinuity` is given, only the pixels it flags: elsewhere
     // no neighbour's CoC differs by more than its step, and min_step is
     // larger (by more than the rounding of a difference in float).
-    auto scan = [&](const ROI& roi, const std::vector<float>& front_coc,
-                    const BlurField* discontinuity) {
+    auto scan = [&](const ROI& roi, const float* front_coc, const BlurField* discontinuity) {
         const size_t first = rows.size();
         rows.resize(first + roi.height());
         const int width = roi.width(), height = roi.height();
@@ -658,7 +670,7 @@ std::vector<Occlusion> find_occlusions(const Scene& scene, const std::vector<Blu
                     }
             }
         }, by_rows(nthreads));
-        scan(deep.roi, front, nullptr);
+        scan(deep.roi, front.data(), nullptr);
         const size_t first = rows.size();
         rows.resize(first + deep.roi.height());
         parallel_for(deep.roi.ybegin, deep.roi.yend, [&](int y) {
@@ -797,8 +809,8 @@ bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
         const std::vector<MixedPixel> mixed = find_mixed_pixels(flats[i], nthreads);
         slicing.mixed_pixels += int64_t(mixed.size());
         const FlatFragments ff(flats[i], mixed, coc, bounds);
-        if (!slice(ff, scene.flat[i].name, bounds,
-                   options.memory_limit, held, scene.layers, error, nthreads))
+        if (!slice(ff, scene.flat[i].name, bounds, options.memory_limit, held, scene.layers,
+                   error, &scene.flat[i], nthreads))
             return false;
     }
     for (const DeepImage& deep : scene.deep) {
@@ -808,7 +820,7 @@ bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
             return false;
         }
         if (!slice(deep_fragments(deep, coc, bounds, nthreads), deep.name, bounds,
-                   options.memory_limit, held, scene.layers, error, nthreads))
+                   options.memory_limit, held, scene.layers, error, nullptr, nthreads))
             return false;
     }
     layered.source = std::move(scene.source);
