@@ -82,4 +82,13 @@ float BlurField::other_side(int x, int y) const
     return other;
 }
 
+std::vector<BlurField> blur_fields(const Scene& scene, const CircleOfConfusion& coc, int nthreads)
+{
+    std::vector<BlurField> flats;
+    flats.reserve(scene.flat.size());
+    for (const Layer& flat : scene.flat)
+        flats.emplace_back(flat, coc, nthreads);
+    return flats;
+}
+
 }  // namespace defocus

@@ -69,6 +69,9 @@ private:
     float m_least = INFINITY, m_largest = -INFINITY;
 };
 
+/// The blur field of each of the scene's flat renders.
+std::vector<BlurField> blur_fields(const Scene& scene, const CircleOfConfusion& coc, int nthreads);
+
 /// find_mixed_pixels (mixed_pixels.h) over a blur field already made.
 std::vector<MixedPixel> find_mixed_pixels(const BlurField& field, int nthreads);
 
