@@ -90,6 +90,8 @@ enum class SpreadMethod {
     Bounded,  ///< the shape, large footprints merged in blocks: bounded time
 };
 
+struct Tile;
+
 class SpreadEngine {
 public:
     /// `shape` is needed (and must outlive the engine) unless the method is
@@ -108,6 +110,19 @@ public:
     struct Sparse;
 
 private:
+    struct Band;
+    struct Workspace;
+
+    void spread_band(const Band& band, Workspace& ws, RowSink& sink) const;
+    void spread_box_tile(const Band& band, const Tile& tile, Workspace& ws, RowSink& sink) const;
+    void spread_shape_tile(const Band& band, const Tile& tile, Workspace& ws,
+                           RowSink& sink) const;
+    void spread_carry_tile(const Band& band, const Tile& tile, const Tile& half_tile,
+                           Workspace& ws, RowSink& sink) const;
+    template<typename Visit>
+    void visit_item_rows(const Band& band, const Tile& tile, const Tile& half_tile,
+                         const Workspace& ws, Visit&& visit) const;
+
     struct Dense {
         float max_radius = -1.0f;  ///< of the pixels on this path; < 0: none
         int first_row = 0, last_row = 0, first_column = 0, last_column = 0;
