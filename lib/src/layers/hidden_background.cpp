@@ -117,6 +117,76 @@ int line_length(double max_distance)
     return int(std::min(4.0 * max_distance, 65535.0));
 }
 
+/// The first pyramid level over `window`: per cell of 2x2 pixels, the sums
+/// over its observed pixels (those not flagged in `holes`, which covers
+/// `color`'s ROI), each weighed so that it counts as no brighter than
+/// `highlight`.
+Level observed_cells(const FloatPixels& color, const FloatPixels& depth,
+                     const std::vector<uint8_t>& holes, const ROI& window, float highlight,
+                     int nthreads)
+{
+    const ROI& roi = color.roi();
+    auto is_hidden = [&](int x, int y) {
+        return holes[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)] != 0;
+    };
+    Level first((window.width() + 1) / 2, (window.height() + 1) / 2, nthreads);
+    parallel_for(0, first.height, [&](int y) {
+        for (int x = 0; x < first.width; ++x) {
+            Cell& cell = first.at(x, y);
+            cell = Cell {};
+            const int x0 = window.xbegin + 2 * x, y0 = window.ybegin + 2 * y;
+            for (int py = y0; py < std::min(y0 + 2, window.yend); ++py)
+                for (int px = x0; px < std::min(x0 + 2, window.xend); ++px) {
+                    // Every pixel not hidden is an observation of the layer,
+                    // empty ones too: the fill estimates coverage as well as
+                    // colour.
+                    if (is_hidden(px, py))
+                        continue;
+                    const float* c = color(px, py);
+                    // A highlight weighs as much light as the layer's mean
+                    // brightness: what continues behind the nearer layer is
+                    // not known, and a small light beside the hole must not
+                    // flood it (the mean of a light 100 times brighter than
+                    // a wall and of seven wall pixels is 13 walls; weighted,
+                    // it is 1.1).
+                    const float w = std::min(1.0f, highlight / std::max(brightness(c), 1e-30f));
+                    const float z = *depth(px, py);
+                    for (int i = 0; i < 4; ++i)
+                        cell.v[i] += w * c[i];
+                    cell.v[4] += c[3] > 0.0f ? w * c[3] * std::min(z, 1e30f) : 0.0f;
+                    cell.w += w;
+                }
+        }
+    }, by_rows(nthreads));
+    return first;
+}
+
+/// The push-pull pyramid up to `levels` levels above the pixels, from its
+/// first level: every cell that sums nothing takes the coarser level's
+/// averages.
+std::vector<Level> push_pull(Level first, int levels, int nthreads)
+{
+    std::vector<Level> pyramid;
+    pyramid.push_back(std::move(first));
+    // Push: each level sums 2x2 cells of the finer one, as far as a cell
+    // spans the distance to fill.
+    for (int l = 2; l <= levels && (pyramid.back().width > 1 || pyramid.back().height > 1); ++l)
+        pyramid.push_back(coarser(pyramid.back(), nthreads));
+    // Pull: an empty cell takes the coarser level's averages.
+    for (int l = int(pyramid.size()) - 2; l >= 0; --l) {
+        Level& fine = pyramid[l];
+        const Level& coarse = pyramid[l + 1];
+        parallel_for(0, fine.height, [&](int y) {
+            for (int x = 0; x < fine.width; ++x) {
+                Cell& f = fine.at(x, y);
+                if (f.w <= 0.0f && pull(coarse, x, y, f.v))
+                    f.w = 1.0f;
+            }
+        }, by_rows(nthreads));
+    }
+    return pyramid;
+}
+
 }  // namespace
 
 ROI hidden_background_window(const ROI& content, const ROI& frame, double max_distance)
@@ -152,7 +222,6 @@ void fill_hidden_background(Layer& layer, const HiddenPixels& hidden_pixels,
     const ROI roi = layer.color.roi();
     const FloatPixels color(layer.color, roi);
     const FloatPixels depth(layer.depth, ROI(roi.xbegin, roi.xend, roi.ybegin, roi.yend, 0, 1, 0, 1));
-    const float highlight = hidden_pixels.seen_brightness;
     // Only the pixels around the holes matter, as far as the fill reaches.
     auto is_hidden = [&](int x, int y) {
         return holes[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)] != 0;
@@ -164,55 +233,9 @@ void fill_hidden_background(Layer& layer, const HiddenPixels& hidden_pixels,
 
     // The pyramid starts at 2x2 pixels a cell: the pixels themselves are
     // read where they are, and only the hidden ones are written.
-    std::vector<Level> pyramid;
-    Level first((window.width() + 1) / 2, (window.height() + 1) / 2, nthreads);
-    parallel_for(0, first.height, [&](int y) {
-        for (int x = 0; x < first.width; ++x) {
-            Cell& cell = first.at(x, y);
-            cell = Cell {};
-            const int x0 = window.xbegin + 2 * x, y0 = window.ybegin + 2 * y;
-            for (int py = y0; py < std::min(y0 + 2, window.yend); ++py)
-                for (int px = x0; px < std::min(x0 + 2, window.xend); ++px) {
-                    // Every pixel not hidden is an observation of the layer,
-                    // empty ones too: the fill estimates coverage as well as
-                    // colour.
-                    if (is_hidden(px, py))
-                        continue;
-                    const float* c = color(px, py);
-                    // A highlight weighs as much light as the layer's mean
-                    // brightness: what continues behind the nearer layer is
-                    // not known, and a small light beside the hole must not
-                    // flood it (the mean of a light 100 times brighter than
-                    // a wall and of seven wall pixels is 13 walls; weighted,
-                    // it is 1.1).
-                    const float w = std::min(1.0f, highlight / std::max(brightness(c), 1e-30f));
-                    const float z = *depth(px, py);
-                    for (int i = 0; i < 4; ++i)
-                        cell.v[i] += w * c[i];
-                    cell.v[4] += c[3] > 0.0f ? w * c[3] * std::min(z, 1e30f) : 0.0f;
-                    cell.w += w;
-                }
-        }
-    }, by_rows(nthreads));
-    pyramid.push_back(std::move(first));
-
-    // Push: each level sums 2x2 cells of the finer one, as far as a cell
-    // spans the distance to fill.
-    const int levels = pyramid_levels(max_distance);
-    for (int l = 2; l <= levels && (pyramid.back().width > 1 || pyramid.back().height > 1); ++l)
-        pyramid.push_back(coarser(pyramid.back(), nthreads));
-    // Pull: an empty cell takes the coarser level's averages.
-    for (int l = int(pyramid.size()) - 2; l >= 0; --l) {
-        Level& fine = pyramid[l];
-        const Level& coarse = pyramid[l + 1];
-        parallel_for(0, fine.height, [&](int y) {
-            for (int x = 0; x < fine.width; ++x) {
-                Cell& f = fine.at(x, y);
-                if (f.w <= 0.0f && pull(coarse, x, y, f.v))
-                    f.w = 1.0f;
-            }
-        }, by_rows(nthreads));
-    }
+    const std::vector<Level> pyramid = push_pull(
+        observed_cells(color, depth, holes, window, hidden_pixels.seen_brightness, nthreads),
+        pyramid_levels(max_distance), nthreads);
 
     // Lines start at hidden pixels and read as far as their reach.
     const int length = line_length(max_distance);
