@@ -5,7 +5,7 @@
 
 #include <OpenImageIO/strutil.h>
 
-#include <defocus/shot/option_value.h>
+#include "util/parse_name.h"
 
 namespace defocus {
 

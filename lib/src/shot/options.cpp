@@ -1,6 +1,6 @@
 #include <defocus/shot/options.h>
 
-#include <defocus/shot/option_value.h>
+#include "util/parse_name.h"
 
 namespace defocus {
 

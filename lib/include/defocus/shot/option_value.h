@@ -16,18 +16,4 @@ bool parse_number(const std::string& option, const std::string& text, double lo,
 bool parse_whole_number(const std::string& option, const std::string& text, double lo,
                         double hi, int& value, std::string& error);
 
-/// The one of `values` that `name_of` calls `name`, into `value`; false
-/// when none is.
-template<typename Enum, size_t N>
-bool parse_name(const std::string& name, const Enum (&values)[N], const char* (*name_of)(Enum),
-                Enum& value)
-{
-    for (Enum v : values)
-        if (name == name_of(v)) {
-            value = v;
-            return true;
-        }
-    return false;
-}
-
 }  // namespace defocus
