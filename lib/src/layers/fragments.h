@@ -121,17 +121,12 @@ public:
     {
         const BlurField::Row pixels = m_field.row(y);
         const int first = m_field.roi().xbegin;
-        // Mixed pixels lie at discontinuities, ordered by row, then column.
-        auto mixed = std::lower_bound(m_mixed.begin(), m_mixed.end(), std::pair { y, x0 });
+        MixedWalk mixed = walk_mixed(y, x0);
         for (int x = x0; x < x1; ++x) {
             const int i = x - first;
-            if (pixels.discontinuity[i]) {
-                while (mixed != m_mixed.end() && *mixed < std::pair { y, x })
-                    ++mixed;
-                if (mixed != m_mixed.end() && *mixed == std::pair { y, x }) {
-                    visit(x, &m_split[2 * size_t(mixed - m_mixed.begin())], 2);
-                    continue;
-                }
+            if (const Fragment* split = pixels.discontinuity[i] ? mixed.at(x) : nullptr) {
+                visit(x, split, 2);
+                continue;
             }
             const float* c = pixels.color + 4 * size_t(i);
             Fragment f { c[0], c[1], c[2], c[3], pixels.depth[i], 0, 1, 0 };
@@ -157,23 +152,18 @@ public:
     {
         const BlurField::Row pixels = m_field.row(y);
         const OIIO::ROI& roi = m_field.roi();
-        auto mixed = std::lower_bound(m_mixed.begin(), m_mixed.end(), std::pair { y, roi.xbegin });
+        MixedWalk mixed = walk_mixed(y, roi.xbegin);
         for (int i = 0; i < roi.width(); ++i) {
             const int x = roi.xbegin + i;
-            if (pixels.discontinuity[i]) {
-                while (mixed != m_mixed.end() && *mixed < std::pair { y, x })
-                    ++mixed;
-                if (mixed != m_mixed.end() && *mixed == std::pair { y, x }) {
-                    for (const Fragment& f : { m_split[2 * size_t(mixed - m_mixed.begin())],
-                                               m_split[2 * size_t(mixed - m_mixed.begin()) + 1] })
-                        if (f.a > 0.0f) {
-                            if (f.front_weight > 0.0f)
-                                visit(x, f.front);
-                            if (f.back_weight > 0.0f)
-                                visit(x, f.front + 1);
-                        }
-                    continue;
-                }
+            if (const Fragment* split = pixels.discontinuity[i] ? mixed.at(x) : nullptr) {
+                for (const Fragment* f = split; f < split + 2; ++f)
+                    if (f->a > 0.0f) {
+                        if (f->front_weight > 0.0f)
+                            visit(x, f->front);
+                        if (f->back_weight > 0.0f)
+                            visit(x, f->front + 1);
+                    }
+                continue;
             }
             if (std::isnan(pixels.blur[i]))
                 continue;
@@ -186,6 +176,29 @@ public:
     }
 
 private:
+    /// Walks row y's mixed pixels (at discontinuities, ordered by row, then
+    /// column) as the columns ascend.
+    struct MixedWalk {
+        const FlatFragments& fragments;
+        int y;
+        std::vector<std::pair<int, int>>::const_iterator next;
+
+        /// The near and far fragments of pixel x when it is mixed, else null.
+        const Fragment* at(int x)
+        {
+            const auto& mixed = fragments.m_mixed;
+            while (next != mixed.end() && *next < std::pair { y, x })
+                ++next;
+            if (next == mixed.end() || *next != std::pair { y, x })
+                return nullptr;
+            return &fragments.m_split[2 * size_t(next - mixed.begin())];
+        }
+    };
+    MixedWalk walk_mixed(int y, int x0) const
+    {
+        return { *this, y, std::lower_bound(m_mixed.begin(), m_mixed.end(), std::pair { y, x0 }) };
+    }
+
     const BlurField& m_field;
     const LayerBounds& m_bounds;
     std::vector<std::pair<int, int>> m_mixed;  ///< (y, x) of each mixed pixel
