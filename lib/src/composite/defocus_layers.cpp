@@ -11,10 +11,9 @@
 #include <OpenImageIO/timer.h>
 
 #include <defocus/layers/edges.h>
-#include <defocus/spread/cateye.h>
-#include <defocus/spread/spread.h>
 
 #include "spread/spread_engine.h"
+#include "spread/spread_plan.h"
 #include "util/float_pixels.h"
 #include "util/fresh_image.h"
 #include "util/parallel_rows.h"
@@ -142,73 +141,6 @@ private:
     const bool m_onto_black;
 };
 
-/// A layer spread on its own, as an image: the hybrid method (highlights
-/// with the PSF image, the rest with the aperture's filter), the smooth
-/// filters, or any aperture clipped by a cat's eye.
-bool spread_apart(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
-                  const SpreadOptions& spread, const ApertureImages& images,
-                  const RowProfile* profile, const CatEye& cateye, const Imath::V3d& luma,
-                  int64_t& psf_pixels, int nthreads)
-{
-    const bool clipped = cateye.amount > 0.0;
-    auto fast = [&](ImageBuf& out, const ImageBuf& in) {
-        if (clipped) {
-            switch (spread.aperture.shape) {
-            case ApertureShape::Box:
-                return spread_cateye(out, in, radius, BoxProfile(), cateye, {}, nthreads);
-            case ApertureShape::Tent:
-            case ApertureShape::Smooth: {
-                const int order = spread.aperture.shape == ApertureShape::Tent ? 2 : 3;
-                const Psf psf = [order](double r) { return smooth_footprint(order, r); };
-                return spread_cateye(out, in, radius, psf, cateye, {}, nthreads);
-            }
-            default: return spread_cateye(out, in, radius, *profile, cateye, {}, nthreads);
-            }
-        }
-        switch (spread.aperture.shape) {
-        case ApertureShape::Box: return spread_box(out, in, radius, {}, nthreads);
-        case ApertureShape::Tent: return spread_smooth(out, in, radius, 2, {}, nthreads);
-        case ApertureShape::Smooth: return spread_smooth(out, in, radius, 3, {}, nthreads);
-        default:
-            return spread.exact_shape
-                       ? spread_scanline(out, in, radius, *profile, {}, nthreads)
-                       : spread_aperture(out, in, radius, *profile,
-                                         { exact_highlight_threshold, luma }, {}, nthreads);
-        }
-    };
-    if (!images.psf)
-        return fast(dst, color);
-
-    const std::vector<uint8_t> slow = visible_bokeh(color, radius,
-                                                    { spread.hybrid_threshold, luma }, nthreads);
-    psf_pixels = std::count(slow.begin(), slow.end(), uint8_t(1));
-    // Split the layer: the selected pixels go one way, the rest the other.
-    ImageBuf fast_part(color.spec()), slow_part(color.spec());
-    const ROI roi = color.roi();
-    parallel_for(roi.ybegin, roi.yend, [&](int y) {
-        for (int x = roi.xbegin; x < roi.xend; ++x) {
-            const bool is_slow = slow[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)];
-            const float* c = static_cast<const float*>(color.pixeladdr(x, y));
-            float* f = static_cast<float*>(fast_part.pixeladdr(x, y));
-            float* s = static_cast<float*>(slow_part.pixeladdr(x, y));
-            for (int k = 0; k < 4; ++k) {
-                f[k] = is_slow ? 0.0f : c[k];
-                s[k] = is_slow ? c[k] : 0.0f;
-            }
-        }
-    }, by_rows(nthreads));
-    const std::shared_ptr<const PsfImage> image = images.psf;
-    const Psf psf = [image](double r) { return image->footprint(r); };
-    ImageBuf fast_spread, slow_spread;
-    if (!fast(fast_spread, fast_part)
-        || !(clipped ? spread_cateye(slow_spread, slow_part, radius, psf, cateye, {}, nthreads)
-                     : spread_direct(slow_spread, slow_part, radius, psf, {}, nthreads))) {
-        dst.errorfmt("{}{}", fast_spread.geterror(), slow_spread.geterror());
-        return false;
-    }
-    return ImageBufAlgo::add(dst, fast_spread, slow_spread, {}, nthreads);
-}
-
 /// Keeps spread rows as an image, for a pass composited later.
 class Keep final : public RowSink {
 public:
@@ -296,27 +228,11 @@ void composite_image(ImageBuf& frame, const ImageBuf& layer, const ChannelPass& 
     }, by_rows(nthreads));
 }
 
-/// Whether a layer goes through the spreading engine, composited as it is
-/// spread, rather than spread apart. The engine's footprints depend on the
-/// radius alone; a cat's eye's change over the frame.
-bool spread_in_engine(const SpreadOptions& spread, const ApertureImages& images,
-                      const CatEye& cateye)
-{
-    return !images.psf && spread.aperture.shape != ApertureShape::Tent
-           && spread.aperture.shape != ApertureShape::Smooth && cateye.amount == 0.0;
-}
-
-/// One spread of a layer, in the channels of a pass: set up in the engine
-/// (its radii, float radii and highlights, which the engine reads while it
-/// lives), or done apart. `apart` also holds an engine's spread that is
-/// composited magnified.
+/// One spread of a layer, in the channels of a pass. `spread.apart` also
+/// holds an engine's spread that is composited magnified.
 struct LayerPass {
     ChannelPass channels;
-    ImageBuf radius;
-    FloatPixels radius_pixels;
-    std::vector<uint8_t> highlights;
-    std::unique_ptr<SpreadEngine> engine;
-    ImageBuf apart;
+    PassSpread spread;
 };
 
 /// A layer ready to composite: its float pixels and its passes.
@@ -324,6 +240,62 @@ struct LayerSpreads {
     FloatPixels color_pixels;
     std::vector<LayerPass> passes;
 };
+
+/// The back-most layer's pass, when it is spread in one pass in the
+/// engine: it lands on a black frame, so it is stored rather than
+/// composited, and only the frame beyond its reach is cleared first. Null
+/// otherwise.
+const LayerPass* pass_onto_black(const std::vector<LayerSpreads>& layers)
+{
+    for (const LayerSpreads& l : layers)
+        if (!l.passes.empty())
+            return l.passes.size() == 1 && l.passes[0].spread.engine
+                           && !l.passes[0].channels.magnified
+                       ? &l.passes[0]
+                       : nullptr;
+    return nullptr;
+}
+
+/// Where a magnified pass's light can come from: the window, grown by the
+/// largest displacement lateral aberration gives within it, as far as
+/// anything is lit.
+ROI magnified_reach(const ROI& window, const ROI& grown, const Imath::V2d& centre,
+                    double lateral_ca)
+{
+    const double farthest = std::max({ std::abs(window.xbegin - centre.x),
+                                       std::abs(window.xend - centre.x),
+                                       std::abs(window.ybegin - centre.y),
+                                       std::abs(window.yend - centre.y) });
+    const double lateral = std::abs(lateral_ca);
+    const int margin = int(std::ceil(lateral * farthest / (1.0 - lateral))) + 2;
+    const ROI reach(window.xbegin - margin, window.xend + margin, window.ybegin - margin,
+                    window.yend + margin, 0, 1, 0, 4);
+    return roi_intersection(reach, roi_union(grown, window));
+}
+
+/// Composites one pass of a layer into the frame over `window`: as the
+/// engine spreads it (stored, `onto_black`, for the back-most layer), or
+/// from its spread image; a magnified pass from an image of its spread over
+/// `reach` (light from just outside the window lands inside it).
+void composite_pass(ImageBuf& frame, LayerPass& p, bool onto_black, const ImageSpec& scene,
+                    const ROI& window, const ROI& reach, double lateral_ca,
+                    const Imath::V2d& centre, int nthreads)
+{
+    if (p.channels.magnified) {
+        if (p.spread.engine) {
+            reset_zeroed(p.spread.apart, result_spec(scene, reach, TypeFloat), nthreads);
+            Keep keep(p.spread.apart);
+            p.spread.engine->run(reach, keep, nthreads);
+        }
+        composite_magnified(frame, p.spread.apart, 0, 1.0 + lateral_ca, centre, nthreads);
+        composite_magnified(frame, p.spread.apart, 2, 1.0 - lateral_ca, centre, nthreads);
+    } else if (p.spread.engine) {
+        Over over(frame, p.channels, onto_black);
+        p.spread.engine->run(window, over, nthreads);
+    } else if (p.spread.apart.initialized()) {
+        composite_image(frame, p.spread.apart, p.channels, nthreads);
+    }
+}
 
 bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
                           const SpreadOptions& spread, const ApertureImages& images,
@@ -333,87 +305,44 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
     Timer spread_timer;
     const CircleOfConfusion coc(camera, scene.spec.roi_full());
     std::vector<LayerReport> depths = scene.reports;
-
-    // Shape apertures share one profile and its footprints, sized to the
-    // largest blur.
-    std::shared_ptr<const RowProfile> profile;
-    double max_radius = 0.0;
-    for (const LayerReport& d : depths)
-        max_radius = std::max({ max_radius, 0.5 * std::abs(d.coc_min), 0.5 * std::abs(d.coc_max) });
-    const Aperture& aperture = spread.aperture;
-    if (aperture.shape == ApertureShape::Disc || aperture.shape == ApertureShape::Polygon) {
-        profile = std::make_shared<ApertureProfile>(aperture);
-    } else if (aperture.shape == ApertureShape::Mask) {
-        if (!images.mask) {
-            dst.errorfmt("a mask aperture needs its shape (read_aperture_mask)");
-            return false;
-        }
-        profile = images.mask;
+    const ROI display(scene.spec.full_x, scene.spec.full_x + scene.spec.full_width,
+                      scene.spec.full_y, scene.spec.full_y + scene.spec.full_height, 0, 1, 0, 4);
+    SpreadPlan plan;
+    std::string error;
+    if (!plan_spread(spread, images, camera, display, depths, scene.luma, plan, error)) {
+        dst.errorfmt("{}", error);
+        return false;
     }
-    const std::unique_ptr<ShapePrograms> programs =
-        profile ? std::make_unique<ShapePrograms>(profile, max_radius) : nullptr;
-    const SpreadMethod method = aperture.shape == ApertureShape::Box ? SpreadMethod::Box
-                                : spread.exact_shape                 ? SpreadMethod::Exact
-                                                                     : SpreadMethod::Bounded;
+    const Imath::V2d centre = plan.cateye.centre;
 
     // Every layer's radii, and its spread (set up in the engine, or done
     // apart), so that the frame's window is known before it is made.
-    const ROI display(scene.spec.full_x, scene.spec.full_x + scene.spec.full_width,
-                      scene.spec.full_y, scene.spec.full_y + scene.spec.full_height, 0, 1, 0, 4);
     ROI grown = display;
-    const Imath::V2d centre = optical_centre(camera, display);
-    CatEye cateye;
-    cateye.amount = camera.cateye;
-    cateye.centre = centre;
-    for (const int x : { display.xbegin, display.xend })
-        for (const int y : { display.ybegin, display.yend })
-            cateye.corner_distance = std::max(cateye.corner_distance,
-                                              (Imath::V2d(x, y) - centre).length());
     const std::vector<ChannelPass> passes = channel_passes(camera);
-    const bool in_engine = spread_in_engine(spread, images, cateye);
     std::vector<LayerSpreads> layers(scene.layers.size());
     for (size_t i = 0; i < scene.layers.size(); ++i) {
         const Layer& layer = scene.layers[i];
         if (depths[i].pixels == 0)
             continue;
-        const ROI roi = layer.color.roi();
         LayerSpreads& l = layers[i];
-        if (in_engine)
-            l.color_pixels = FloatPixels(layer.color, roi);
+        if (plan.in_engine)
+            l.color_pixels = FloatPixels(layer.color, layer.color.roi());
         for (const ChannelPass& channels : passes) {
             LayerPass& p = l.passes.emplace_back();
             p.channels = channels;
-            if (!coc_radius(p.radius, layer.depth, coc, {}, nthreads, channels.coc)) {
-                dst.errorfmt("layer '{}': {}", layer.name, p.radius.geterror());
+            ImageBuf radius;
+            if (!coc_radius(radius, layer.depth, coc, {}, nthreads, channels.coc)) {
+                dst.errorfmt("layer '{}': {}", layer.name, radius.geterror());
                 return false;
             }
-            if (!in_engine) {
-                int64_t psf_pixels = 0;
-                if (!spread_apart(p.apart, layer.color, p.radius, spread, images, profile.get(),
-                                  cateye, scene.luma, psf_pixels, nthreads)) {
-                    dst.errorfmt("layer '{}': {}", layer.name, p.apart.geterror());
-                    return false;
-                }
-                if (channels.alpha)
-                    depths[i].psf_pixels = psf_pixels;
-                p.radius.reset();
-                grown = roi_union(grown, p.apart.roi());
-                continue;
+            if (!spread_pass(plan, layer, l.color_pixels, depths[i], std::move(radius), p.spread,
+                             error, nthreads)) {
+                dst.errorfmt("layer '{}': {}", layer.name, error);
+                return false;
             }
-            p.radius_pixels = FloatPixels(p.radius, roi);
-            SpreadSource source;
-            source.roi = roi;
-            source.color = l.color_pixels(roi.xbegin, roi.ybegin);
-            source.radius = p.radius_pixels(roi.xbegin, roi.ybegin);
-            const double layer_radius
-                = 0.5 * std::max(std::abs(depths[i].coc_min), std::abs(depths[i].coc_max));
-            if (method == SpreadMethod::Bounded && layer_radius >= smallest_merged_radius()) {
-                p.highlights = visible_bokeh(layer.color, p.radius,
-                                             { exact_highlight_threshold, scene.luma }, nthreads);
-                source.keep_exact = p.highlights.data();
-            }
-            p.engine = std::make_unique<SpreadEngine>(source, method, programs.get(), nthreads);
-            grown = roi_union(grown, p.engine->extent());
+            if (channels.alpha && !plan.in_engine)
+                depths[i].psf_pixels = p.spread.psf_pixels;
+            grown = roi_union(grown, p.spread.extent());
         }
     }
 
@@ -422,58 +351,23 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
                                                           : scene.spec.roi();
     window.chbegin = 0;
     window.chend = 4;
-    // The back-most layer, when it is spread in one pass, lands on a black
-    // frame: it is stored rather than composited, and only the frame
-    // beyond its reach is cleared first.
-    const LayerPass* back = nullptr;
-    for (const LayerSpreads& l : layers)
-        if (!l.passes.empty()) {
-            if (l.passes.size() == 1 && l.passes[0].engine && !l.passes[0].channels.magnified)
-                back = &l.passes[0];
-            break;
-        }
+    const LayerPass* back = pass_onto_black(layers);
     // dst's pixels, when it has them in the frame's layout, are reused
     // (swapped, not moved: dst stays valid for an error).
     const ImageSpec frame_spec = result_spec(scene.spec, window, TypeFloat);
     ImageBuf frame;
     if (holds_pixels_like(dst, frame_spec))
         frame.swap(dst);
-    reset_zeroed_except(frame, frame_spec, back ? back->engine->extent() : ROI(), nthreads);
-    // Where a magnified pass's light can come from: the window, grown by
-    // the largest displacement lateral aberration gives within it.
-    const double farthest = std::max({ std::abs(window.xbegin - centre.x),
-                                       std::abs(window.xend - centre.x),
-                                       std::abs(window.ybegin - centre.y),
-                                       std::abs(window.yend - centre.y) });
-    const double lateral = std::abs(camera.lateral_ca);
-    const int margin = int(std::ceil(lateral * farthest / (1.0 - lateral))) + 2;
-    ROI magnified_reach(window.xbegin - margin, window.xend + margin, window.ybegin - margin,
-                        window.yend + margin, 0, 1, 0, 4);
-    magnified_reach = roi_intersection(magnified_reach, roi_union(grown, window));
-
+    reset_zeroed_except(frame, frame_spec, back ? back->spread.engine->extent() : ROI(), nthreads);
+    const ROI reach = magnified_reach(window, grown, centre, camera.lateral_ca);
     for (size_t i = 0; i < scene.layers.size(); ++i) {
         if (report)
             report->push_back(depths[i]);
         // A layer's passes write different channels of the frame, so their
         // order does not matter.
-        for (LayerPass& p : layers[i].passes) {
-            if (p.channels.magnified) {
-                if (p.engine) {
-                    // Light from just outside the window lands inside it.
-                    reset_zeroed(p.apart, result_spec(scene.spec, magnified_reach, TypeFloat),
-                                 nthreads);
-                    Keep keep(p.apart);
-                    p.engine->run(magnified_reach, keep, nthreads);
-                }
-                composite_magnified(frame, p.apart, 0, 1.0 + camera.lateral_ca, centre, nthreads);
-                composite_magnified(frame, p.apart, 2, 1.0 - camera.lateral_ca, centre, nthreads);
-            } else if (p.engine) {
-                Over over(frame, p.channels, &p == back);
-                p.engine->run(window, over, nthreads);
-            } else if (p.apart.initialized()) {
-                composite_image(frame, p.apart, p.channels, nthreads);
-            }
-        }
+        for (LayerPass& p : layers[i].passes)
+            composite_pass(frame, p, &p == back, scene.spec, window, reach, camera.lateral_ca,
+                           centre, nthreads);
         layers[i] = LayerSpreads();
     }
     timings.spread += spread_timer();

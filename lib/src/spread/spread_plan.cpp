@@ -1,0 +1,158 @@
+#include "spread/spread_plan.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/parallel.h>
+
+#include <defocus/spread/spread.h>
+
+#include "util/parallel_rows.h"
+
+namespace defocus {
+
+using namespace OIIO;
+
+namespace {
+
+/// A layer spread on its own, as an image: the hybrid method (highlights
+/// with the PSF image, the rest with the aperture's filter), the smooth
+/// filters, or any aperture clipped by a cat's eye.
+bool spread_apart(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
+                  const SpreadOptions& spread, const ApertureImages& images,
+                  const RowProfile* profile, const CatEye& cateye, const Imath::V3d& luma,
+                  int64_t& psf_pixels, int nthreads)
+{
+    const bool clipped = cateye.amount > 0.0;
+    auto fast = [&](ImageBuf& out, const ImageBuf& in) {
+        if (clipped) {
+            switch (spread.aperture.shape) {
+            case ApertureShape::Box:
+                return spread_cateye(out, in, radius, BoxProfile(), cateye, {}, nthreads);
+            case ApertureShape::Tent:
+            case ApertureShape::Smooth: {
+                const int order = spread.aperture.shape == ApertureShape::Tent ? 2 : 3;
+                const Psf psf = [order](double r) { return smooth_footprint(order, r); };
+                return spread_cateye(out, in, radius, psf, cateye, {}, nthreads);
+            }
+            default: return spread_cateye(out, in, radius, *profile, cateye, {}, nthreads);
+            }
+        }
+        switch (spread.aperture.shape) {
+        case ApertureShape::Box: return spread_box(out, in, radius, {}, nthreads);
+        case ApertureShape::Tent: return spread_smooth(out, in, radius, 2, {}, nthreads);
+        case ApertureShape::Smooth: return spread_smooth(out, in, radius, 3, {}, nthreads);
+        default:
+            return spread.exact_shape
+                       ? spread_scanline(out, in, radius, *profile, {}, nthreads)
+                       : spread_aperture(out, in, radius, *profile,
+                                         { exact_highlight_threshold, luma }, {}, nthreads);
+        }
+    };
+    if (!images.psf)
+        return fast(dst, color);
+
+    const std::vector<uint8_t> slow = visible_bokeh(color, radius,
+                                                    { spread.hybrid_threshold, luma }, nthreads);
+    psf_pixels = std::count(slow.begin(), slow.end(), uint8_t(1));
+    // Split the layer: the selected pixels go one way, the rest the other.
+    ImageBuf fast_part(color.spec()), slow_part(color.spec());
+    const ROI roi = color.roi();
+    parallel_for(roi.ybegin, roi.yend, [&](int y) {
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const bool is_slow = slow[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)];
+            const float* c = static_cast<const float*>(color.pixeladdr(x, y));
+            float* f = static_cast<float*>(fast_part.pixeladdr(x, y));
+            float* s = static_cast<float*>(slow_part.pixeladdr(x, y));
+            for (int k = 0; k < 4; ++k) {
+                f[k] = is_slow ? 0.0f : c[k];
+                s[k] = is_slow ? c[k] : 0.0f;
+            }
+        }
+    }, by_rows(nthreads));
+    const std::shared_ptr<const PsfImage> image = images.psf;
+    const Psf psf = [image](double r) { return image->footprint(r); };
+    ImageBuf fast_spread, slow_spread;
+    if (!fast(fast_spread, fast_part)
+        || !(clipped ? spread_cateye(slow_spread, slow_part, radius, psf, cateye, {}, nthreads)
+                     : spread_direct(slow_spread, slow_part, radius, psf, {}, nthreads))) {
+        dst.errorfmt("{}{}", fast_spread.geterror(), slow_spread.geterror());
+        return false;
+    }
+    return ImageBufAlgo::add(dst, fast_spread, slow_spread, {}, nthreads);
+}
+
+}  // namespace
+
+bool plan_spread(const SpreadOptions& options, const ApertureImages& images,
+                 const Camera& camera, const ROI& display,
+                 const std::vector<LayerReport>& reports, const Imath::V3d& luma,
+                 SpreadPlan& plan, std::string& error)
+{
+    plan.options = &options;
+    plan.images = &images;
+    plan.luma = luma;
+    // Shape apertures share one profile and its footprints, sized to the
+    // largest blur.
+    double max_radius = 0.0;
+    for (const LayerReport& d : reports)
+        max_radius = std::max({ max_radius, 0.5 * std::abs(d.coc_min), 0.5 * std::abs(d.coc_max) });
+    const Aperture& aperture = options.aperture;
+    if (aperture.shape == ApertureShape::Disc || aperture.shape == ApertureShape::Polygon) {
+        plan.profile = std::make_shared<ApertureProfile>(aperture);
+    } else if (aperture.shape == ApertureShape::Mask) {
+        if (!images.mask) {
+            error = "a mask aperture needs its shape (read_aperture_mask)";
+            return false;
+        }
+        plan.profile = images.mask;
+    }
+    plan.programs = plan.profile ? std::make_unique<ShapePrograms>(plan.profile, max_radius)
+                                 : nullptr;
+    plan.method = aperture.shape == ApertureShape::Box ? SpreadMethod::Box
+                  : options.exact_shape                ? SpreadMethod::Exact
+                                                       : SpreadMethod::Bounded;
+    const Imath::V2d centre = optical_centre(camera, display);
+    plan.cateye.amount = camera.cateye;
+    plan.cateye.centre = centre;
+    for (const int x : { display.xbegin, display.xend })
+        for (const int y : { display.ybegin, display.yend })
+            plan.cateye.corner_distance = std::max(plan.cateye.corner_distance,
+                                                   (Imath::V2d(x, y) - centre).length());
+    plan.in_engine = !images.psf && aperture.shape != ApertureShape::Tent
+                     && aperture.shape != ApertureShape::Smooth && plan.cateye.amount == 0.0;
+    return true;
+}
+
+bool spread_pass(const SpreadPlan& plan, const Layer& layer, const FloatPixels& color,
+                 const LayerReport& report, ImageBuf&& radius, PassSpread& out,
+                 std::string& error, int nthreads)
+{
+    out.radius = std::move(radius);
+    if (!plan.in_engine) {
+        if (!spread_apart(out.apart, layer.color, out.radius, *plan.options, *plan.images,
+                          plan.profile.get(), plan.cateye, plan.luma, out.psf_pixels, nthreads)) {
+            error = out.apart.geterror();
+            return false;
+        }
+        out.radius.reset();
+        return true;
+    }
+    const ROI roi = layer.color.roi();
+    out.radius_pixels = FloatPixels(out.radius, roi);
+    SpreadSource source;
+    source.roi = roi;
+    source.color = color(roi.xbegin, roi.ybegin);
+    source.radius = out.radius_pixels(roi.xbegin, roi.ybegin);
+    const double layer_radius = 0.5 * std::max(std::abs(report.coc_min), std::abs(report.coc_max));
+    if (plan.method == SpreadMethod::Bounded && layer_radius >= smallest_merged_radius()) {
+        out.highlights = visible_bokeh(layer.color, out.radius,
+                                       { exact_highlight_threshold, plan.luma }, nthreads);
+        source.keep_exact = out.highlights.data();
+    }
+    out.engine = std::make_unique<SpreadEngine>(source, plan.method, plan.programs.get(), nthreads);
+    return true;
+}
+
+}  // namespace defocus
