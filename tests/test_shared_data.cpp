@@ -174,8 +174,8 @@ TEST_CASE("flat renders score above plain hard slicing, directly and through lay
     const double blender125 = score(blender, 1.25, 96);
     WARN("flat.exr: " << flat3 << " / " << flat125 << " dB; blender_multilayer.exr: "
                       << blender3 << " / " << blender125 << " dB");
-    CHECK(flat3 >= 33.5);
-    CHECK(flat125 >= 35.4);
+    CHECK(flat3 >= 33.6);
+    CHECK(flat125 >= 35.6);
     CHECK(blender3 >= 29.3);
     CHECK(blender125 >= 27.5);
     CHECK(score_via_layerize(garden("flat.exr"), 3.0) == Approx(flat3).margin(0.01));
@@ -219,8 +219,8 @@ TEST_CASE("flat and deep input come close to the layers with the disc aperture")
     const double deep125 = score(garden("deep.exr"), 1.25, 0, "disc");
     WARN("disc: flat.exr " << flat3 << " / " << flat125 << " dB, deep.exr " << deep3 << " / "
                            << deep125 << " dB");
-    CHECK(flat3 >= 38.1);
-    CHECK(flat125 >= 37.6);
+    CHECK(flat3 >= 38.2);
+    CHECK(flat125 >= 37.9);
     CHECK(deep3 >= 38.4);
     CHECK(deep125 >= 37.6);
     CHECK(deep3 >= flat3);

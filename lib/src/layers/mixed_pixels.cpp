@@ -36,6 +36,80 @@ struct Side {
     double mean_depth() const { return z / count; }
 };
 
+/// How far `color` lies from the nearest blend of `near` and `far`,
+/// relative to its own level (squared).
+double blend_error(const float* color, const double near[3], const float* far)
+{
+    double along = 0.0, length = 0.0;
+    for (int i = 0; i < 3; ++i) {
+        const double d = near[i] - far[i];
+        along += (color[i] - far[i]) * d;
+        length += d * d;
+    }
+    const double t = length > 0.0 ? std::clamp(along / length, 0.0, 1.0) : 0.0;
+    double error = 0.0, level = 1e-12;
+    for (int i = 0; i < 3; ++i) {
+        const double e = color[i] - (far[i] + t * (near[i] - far[i]));
+        error += e * e;
+        level += double(color[i]) * color[i];
+    }
+    return error / level;
+}
+
+/// The pixels within `reach` of a mixed pixel, each on the near or the
+/// far side of the CoC midway between the pixel's own and the other
+/// side's.
+struct Neighbourhood {
+    const BlurField& field;
+    int x, y;
+    float middle;
+    int x0, x1, y0, y1;
+
+    Neighbourhood(const BlurField& field, int x, int y, float middle)
+        : field(field), x(x), y(y), middle(middle)
+    {
+        const ROI& roi = field.roi();
+        x0 = std::max(x - reach, roi.xbegin), x1 = std::min(x + reach, roi.xend - 1);
+        y0 = std::max(y - reach, roi.ybegin), y1 = std::min(y + reach, roi.yend - 1);
+    }
+
+    /// visit(sx, sy, near) for each covered pixel but (x, y) itself.
+    template<typename Visit>
+    void each(Visit&& visit) const
+    {
+        for (int sy = y0; sy <= y1; ++sy)
+            for (int sx = x0; sx <= x1; ++sx) {
+                const float c = field.blur(sx, sy);
+                if (!std::isnan(c) && (sx != x || sy != y))
+                    visit(sx, sy, c < middle);
+            }
+    }
+
+    /// The colour of the far side's pixel (of its unmixed ones, or its mixed
+    /// ones when `mixed`) which, blended with `near`, comes closest to the
+    /// pixel's; between equals, the nearest. A far side of several colours
+    /// (a light beside a wall, a checker) has a mean that explains no pixel
+    /// (colour sampling for matting: Wang & Cohen, "Optimized Color
+    /// Sampling for Robust Matting", CVPR 2007).
+    const float* far_color(const double near[3], bool mixed) const
+    {
+        const float* color = field.color(x, y);
+        const float* best = nullptr;
+        double least = INFINITY;
+        each([&](int sx, int sy, bool is_near) {
+            if (is_near || field.at_discontinuity(sx, sy) != mixed)
+                return;
+            const double error = blend_error(color, near, field.color(sx, sy))
+                                 + 1e-4 * ((sx - x) * (sx - x) + (sy - y) * (sy - y));
+            if (error < least) {
+                least = error;
+                best = field.color(sx, sy);
+            }
+        });
+        return best;
+    }
+};
+
 /// Pixel (x, y), mixed, as its two surfaces; false when it is better left
 /// whole.
 bool split(const BlurField& field, int x, int y, MixedPixel& out)
@@ -50,41 +124,38 @@ bool split(const BlurField& field, int x, int y, MixedPixel& out)
     // pole's edge flooded the pole's band: 1 dB lost on garden).
     if (own < other)
         return false;
-    const float middle = 0.5f * (own + other);
-    const ROI& roi = field.roi();
-    const int x0 = std::max(x - reach, roi.xbegin), x1 = std::min(x + reach, roi.xend - 1);
-    const int y0 = std::max(y - reach, roi.ybegin), y1 = std::min(y + reach, roi.yend - 1);
-    // Each side's colour from its unmixed pixels; a side only a pixel or
-    // two wide (a wire, a small light) has none, and takes its mixed ones.
+    const Neighbourhood around(field, x, y, 0.5f * (own + other));
+    // The near side's colour is the mean of its unmixed pixels; a side only
+    // a pixel or two wide (a wire, a small light) has none, and takes its
+    // mixed ones. So does the far side's choice of pixels.
     Side sides[2][2];  // [near][mixed]
-    for (int sy = y0; sy <= y1; ++sy)
-        for (int sx = x0; sx <= x1; ++sx) {
-            const float c = field.blur(sx, sy);
-            if (!std::isnan(c) && (sx != x || sy != y))
-                sides[c < middle][field.at_discontinuity(sx, sy)].add(field.color(sx, sy),
+    around.each([&](int sx, int sy, bool is_near) {
+        sides[is_near][field.at_discontinuity(sx, sy)].add(field.color(sx, sy),
                                                            field.depth(sx, sy));
-        }
+    });
     const Side& near = sides[1][0].count ? sides[1][0] : sides[1][1];
-    const Side& far = sides[0][0].count ? sides[0][0] : sides[0][1];
-    if (near.count == 0 || far.count == 0)
+    const bool far_mixed = sides[0][0].count == 0;
+    if (near.count == 0 || sides[0][far_mixed].count == 0)
         return false;
+    const double near_color[3] = { near.mean(0), near.mean(1), near.mean(2) };
+    const float* far = around.far_color(near_color, far_mixed);
+    const float* color = field.color(x, y);
 
     // The pixel's colour as near·alpha + far·(1 - alpha): alpha is where its
     // colour projects on the line between the sides' colours.
-    const float* color = field.color(x, y);
     double along = 0.0, length = 0.0, scale = 0.0;
     for (int i = 0; i < 3; ++i) {
-        const double d = near.mean(i) - far.mean(i);
-        along += (color[i] - far.mean(i)) * d;
+        const double d = near_color[i] - far[i];
+        along += (color[i] - far[i]) * d;
         length += d * d;
-        scale += near.mean(i) * near.mean(i) + far.mean(i) * far.mean(i);
+        scale += near_color[i] * near_color[i] + double(far[i]) * far[i];
     }
     // Sides that differ by less than about 1% in colour look the same
     // wherever the pixel's light goes.
-    if (!(length > 1e-4 * scale) || !(far.mean(3) > 0.0))
+    if (!(length > 1e-4 * scale) || !(far[3] > 0.0f))
         return false;
     // A colour well beyond either side is not a blend of the two: the
-    // sides' means stand for a textured surface badly, and such a pixel
+    // near side's mean stands for a textured surface badly, and such a pixel
     // (a dark stripe beside a grey pole) is left whole.
     if (along < -0.1 * length || along > 1.1 * length)
         return false;
@@ -98,14 +169,14 @@ bool split(const BlurField& field, int x, int y, MixedPixel& out)
     double covered = std::min(alpha * near.mean(3), a);
     // The far side's share takes no more of a channel than the pixel holds.
     for (int i = 0; i < 3; ++i)
-        if (far.mean(i) > 0.0)
-            covered = std::max(covered, a - color[i] * far.mean(3) / far.mean(i));
+        if (far[i] > 0.0f)
+            covered = std::max(covered, a - color[i] * double(far[3]) / far[i]);
     const double behind = a - covered;  // the far side's share of coverage
     const double through = 1.0 - covered;
     out.x = x;
     out.y = y;
     for (int i = 0; i < 3; ++i) {
-        const double share = far.mean(i) / far.mean(3) * behind;
+        const double share = double(far[i]) / far[3] * behind;
         out.near[i] = float(std::max(0.0, color[i] - share));
         out.far[i] = through > 0.0 ? float(share / through) : 0.0f;
     }
