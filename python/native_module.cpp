@@ -31,6 +31,7 @@
 #include <defocus/io/scene_io.h>
 #include <defocus/io/settings_hash.h>
 #include <defocus/render_frame.h>
+#include <defocus/run_shot.h>
 #include <defocus/io/shot_file.h>
 #include <defocus/version.h>
 
@@ -99,9 +100,6 @@ struct Error : std::runtime_error {
     }
 };
 
-/// Thrown out of a render at a stage boundary once Ctrl-C was pressed.
-struct Cancelled {};
-
 void check(bool ok, const std::string& error)
 {
     if (!ok)
@@ -123,7 +121,6 @@ void run_cancellable(Work&& work)
     std::thread worker([&] {
         try {
             work(cancelled);
-        } catch (const Cancelled&) {
         } catch (...) {
             failure = std::current_exception();
         }
@@ -155,10 +152,7 @@ void run_cancellable(Work&& work)
 /// A stage callback that stops the render once cancelled.
 StageCallback stop_when(const std::atomic<bool>& cancelled)
 {
-    return [&cancelled](const char*) {
-        if (cancelled)
-            throw Cancelled();
-    };
+    return [&cancelled](const char*) { return !cancelled; };
 }
 
 ShotAssets read_assets(const Shot& shot)
@@ -201,20 +195,14 @@ py::tuple image_result(const ImageBuf& image, bool crop)
     return py::make_tuple(pixels, described.to_xml());
 }
 
-/// What to do with a rendered frame on the render's own thread.
-using AfterRender = std::function<void(const FrameResult&, const std::atomic<bool>& cancelled)>;
-
-/// Renders frame `at` of a shot, cancellably; `after` runs on the render's
-/// thread (so that writing a file does not hold the GIL either).
-FrameResult render_one(const Shot& shot, int at, const AfterRender& after = {})
+/// Renders frame `at` of a shot, cancellably.
+FrameResult render_one(const Shot& shot, int at)
 {
     const ShotAssets assets = read_assets(shot);
     FrameResult result;
     run_cancellable([&](const std::atomic<bool>& cancelled) {
         std::string error;
         check(render_frame(shot, at, assets, result, error, stop_when(cancelled)), error);
-        if (after)
-            after(result, cancelled);
     });
     return result;
 }
@@ -231,90 +219,88 @@ py::tuple focus_map(const Shot& shot, std::optional<int> frame, bool crop)
     return image_result(render_one(map, frame_or_first(map, frame)).image, crop);
 }
 
-void render_to_file(const Shot& shot, const std::string& path, std::optional<int> frame)
+/// Called with the GIL held as each frame is written: (frame, path).
+using WrittenCallback = std::function<void(int, std::string)>;
+
+/// Runs a planned shot (run_plan), cancellably; `written` may raise, which
+/// stops the run and is raised once it has stopped. Returns each failed
+/// frame's error, by index in the plan.
+std::pair<ScheduleResult, std::vector<std::string>> run_cancellable_plan(
+    const Shot& shot, const RunPlan& plan, const RunRequest& request,
+    const WrittenCallback& written)
 {
-    std::string error;
-    check(check_output(path, shot.compression, error), error);
-    const int at = frame_or_first(shot, frame);
-    check(check_overwrites(files_read(shot, { at }), { path }, error), error);
-    render_one(shot, at, [&](const FrameResult& result, const std::atomic<bool>& cancelled) {
-        if (cancelled)
-            throw Cancelled();
-        std::string error;
-        check(write_image_atomic(result.image, path, result.pixel_type, "", error), error);
+    const ShotAssets assets = read_assets(shot);
+    std::vector<std::string> errors(plan.frames.size());
+    std::exception_ptr written_failure;
+    std::mutex mutex;
+    ScheduleResult run;
+    run_cancellable([&](const std::atomic<bool>& cancelled) {
+        std::atomic<bool> stop { false };
+        RunCallbacks callbacks;
+        callbacks.stage = [&](int, const char*) { return !cancelled && !stop; };
+        callbacks.failed = [&](int frame, const std::string& error) {
+            const auto at = std::find(plan.frames.begin(), plan.frames.end(), frame);
+            errors[at - plan.frames.begin()] = error;
+        };
+        if (written)
+            callbacks.written = [&](int frame, const std::string& output, const FrameResult&,
+                                    double) {
+                py::gil_scoped_acquire gil;
+                try {
+                    written(frame, output);
+                } catch (...) {
+                    std::lock_guard<std::mutex> lock(mutex);
+                    if (!written_failure)
+                        written_failure = std::current_exception();
+                    stop = true;
+                }
+            };
+        run = run_plan(shot, assets, plan, request, callbacks);
     });
+    if (written_failure)
+        std::rethrow_exception(written_failure);
+    return { run, errors };
 }
 
-/// Renders frames side by side as the CLI does (run_frames), writing each
+void render_to_file(const Shot& shot, const std::string& path, std::optional<int> frame)
+{
+    RunRequest request;
+    request.output = path;
+    request.frames = { frame_or_first(shot, frame) };
+    RunPlan plan;
+    std::string error;
+    check(plan_run(shot, request, plan, error), error);
+    const auto [run, errors] = run_cancellable_plan(shot, plan, request, {});
+    check(run.failed.empty(), errors[0]);
+}
+
+/// Renders frames side by side as the CLI does (run_plan), writing each
 /// through `pattern`; progress(frame, path) is called as each is written.
 /// Bad frames are reported together once the others are written.
 std::vector<std::string> render_sequence(const Shot& shot, const std::string& pattern,
                                          std::optional<std::vector<int>> frames_given,
-                                         const std::function<void(int, std::string)>& progress,
-                                         int threads, bool stop_on_error)
+                                         const WrittenCallback& progress, int threads,
+                                         bool stop_on_error)
 {
-    std::string error;
-    std::vector<int> frames;
+    check(!frames_given || !frames_given->empty(), "render_sequence: no frames to render");
+    RunRequest request;
+    request.output = pattern;
     if (frames_given)
-        frames = *frames_given;
-    else
-        check(shot_frames(shot, frames, error), error);
-    check(!frames.empty(), "render_sequence: no frames to render");
-    std::vector<std::string> outputs;
-    check(frame_outputs("output", pattern, frames, outputs, error), error);
-    for (size_t i = 0; i < frames.size(); ++i)
-        check(check_output(outputs[i], shot.compression, error), error);
-    check(check_overwrites(files_read(shot, frames), outputs, error), error);
-    const ShotAssets assets = read_assets(shot);
-
-    std::vector<std::string> errors(frames.size());
-    std::exception_ptr progress_failure;
-    std::mutex progress_mutex;
-    ScheduleResult run;
-    run_cancellable([&](const std::atomic<bool>& cancelled) {
-        std::atomic<bool> stop { false };
-        run = run_frames(int(frames.size()), threads, shot.read.memory_limit.bytes(),
-                         stop_on_error, [&](int i) {
-            if (cancelled || stop)
-                return false;
-            try {
-                FrameResult result;
-                std::string& frame_error = errors[i];
-                if (!render_frame(shot, frames[i], assets, result, frame_error,
-                                  stop_when(cancelled), threads)
-                    || cancelled
-                    || !write_image_atomic(result.image, outputs[i], result.pixel_type, "",
-                                           frame_error))
-                    return false;
-            } catch (const Cancelled&) {
-                return false;
-            }
-            if (progress) {
-                py::gil_scoped_acquire gil;
-                try {
-                    progress(frames[i], outputs[i]);
-                } catch (...) {
-                    std::lock_guard<std::mutex> lock(progress_mutex);
-                    if (!progress_failure)
-                        progress_failure = std::current_exception();
-                    stop = true;
-                }
-            }
-            return true;
-        }, [&](int i) { return declared_bytes(frame_inputs(shot, frames[i])); });
-        if (cancelled)
-            throw Cancelled();
-    });
-    if (progress_failure)
-        std::rethrow_exception(progress_failure);
+        request.frames = *frames_given;
+    request.threads = threads;
+    request.stop_on_error = stop_on_error;
+    RunPlan plan;
+    std::string error;
+    check(plan_run(shot, request, plan, error), error);
+    const auto [run, errors] = run_cancellable_plan(shot, plan, request, progress);
     if (!run.failed.empty()) {
-        std::string summary = frames_written(run, frames);
+        std::string summary = frames_written(run, plan.frames);
         for (int i : run.failed)
             if (!errors[i].empty())
-                summary += format("; frame {}: {}", frames[i], errors[i]);
+                summary += format("; frame {}: {}", plan.frames[i], errors[i]);
         throw Error(summary);
     }
-    return outputs;
+    return plan.outputs;
 }
 
 /// Where arrays lie: the data window's origin (x, y) and the display

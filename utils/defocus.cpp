@@ -22,7 +22,7 @@
 #include <defocus/io/image_output.h>
 #include <defocus/io/scene_io.h>
 #include <defocus/render_frame.h>
-#include <defocus/io/settings_hash.h>
+#include <defocus/run_shot.h>
 #include <defocus/io/shot_file.h>
 #include <defocus/version.h>
 
@@ -182,34 +182,6 @@ bool parse_command_line(int argc, const char* argv[], CommandLine& cl, bool& hel
     return true;
 }
 
-/// The frames this run renders: `frames`, or their --chunk, less those
-/// --skip-existing finds written with these settings (counted in `skipped`;
-/// -v says why a frame that exists is rendered again).
-std::vector<int> frames_to_render(const CommandLine& cl, std::vector<int> frames, int& skipped)
-{
-    if (cl.chunk_n > 0)
-        frames = chunk_frames(frames, cl.chunk_k, cl.chunk_n);
-    if (!cl.skip_existing)
-        return frames;
-    std::vector<int> to_render;
-    for (int frame : frames) {
-        const std::string output = frame_path(cl.output, frame);
-        const std::string label = is_sequence(cl.shot) ? format("frame {}: ", frame) : "";
-        std::string why;
-        if (written_with_settings(output, settings_hash(cl.shot, frame), why)) {
-            ++skipped;
-            if (cl.verbose)
-                Strutil::print("defocus {}skipped: {} is written with these settings\n", label,
-                               output);
-            continue;
-        }
-        if (cl.verbose && why != "does not exist")
-            Strutil::print("defocus {}rendering again: {} {}\n", label, output, why);
-        to_render.push_back(frame);
-    }
-    return to_render;
-}
-
 bool write_preview(const FrameResult& frame, const CommandLine& cl, const std::string& file,
                    std::string& error)
 {
@@ -234,6 +206,57 @@ bool write_preview(const FrameResult& frame, const CommandLine& cl, const std::s
         return false;
     }
     return write_image_atomic(shown, file, TypeUInt8, "", error);
+}
+
+/// The run the command line asks for: -o and --preview through the frames,
+/// the .dof read and the one saved kept apart from every output.
+RunRequest run_request(const CommandLine& cl)
+{
+    RunRequest request;
+    request.output = cl.output;
+    request.output_option = "-o";
+    request.chunk = cl.chunk_k;
+    request.chunks = cl.chunk_n;
+    request.skip_existing = cl.skip_existing;
+    request.sides.push_back({ "--preview", cl.preview, "",
+                              [&cl](const FrameResult& frame, const std::string& file,
+                                    std::string& error) {
+                                  return write_preview(frame, cl, file, error);
+                              } });
+    request.also_read = { cl.scene_file };
+    request.also_written = { cl.save_scene };
+    request.threads = cl.threads;
+    request.stop_on_error = cl.stop_on_error;
+    return request;
+}
+
+/// -v says which frames --skip-existing leaves, and why a frame that exists
+/// is rendered again.
+void report_existing(const CommandLine& cl, const RunPlan& plan)
+{
+    if (!cl.verbose)
+        return;
+    auto label = [&](int frame) {
+        return is_sequence(cl.shot) ? format("frame {}: ", frame) : std::string();
+    };
+    for (const RunPlan::Existing& e : plan.skipped)
+        Strutil::print("defocus {}skipped: {} is written with these settings\n", label(e.frame),
+                       e.output);
+    for (const RunPlan::Existing& e : plan.again)
+        Strutil::print("defocus {}rendering again: {} {}\n", label(e.frame), e.output, e.why);
+}
+
+/// A farm task's log begins with where, when and what it ran.
+void print_farm_header(const CommandLine& cl, const std::vector<int>& frames)
+{
+    char host[256] = {};
+    ::gethostname(host, sizeof host - 1);
+    const std::time_t now = std::time(nullptr);
+    char date[32];
+    std::strftime(date, sizeof date, "%Y-%m-%d %H:%M:%S UTC", std::gmtime(&now));
+    Strutil::print("defocus {} on {} at {}: chunk {}, frames {}\n", version(), host, date,
+                   cl.chunk, frame_ranges(frames));
+    std::fflush(stdout);
 }
 
 std::string verbose_report(const FrameResult& frame, const CommandLine& cl,
@@ -313,52 +336,24 @@ int main(int argc, const char* argv[])
     ShotAssets assets;
     if (!read_shot_assets(shot, assets, error))
         return fail(error);
-
-    std::vector<int> frames, missing;
-    std::vector<std::string> outputs, previews;
-    if (!shot_frames(shot, frames, error, &missing)
-        || !frame_outputs("-o", cl.output, frames, outputs, error)
-        || !frame_outputs("--preview", cl.preview, frames, previews, error))
+    const RunRequest request = run_request(cl);
+    RunPlan plan;
+    if (!plan_run(shot, request, plan, error))
         return fail(error);
-    const size_t shot_frame_count = frames.size();
-    int skipped = 0;
-    frames = frames_to_render(cl, std::move(frames), skipped);
-    if (frames.empty() && skipped == 0) {
+    report_existing(cl, plan);
+    if (plan.frames.empty() && plan.skipped.empty()) {
         if (!cl.quiet)
             Strutil::print("defocus: chunk {} has no frames ({} frames in {} chunks)\n", cl.chunk,
-                           shot_frame_count, cl.chunk_n);
+                           plan.shot_frame_count, cl.chunk_n);
         return EXIT_SUCCESS;
     }
-    if (frames.size() != shot_frame_count
-        && (!frame_outputs("-o", cl.output, frames, outputs, error)
-            || !frame_outputs("--preview", cl.preview, frames, previews, error)))
-        return fail(error);
-    // Refused before any frame is rendered, not after each.
-    for (size_t i = 0; i < outputs.size(); ++i) {
-        if (!check_output(outputs[i], shot.compression, error))
-            return fail(error);
-        if (previews.empty())
-            continue;
-        if (!check_output(previews[i], "", error))
-            return fail("--preview " + error);
-        if (same_path(outputs[i], previews[i]))
-            return fail(outputs[i] + ": -o and --preview name the same file");
-    }
-    // Nothing the run reads may be overwritten: no input, depth, mask, PSF
-    // image, config or scene file, by an image, a preview or a scene file.
-    std::vector<std::string> read = files_read(shot, frames), written = outputs;
-    read.push_back(cl.scene_file);
-    written.insert(written.end(), previews.begin(), previews.end());
-    written.push_back(cl.save_scene);
-    if (!check_overwrites(read, written, error))
-        return fail(error);
-    if (!missing.empty() && !cl.quiet)
+    if (!plan.missing.empty() && !cl.quiet)
         Strutil::print(stderr, "defocus: warning: frames with input files missing {}: {}\n",
                        shot.missing_frames == MissingFrames::Skip
                            ? "are not rendered (--missing-frames skip)"
                            : "are rendered from the nearest earlier frame's (--missing-frames "
                              "hold)",
-                       frame_ranges(missing));
+                       frame_ranges(plan.missing));
     if (!cl.save_scene.empty()) {
         if (!save_shot(shot, cl.save_scene, error))
             return fail(error);
@@ -367,83 +362,50 @@ int main(int argc, const char* argv[])
         if (cl.output.empty())
             return EXIT_SUCCESS;
     }
-
-    if (cl.chunk_n > 0 && !cl.quiet) {
-        // A farm task's log begins with where, when and what it ran.
-        char host[256] = {};
-        ::gethostname(host, sizeof host - 1);
-        const std::time_t now = std::time(nullptr);
-        char date[32];
-        std::strftime(date, sizeof date, "%Y-%m-%d %H:%M:%S UTC", std::gmtime(&now));
-        Strutil::print("defocus {} on {} at {}: chunk {}, frames {}\n", version(), host, date,
-                       cl.chunk, frame_ranges(frames));
-        std::fflush(stdout);
-    }
+    if (cl.chunk_n > 0 && !cl.quiet)
+        print_farm_header(cl, plan.frames);
     OIIO::attribute("threads", cl.threads);
     const bool sequence = is_sequence(shot);
     const ProgressMode mode = cl.quiet ? ProgressMode::Quiet
                               : isatty(STDOUT_FILENO) ? ProgressMode::Bar
                                                       : ProgressMode::Lines;
-    Progress progress(mode, int(frames.size()));
+    Progress progress(mode, int(plan.frames.size()));
+    auto label = [&](int frame) { return sequence ? format("frame {}", frame) : std::string(); };
     // Display-referred output from a guessed input space may be wrong:
     // said once a run, not once a frame.
-    const bool display_referred = !previews.empty() || !shot.output_space.empty();
+    const bool display_referred = !cl.preview.empty() || !shot.output_space.empty();
     std::once_flag guess_warning;
-    auto render_one = [&](int i) {
-        const std::string label = sequence ? format("frame {}", frames[i]) : "";
-        Timer timer;
-        FrameResult frame;
-        // Each thread renders into the image it wrote last: a sequence's
-        // frames skip a new frame's fresh pages (see defocus_layers). The
-        // first frame's thread renders no other (see run_frames), so its
-        // image is not kept past it: the memory of the frames in flight
-        // stays theirs.
-        thread_local ImageBuf last_image;
-        frame.image.swap(last_image);
-        std::string error;
-        const bool ok = [&] {
-            if (!render_frame(shot, frames[i], assets, frame, error,
-                              [&](const char* stage) { progress.stage(label, stage); },
-                              cl.threads))
-                return false;
-            progress.stage(label, "write");
-            Timer write_timer;
-            if (!previews.empty() && !write_preview(frame, cl, previews[i], error))
-                return false;
-            if (!write_image_atomic(frame.image, outputs[i], frame.pixel_type, "", error))
-                return false;
-            frame.timings.emplace_back("write", write_timer());
-            return true;
-        }();
-        if (ok) {
-            if (display_referred && !frame.color.guess.empty())
-                std::call_once(guess_warning, [&] {
-                    progress.error(format("warning: {}: input colour space '{}' is a guess "
-                                          "({}); give --iscolorspace to be sure",
-                                          frame.source, frame.color.input, frame.color.guess));
-                });
-            if (cl.verbose)
-                progress.text(verbose_report(frame, cl, label, outputs[i]));
-            progress.written(label, outputs[i], timer());
-        } else {
-            progress.error(label.empty() ? error : label + ": " + error);
-        }
-        progress.frame_over();
-        if (i > 0)
-            last_image.swap(frame.image);
-        return ok;
+    RunCallbacks callbacks;
+    callbacks.stage = [&](int frame, const char* stage) {
+        progress.stage(label(frame), stage);
+        return true;
     };
-    const ScheduleResult run = run_frames(
-        int(frames.size()), cl.threads, shot.read.memory_limit.bytes(), cl.stop_on_error,
-        render_one, [&](int i) { return declared_bytes(frame_inputs(shot, frames[i])); });
+    callbacks.written = [&](int frame, const std::string& output, const FrameResult& result,
+                            double seconds) {
+        if (display_referred && !result.color.guess.empty())
+            std::call_once(guess_warning, [&] {
+                progress.error(format("warning: {}: input colour space '{}' is a guess "
+                                      "({}); give --iscolorspace to be sure",
+                                      result.source, result.color.input, result.color.guess));
+            });
+        if (cl.verbose)
+            progress.text(verbose_report(result, cl, label(frame), output));
+        progress.written(label(frame), output, seconds);
+        progress.frame_over();
+    };
+    callbacks.failed = [&](int frame, const std::string& error) {
+        progress.error(sequence ? label(frame) + ": " + error : error);
+        progress.frame_over();
+    };
+    const ScheduleResult run = run_plan(shot, assets, plan, request, callbacks);
     progress.finish();
     if (sequence) {
-        const std::string summary = frames_written(run, frames, skipped);
+        const std::string summary = frames_written(run, plan.frames, int(plan.skipped.size()));
         if (!run.failed.empty())
             Strutil::print(stderr, "defocus: {}\n", error_line(summary));
         else if (!cl.quiet)
             Strutil::print("defocus: {}\n", summary);
-    } else if (skipped > 0 && !cl.quiet) {
+    } else if (!plan.skipped.empty() && !cl.quiet) {
         Strutil::print("defocus: {} is written with these settings: skipped\n", cl.output);
     }
     return run.failed.empty() ? EXIT_SUCCESS : EXIT_FAILURE;

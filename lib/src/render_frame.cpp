@@ -95,10 +95,14 @@ void describe_output(ImageSpec& spec, const ImageSpec& input, const Shot& shot,
 
 namespace {
 
-void run_stage(const StageCallback& on_stage, const char* name)
+/// Whether stage `name` may start; false with `error` where the callback
+/// cancels the frame.
+bool run_stage(const StageCallback& on_stage, const char* name, std::string& error)
 {
-    if (on_stage)
-        on_stage(name);
+    if (!on_stage || on_stage(name))
+        return true;
+    error = "cancelled";
+    return false;
 }
 
 /// prepare_layers() from the scene read; `timer` started with the read.
@@ -106,7 +110,6 @@ bool layer_scene(Scene&& scene, const Shot& shot, int frame, const ShotAssets& a
                  LayeredScene& layered, FrameResult& out, std::string& error,
                  const StageCallback& on_stage, int nthreads, Timer& timer)
 {
-    auto stage = [&](const char* name) { run_stage(on_stage, name); };
     auto lap = [&](const char* name) { out.timings.emplace_back(name, timer.lap()); };
     out.source = scene.source;
     out.notes  = scene.notes;
@@ -119,7 +122,8 @@ bool layer_scene(Scene&& scene, const Shot& shot, int frame, const ShotAssets& a
         return false;
     };
 
-    stage("colour");
+    if (!run_stage(on_stage, "colour", error))
+        return false;
     ColorPlan& color = out.color;
     if (!plan_color(color, assets.color, assets.no_color, shot.input_space, shot.output_space,
                     scene.spec, error)
@@ -129,7 +133,8 @@ bool layer_scene(Scene&& scene, const Shot& shot, int frame, const ShotAssets& a
         return fail();
     lap("colour");
 
-    stage("slice");
+    if (!run_stage(on_stage, "slice", error))
+        return false;
     if (!shot_camera(shot, scene, frame, out.camera, out.camera_origins, error))
         return fail();
     const CircleOfConfusion coc(out.camera, scene.spec.roi_full());
@@ -198,9 +203,8 @@ bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, Layer
                     int nthreads)
 {
     Timer timer;
-    run_stage(on_stage, "read");
     Scene scene;
-    if (!spread_fits(shot, frame, error)
+    if (!run_stage(on_stage, "read", error) || !spread_fits(shot, frame, error)
         || !read_scene(frame_inputs(shot, frame), frame_read_options(shot, frame), scene, error))
         return false;
     return layer_scene(std::move(scene), shot, frame, assets, layered, out, error, on_stage,
@@ -228,7 +232,8 @@ bool prepare_layers(Scene&& scene, const Shot& shot, int frame, const ShotAssets
                     const StageCallback& on_stage, int nthreads)
 {
     Timer timer;
-    run_stage(on_stage, "read");
+    if (!run_stage(on_stage, "read", error))
+        return false;
     return layer_scene(std::move(scene), shot, frame, assets, layered, out, error, on_stage,
                        nthreads, timer);
 }
@@ -287,7 +292,8 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
     const CircleOfConfusion coc(out.camera, layered.spec.roi_full());
     Timer timer;
     auto lap = [&](const char* name) { out.timings.emplace_back(name, timer.lap()); };
-    run_stage(on_stage, "render");
+    if (!run_stage(on_stage, "render", error))
+        return false;
     ImageBuf& image = out.image;
     if (shot.output == OutputKind::FocusMap) {
         if (!focus_map(image, layered, out.camera, 8.0, nthreads)) {

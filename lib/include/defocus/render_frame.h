@@ -43,8 +43,9 @@ struct FrameResult {
 };
 
 /// Called as each stage of a frame starts ("read", "colour", "slice",
-/// "render"), for progress display.
-using StageCallback = std::function<void(const char* stage)>;
+/// "render"), for progress display; false cancels the frame there, which
+/// then fails with the error "cancelled".
+using StageCallback = std::function<bool(const char* stage)>;
 
 /// The first half of a frame, shared by render_frame() and layerize: read
 /// -> sanitize -> to scene-linear -> focus -> layers. Fills `layers` and,

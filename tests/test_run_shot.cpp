@@ -1,0 +1,110 @@
+// The render service every front end adapts: planning, checks, cancelling.
+#include <catch2/catch.hpp>
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/strutil.h>
+
+#include <defocus/run_shot.h>
+
+#include "test_support.h"
+
+using namespace defocus;
+using namespace defocus_test;
+
+namespace {
+
+Shot example_shot()
+{
+    Shot shot;
+    shot.inputs = { example_scene() };
+    std::string error;
+    REQUIRE(set_shot_setting(shot, "focus", "4", error));
+    return shot;
+}
+
+struct Reports {
+    std::vector<std::string> written, failed, stages;
+};
+
+RunCallbacks recording(Reports& reports, const char* cancel_at = nullptr)
+{
+    RunCallbacks callbacks;
+    callbacks.stage = [&reports, cancel_at](int, const char* stage) {
+        reports.stages.push_back(stage);
+        return !cancel_at || std::string(stage) != cancel_at;
+    };
+    callbacks.written = [&reports](int, const std::string& output, const FrameResult& result,
+                                   double) {
+        reports.written.push_back(output);
+        CHECK(result.timings.back().first == "write");
+    };
+    callbacks.failed = [&reports](int, const std::string& error) {
+        reports.failed.push_back(error);
+    };
+    return callbacks;
+}
+
+}  // namespace
+
+TEST_CASE("a run writes each planned frame once; a cancelled run writes nothing and fails none")
+{
+    const Shot shot = example_shot();
+    ShotAssets assets;
+    std::string error;
+    REQUIRE(read_shot_assets(shot, assets, error));
+    RunRequest request;
+    request.output = scratch_dir("run_shot") + "/out.exr";
+    OIIO::Filesystem::remove(request.output);
+    RunPlan plan;
+    REQUIRE(plan_run(shot, request, plan, error));
+    REQUIRE(plan.outputs == std::vector<std::string> { request.output });
+
+    Reports cancelled;
+    bool was_cancelled = false;
+    ScheduleResult run = run_plan(shot, assets, plan, request, recording(cancelled, "slice"),
+                                  &was_cancelled);
+    CHECK(was_cancelled);
+    CHECK(run.failed.size() == 1);
+    CHECK(cancelled.stages == std::vector<std::string> { "read", "colour", "slice" });
+    CHECK(cancelled.written.empty());
+    CHECK(cancelled.failed.empty());
+    CHECK_FALSE(OIIO::Filesystem::exists(request.output));
+
+    Reports done;
+    run = run_plan(shot, assets, plan, request, recording(done), &was_cancelled);
+    CHECK_FALSE(was_cancelled);
+    CHECK(run.failed.empty());
+    CHECK(done.written == plan.outputs);
+    CHECK(done.stages.back() == "write");
+    CHECK(OIIO::Filesystem::exists(request.output));
+
+    // Written with these settings: left out, and said so.
+    request.skip_existing = true;
+    REQUIRE(plan_run(shot, request, plan, error));
+    CHECK(plan.frames.empty());
+    REQUIRE(plan.skipped.size() == 1);
+    CHECK(plan.skipped[0].output == request.output);
+}
+
+TEST_CASE("a plan refuses, before any work, an output that is an input or another output")
+{
+    const Shot shot = example_shot();
+    RunRequest request;
+    RunPlan plan;
+    std::string error;
+    request.output = shot.inputs[0];
+    CHECK_FALSE(plan_run(shot, request, plan, error));
+    CHECK(OIIO::Strutil::contains(error, shot.inputs[0]));
+    CHECK(OIIO::Strutil::contains(error, "would overwrite"));
+
+    request.output = scratch_dir("run_shot") + "/image.exr";
+    request.also_read = { scratch_dir("run_shot") + "/image.exr" };
+    OIIO::Filesystem::write_text_file(request.also_read[0], "a scene file");
+    CHECK_FALSE(plan_run(shot, request, plan, error));
+    CHECK(OIIO::Strutil::contains(error, "would overwrite"));
+
+    request.also_read.clear();
+    request.sides.push_back({ "--preview", request.output, "", {} });
+    CHECK_FALSE(plan_run(shot, request, plan, error));
+    CHECK(OIIO::Strutil::contains(error, "name the same file"));
+}
