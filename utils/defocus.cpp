@@ -1,32 +1,29 @@
 // defocus: depth of field for layered scenes and EXR sequences, in the
 // style of oiiotool. Options and .dof scene files make a shot (shot.h);
-// each frame is rendered by render_frame() and written atomically.
+// the render service (run_shot.h) plans, renders and writes its frames.
 #include <unistd.h>
 
 #include <cstdlib>
 #include <ctime>
-#include <mutex>
 #include <string>
 #include <vector>
 
 #include <OpenImageIO/argparse.h>
 #include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
-#include <OpenImageIO/timer.h>
 
 #include <defocus/error_line.h>
+#include <defocus/frame_report.h>
 #include <defocus/frame_scheduler.h>
 #include <defocus/io/frames.h>
 #include <defocus/io/image_output.h>
-#include <defocus/io/scene_io.h>
-#include <defocus/render_frame.h>
 #include <defocus/run_shot.h>
 #include <defocus/io/shot_file.h>
 #include <defocus/version.h>
 
 #include "cli_options.h"
+#include "defocus_help.h"
 #include "progress.h"
 
 using namespace OIIO;
@@ -55,43 +52,7 @@ bool parse_command_line(int argc, const char* argv[], CommandLine& cl, bool& hel
         return false;
     };
     ArgParse ap;
-    ap.intro("defocus -- depth of field for layered scenes by constant-time "
-             "rectangle spreading\n"
-             "(Kosloff, Tao & Barsky, Graphics Interface 2009)")
-        .usage("defocus INPUT [INPUT...] -o OUTPUT [options]\n"
-               "   or: defocus SHOT.dof -o OUTPUT [options]")
-        .add_help(false)
-        .exit_on_error(false);
-    add_help_option(ap);
-    ap.description(
-        "INPUT is a layered scene. A multi-part EXR whose parts each hold\n"
-        "premultiplied R,G,B,A and Z: the parts are the layers. A deep EXR, or a\n"
-        "flat RGBA+Z render (also Blender's ViewLayer.Combined.* with\n"
-        "ViewLayer.Depth.Z, or a beauty part and a depth part): cut into depth\n"
-        "layers. Several INPUTs are the layers of one scene. Each layer is\n"
-        "spread with its own per-pixel circle of confusion and the layers are\n"
-        "composited back to front. Depth (Z) is planar camera-space depth in\n"
-        "metres, as --focus is (--depth-scale converts other units).\n"
-        "\n"
-        "Sequences use oiiotool's frame patterns: shot.#.exr (4 digits),\n"
-        "shot.@@.exr (one digit per @), shot.%04d.exr, or shot.1-100#.exr; the\n"
-        "output names its frames the same way. Frames run side by side as the\n"
-        "cores and memory allow; a bad frame is reported and the others are\n"
-        "still written.\n"
-        "\n"
-        "A .dof scene file (JSON, see the README) holds the inputs and all the\n"
-        "settings below; options given with it override its values.");
-    ap.epilog(
-        "Examples:\n"
-        "  defocus shot.exr -o shot_dof.exr --focal 85 --fstop 1.4 --focus 3\n"
-        "  defocus render.#.exr --frames 1001-1100 -o dof.#.exr --focal 35 --fstop 2 \\\n"
-        "          --focus 1001:3.0,1040:1.2 -d half --compression dwaa\n"
-        "  defocus shot.exr --frames 1-24 -o pull.#.exr --focus-at 1:640,360,24:200,300\n"
-        "  defocus shot.exr -o focus.png --output focusmap --focal 85 --fstop 1.4 --focus 3\n"
-        "  defocus shot.exr --focal 85 --fstop 1.4 --focus 3 --save-scene shot.dof\n"
-        "  defocus shot.dof -o out.exr --fstop 2.8\n"
-        "  defocus stereo.#.exr --view right -o right.#.exr --focal 35 --fstop 4 --focus 3\n"
-        "  defocus bg.exr mid.exr fg.exr -o comp.exr --focal 50 --fstop 2 --focus 4\n");
+    describe_defocus(ap);
     std::vector<std::string> inputs;
     ap.arg("filename").hidden().action([&](cspan<const char*> argv) {
         inputs.emplace_back(argv[0]);
@@ -185,27 +146,13 @@ bool parse_command_line(int argc, const char* argv[], CommandLine& cl, bool& hel
 bool write_preview(const FrameResult& frame, const CommandLine& cl, const std::string& file,
                    std::string& error)
 {
-    if (!frame.color.config) {
-        error = "--preview needs an OpenColorIO config: " + frame.color.summary;
+    ImageBuf preview;
+    if (!preview_image(frame, cl.display, cl.display_view, cl.preview_alpha, preview, error)) {
+        error = (frame.color.config ? "--preview: " : "--preview needs an OpenColorIO config: ")
+                + error;
         return false;
     }
-    const ColorManagement& c = *frame.color.config;
-    const std::string display = cl.display.empty() ? c.default_display() : cl.display;
-    const std::string view = cl.display_view.empty() ? c.default_view(display)
-                                                     : cl.display_view;
-    const ImageSpec& spec = frame.image.spec();
-    ImageBuf framed, shown;
-    ImageBufAlgo::crop(framed, frame.image,
-                       ROI(spec.full_x, spec.full_x + spec.full_width, spec.full_y,
-                           spec.full_y + spec.full_height, 0, 1, 0, spec.nchannels));
-    // Premultiplied colour over black is the colour itself, without alpha.
-    if (!cl.preview_alpha && spec.nchannels > 3)
-        framed = ImageBufAlgo::channels(framed, 3, { 0, 1, 2 });
-    if (!c.display(shown, framed, frame.color.output, display, view, error)) {
-        error = "--preview: " + error;
-        return false;
-    }
-    return write_image_atomic(shown, file, TypeUInt8, "", error);
+    return write_image_atomic(preview, file, TypeUInt8, "", error);
 }
 
 /// The run the command line asks for: -o and --preview through the frames,
@@ -259,58 +206,32 @@ void print_farm_header(const CommandLine& cl, const std::vector<int>& frames)
     std::fflush(stdout);
 }
 
-std::string verbose_report(const FrameResult& frame, const CommandLine& cl,
-                           const std::string& label, const std::string& output)
+/// Renders the planned frames, reporting as they go; the exit status.
+int render(const CommandLine& cl, const ShotAssets& assets, const RunRequest& request,
+           const RunPlan& plan)
 {
-    const Camera& c = frame.camera;
-    std::string r = format("defocus {}{}{} -> {}\n", label, label.empty() ? "" : ": ",
-                           frame.source, output);
-    r += format("  camera: {:.4g} mm f/{:.3g} focus {:.4g} sensor {:.4g} mm, {} lens, {} aperture, "
-                "max blur {:.4g} px\n",
-                c.focal_length_mm, c.fstop, c.focus_distance, c.sensor_width_mm,
-                lens_model_name(c.lens), aperture_shape_name(cl.shot.spread.aperture.shape),
-                c.max_blur_px);
-    const CameraOrigins& o = frame.camera_origins;
-    r += format("  camera values from: focal {}, f-number {}, focus {}, sensor {}\n",
-                o.focal_length, o.fstop, o.focus, o.sensor_width);
-    if (c.tilt_deg[0] != 0.0 || c.tilt_deg[1] != 0.0)
-        r += format("  plane of focus tilted {:.4g},{:.4g} degrees\n", c.tilt_deg[0],
-                    c.tilt_deg[1]);
-    if (c.split.distance > 0.0)
-        r += format("  split diopter beyond {:.6g},{:.6g} -> {:.6g},{:.6g}: focus {:.4g}\n",
-                    c.split.x0, c.split.y0, c.split.x1, c.split.y1, c.split.distance);
-    for (const std::string& note : frame.notes)
-        r += "  " + note + "\n";
-    r += "  " + frame.color.summary + "\n";
-    if (!frame.slicing.empty())
-        r += "  " + frame.slicing + "\n";
-    if (!frame.edges.empty())
-        r += "  " + frame.edges + "\n";
-    if (!frame.layers.empty())
-        r += "  layers, back to front:\n";
-    int64_t slow = 0, covered = 0;
-    for (const LayerReport& l : frame.layers) {
-        r += format("    {:<12} {:>9} px  depth {:.4g}..{:.4g}  CoC {:.3g}..{:.3g} px\n",
-                    l.name, l.pixels, l.depth_min, l.depth_max, l.coc_min, l.coc_max);
-        slow += l.psf_pixels;
-        covered += l.pixels;
+    const Shot& shot = cl.shot;
+    OIIO::attribute("threads", cl.threads);
+    const bool sequence = is_sequence(shot);
+    const ProgressMode mode = cl.quiet ? ProgressMode::Quiet
+                              : isatty(STDOUT_FILENO) ? ProgressMode::Bar
+                                                      : ProgressMode::Lines;
+    Progress progress(mode, int(plan.frames.size()));
+    // Display-referred output from a guessed input space may be wrong.
+    const bool display_referred = !cl.preview.empty() || !shot.output_space.empty();
+    const RunCallbacks callbacks = progress.run_callbacks(shot, cl.verbose, display_referred);
+    const ScheduleResult run = run_plan(shot, assets, plan, request, callbacks);
+    progress.finish();
+    if (sequence) {
+        const std::string summary = frames_written(run, plan.frames, int(plan.skipped.size()));
+        if (!run.failed.empty())
+            Strutil::print(stderr, "defocus: {}\n", error_line(summary));
+        else if (!cl.quiet)
+            Strutil::print("defocus: {}\n", summary);
+    } else if (!plan.skipped.empty() && !cl.quiet) {
+        Strutil::print("defocus: {} is written with these settings: skipped\n", cl.output);
     }
-    if (!cl.shot.spread.psf_image.empty())
-        r += format("  hybrid: {} of {} pixels ({:.2f}%) spread with the PSF image\n", slow,
-                    covered, covered ? 100.0 * slow / covered : 0.0);
-    r += format("  pixels fixed: {} with NaN/inf colour dropped, {} with colour beyond 1e30 "
-                "clamped, {} with alpha above 1 clamped to 1, {} with bad depth taken as "
-                "infinitely far, {} transparent with colour cleared, {} edge pixels without "
-                "depth given their neighbours'\n",
-                frame.fixed.nonfinite_color, frame.fixed.huge_color,
-                frame.fixed.alpha_above_one, frame.fixed.bad_depth,
-                frame.fixed.transparent_light, frame.fixed.edge_depth);
-    for (const auto& [stage, seconds] : frame.timings)
-        r += format("  {:<10} {:7.3f} s\n", stage, seconds);
-    const ImageSpec& spec = frame.image.spec();
-    r += format("  wrote {} ({}x{} data window, {})\n", output, spec.width, spec.height,
-                frame.pixel_type);
-    return r;
+    return run.failed.empty() ? EXIT_SUCCESS : EXIT_FAILURE;
 }
 
 }  // namespace
@@ -364,49 +285,5 @@ int main(int argc, const char* argv[])
     }
     if (cl.chunk_n > 0 && !cl.quiet)
         print_farm_header(cl, plan.frames);
-    OIIO::attribute("threads", cl.threads);
-    const bool sequence = is_sequence(shot);
-    const ProgressMode mode = cl.quiet ? ProgressMode::Quiet
-                              : isatty(STDOUT_FILENO) ? ProgressMode::Bar
-                                                      : ProgressMode::Lines;
-    Progress progress(mode, int(plan.frames.size()));
-    auto label = [&](int frame) { return sequence ? format("frame {}", frame) : std::string(); };
-    // Display-referred output from a guessed input space may be wrong:
-    // said once a run, not once a frame.
-    const bool display_referred = !cl.preview.empty() || !shot.output_space.empty();
-    std::once_flag guess_warning;
-    RunCallbacks callbacks;
-    callbacks.stage = [&](int frame, const char* stage) {
-        progress.stage(label(frame), stage);
-        return true;
-    };
-    callbacks.written = [&](int frame, const std::string& output, const FrameResult& result,
-                            double seconds) {
-        if (display_referred && !result.color.guess.empty())
-            std::call_once(guess_warning, [&] {
-                progress.error(format("warning: {}: input colour space '{}' is a guess "
-                                      "({}); give --iscolorspace to be sure",
-                                      result.source, result.color.input, result.color.guess));
-            });
-        if (cl.verbose)
-            progress.text(verbose_report(result, cl, label(frame), output));
-        progress.written(label(frame), output, seconds);
-        progress.frame_over();
-    };
-    callbacks.failed = [&](int frame, const std::string& error) {
-        progress.error(sequence ? label(frame) + ": " + error : error);
-        progress.frame_over();
-    };
-    const ScheduleResult run = run_plan(shot, assets, plan, request, callbacks);
-    progress.finish();
-    if (sequence) {
-        const std::string summary = frames_written(run, plan.frames, int(plan.skipped.size()));
-        if (!run.failed.empty())
-            Strutil::print(stderr, "defocus: {}\n", error_line(summary));
-        else if (!cl.quiet)
-            Strutil::print("defocus: {}\n", summary);
-    } else if (!plan.skipped.empty() && !cl.quiet) {
-        Strutil::print("defocus: {} is written with these settings: skipped\n", cl.output);
-    }
-    return run.failed.empty() ? EXIT_SUCCESS : EXIT_FAILURE;
+    return render(cl, assets, request, plan);
 }

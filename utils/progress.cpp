@@ -6,6 +6,8 @@
 #include <OpenImageIO/strutil.h>
 
 #include <defocus/error_line.h>
+#include <defocus/frame_report.h>
+#include <defocus/io/frames.h>
 
 #include "cli_options.h"
 
@@ -125,6 +127,37 @@ void Progress::draw_bar()
     OIIO::Strutil::print("\r{:<{}}", line, columns);
     std::fflush(stdout);
     m_bar_drawn = true;
+}
+
+RunCallbacks Progress::run_callbacks(const Shot& shot, bool verbose, bool display_referred)
+{
+    const bool sequence = is_sequence(shot);
+    auto label = [sequence](int frame) { return sequence ? format("frame {}", frame) : ""; };
+    RunCallbacks callbacks;
+    callbacks.stage = [this, label](int frame, const char* name) {
+        stage(label(frame), name);
+        return true;
+    };
+    callbacks.written = [=, &shot](int frame, const std::string& output,
+                                   const FrameResult& result, double seconds) {
+        if (display_referred && !result.color.guess.empty())
+            std::call_once(m_guess_warning, [&] {
+                error(format("warning: {}: input colour space '{}' is a guess ({}); give "
+                             "--iscolorspace to be sure",
+                             result.source, result.color.input, result.color.guess));
+            });
+        if (verbose)
+            text(format("defocus {}{}{} -> {}\n", label(frame), sequence ? ": " : "",
+                        result.source, output)
+                 + frame_report(result, shot, output));
+        written(label(frame), output, seconds);
+        frame_over();
+    };
+    callbacks.failed = [this, label, sequence](int frame, const std::string& message) {
+        error(sequence ? label(frame) + ": " + message : message);
+        frame_over();
+    };
+    return callbacks;
 }
 
 }  // namespace defocus

@@ -8,6 +8,8 @@
 
 #include <OpenImageIO/timer.h>
 
+#include <defocus/run_shot.h>
+
 namespace defocus {
 
 enum class ProgressMode {
@@ -34,6 +36,12 @@ public:
     /// Clears the bar, and in Bar mode says in one line what was written.
     void finish();
 
+    /// Callbacks that report a run of `shot` here: each stage, each frame
+    /// written (with -v, its report) or failed, and, once a run, a warning
+    /// when the input colour space was guessed and the output is
+    /// `display_referred`.
+    RunCallbacks run_callbacks(const Shot& shot, bool verbose, bool display_referred);
+
 private:
     void clear_bar();
     void draw_bar();
@@ -45,6 +53,7 @@ private:
     std::string m_current;  ///< "frame 1004: render"
     OIIO::Timer m_timer;
     bool m_bar_drawn = false;
+    std::once_flag m_guess_warning;
 };
 
 }  // namespace defocus

@@ -1,0 +1,84 @@
+#include <defocus/frame_report.h>
+
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/strutil.h>
+
+namespace defocus {
+
+using namespace OIIO;
+using Strutil::fmt::format;
+
+std::string frame_report(const FrameResult& frame, const Shot& shot, const std::string& output)
+{
+    const Camera& c = frame.camera;
+    std::string r;
+    r += format("  camera: {:.4g} mm f/{:.3g} focus {:.4g} sensor {:.4g} mm, {} lens, {} aperture, "
+                "max blur {:.4g} px\n",
+                c.focal_length_mm, c.fstop, c.focus_distance, c.sensor_width_mm,
+                lens_model_name(c.lens), aperture_shape_name(shot.spread.aperture.shape),
+                c.max_blur_px);
+    const CameraOrigins& o = frame.camera_origins;
+    r += format("  camera values from: focal {}, f-number {}, focus {}, sensor {}\n",
+                o.focal_length, o.fstop, o.focus, o.sensor_width);
+    if (c.tilt_deg[0] != 0.0 || c.tilt_deg[1] != 0.0)
+        r += format("  plane of focus tilted {:.4g},{:.4g} degrees\n", c.tilt_deg[0],
+                    c.tilt_deg[1]);
+    if (c.split.distance > 0.0)
+        r += format("  split diopter beyond {:.6g},{:.6g} -> {:.6g},{:.6g}: focus {:.4g}\n",
+                    c.split.x0, c.split.y0, c.split.x1, c.split.y1, c.split.distance);
+    for (const std::string& note : frame.notes)
+        r += "  " + note + "\n";
+    r += "  " + frame.color.summary + "\n";
+    if (!frame.slicing.empty())
+        r += "  " + frame.slicing + "\n";
+    if (!frame.edges.empty())
+        r += "  " + frame.edges + "\n";
+    if (!frame.layers.empty())
+        r += "  layers, back to front:\n";
+    int64_t slow = 0, covered = 0;
+    for (const LayerReport& l : frame.layers) {
+        r += format("    {:<12} {:>9} px  depth {:.4g}..{:.4g}  CoC {:.3g}..{:.3g} px\n",
+                    l.name, l.pixels, l.depth_min, l.depth_max, l.coc_min, l.coc_max);
+        slow += l.psf_pixels;
+        covered += l.pixels;
+    }
+    if (!shot.spread.psf_image.empty())
+        r += format("  hybrid: {} of {} pixels ({:.2f}%) spread with the PSF image\n", slow,
+                    covered, covered ? 100.0 * slow / covered : 0.0);
+    r += format("  pixels fixed: {} with NaN/inf colour dropped, {} with colour beyond 1e30 "
+                "clamped, {} with alpha above 1 clamped to 1, {} with bad depth taken as "
+                "infinitely far, {} transparent with colour cleared, {} edge pixels without "
+                "depth given their neighbours'\n",
+                frame.fixed.nonfinite_color, frame.fixed.huge_color,
+                frame.fixed.alpha_above_one, frame.fixed.bad_depth,
+                frame.fixed.transparent_light, frame.fixed.edge_depth);
+    for (const auto& [stage, seconds] : frame.timings)
+        r += format("  {:<10} {:7.3f} s\n", stage, seconds);
+    const ImageSpec& spec = frame.image.spec();
+    r += format("  wrote {} ({}x{} data window, {})\n", output, spec.width, spec.height,
+                frame.pixel_type);
+    return r;
+}
+
+bool preview_image(const FrameResult& frame, const std::string& display, const std::string& view,
+                   bool keep_alpha, ImageBuf& preview, std::string& error)
+{
+    if (!frame.color.config) {
+        error = frame.color.summary;
+        return false;
+    }
+    const ColorManagement& c = *frame.color.config;
+    const std::string shown_on = display.empty() ? c.default_display() : display;
+    const std::string seen_as = view.empty() ? c.default_view(shown_on) : view;
+    const ImageSpec& spec = frame.image.spec();
+    ImageBuf framed;
+    ImageBufAlgo::crop(framed, frame.image,
+                       ROI(spec.full_x, spec.full_x + spec.full_width, spec.full_y,
+                           spec.full_y + spec.full_height, 0, 1, 0, spec.nchannels));
+    // Premultiplied colour over black is the colour itself, without alpha.
+    if (!keep_alpha && spec.nchannels > 3)
+        framed = ImageBufAlgo::channels(framed, 3, { 0, 1, 2 });
+    return c.display(preview, framed, frame.color.output, shown_on, seen_as, error);
+}
+
+}  // namespace defocus
