@@ -1,0 +1,24 @@
+// The library's errors as Python sees them: defocus.Error, its one-line
+// message naming each setting by its Python keyword.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace defocus_python {
+
+/// The library's message with each setting's option named as its Python
+/// keyword: "--focus-at X,Y" reads "focus_at=X,Y", "--aperture polygon"
+/// reads 'aperture="polygon"'.
+std::string python_words(const std::string& message);
+
+/// Raised as defocus.Error, with the one-line message the CLI prints, the
+/// settings named as Python keywords.
+struct Error : std::runtime_error {
+    explicit Error(const std::string& message);
+};
+
+/// Raises Error(error) unless ok.
+void check(bool ok, const std::string& error);
+
+}  // namespace defocus_python
