@@ -2,10 +2,7 @@
 // the defocused image it describes. open() reports the spec from the
 // inputs' headers; the first read of pixels renders the frame, through the
 // same library call as the defocus command, and later reads reuse it.
-#include <sys/stat.h>
 
-#include <algorithm>
-#include <cstring>
 #include <map>
 #include <mutex>
 #include <vector>
@@ -15,6 +12,7 @@
 #include <OpenImageIO/strutil.h>
 
 #include <defocus/error_line.h>
+#include <defocus/io/file_stamps.h>
 #include <defocus/io/frames.h>
 #include <defocus/render_frame.h>
 #include <defocus/shot/option_value.h>
@@ -60,20 +58,6 @@ private:
     bool apply_hints(const ImageSpec& config, bool& frame_given, std::string& error);
     bool render(std::string& error);
     bool render_once();
-    /// The first file the frame reads that is not as it was when the .dof
-    /// was opened, or "".
-    std::string changed_input() const;
-
-    /// A file as open() found it: a file replaced or rewritten since then
-    /// would give pixels the spec reported to the host does not describe.
-    struct Stamp {
-        std::string file;
-        dev_t device;
-        ino_t inode;
-        off_t size;
-        struct timespec modified;
-    };
-    static std::vector<Stamp> stamps(const std::vector<std::string>& files);
 
     std::string m_filename;
     Shot m_shot;
@@ -83,62 +67,8 @@ private:
     bool m_rendered = false;
     std::string m_render_error;
     ImageBuf m_pixels;  ///< the frame, in the spec's window and pixel type
-    std::vector<Stamp> m_inputs;  ///< the files the frame reads, as open() found them
+    std::vector<defocus::FileStamp> m_inputs;  ///< the files the frame reads, as open() found them
 };
-
-std::vector<DofInput::Stamp> DofInput::stamps(const std::vector<std::string>& files)
-{
-    std::vector<Stamp> found;
-    for (const std::string& file : files) {
-        struct stat st {};
-        if (::stat(file.c_str(), &st) == 0)
-            found.push_back({ file, st.st_dev, st.st_ino, st.st_size, st.st_mtim });
-        else
-            found.push_back({ file, 0, 0, -1, {} });
-    }
-    return found;
-}
-
-std::string DofInput::changed_input() const
-{
-    std::vector<std::string> files;
-    for (const Stamp& s : m_inputs)
-        files.push_back(s.file);
-    const std::vector<Stamp> now = stamps(files);
-    for (size_t i = 0; i < now.size(); ++i) {
-        const Stamp &a = m_inputs[i], &b = now[i];
-        if (a.device != b.device || a.inode != b.inode || a.size != b.size
-            || a.modified.tv_sec != b.modified.tv_sec || a.modified.tv_nsec != b.modified.tv_nsec)
-            return a.file;
-    }
-    return "";
-}
-
-/// A host's frame pattern names a frame of a .dof as a file of its own
-/// (oiiotool --frames 1001-1005 shot.#.dof asks for shot.1001.dof...).
-/// Where `name` does not exist but is such a name of one that does, the
-/// scene file it names and the frame; else false.
-bool numbered_frame(const std::string& name, std::string& scene, int& frame)
-{
-    if (!Strutil::iends_with(name, ".dof") || Filesystem::exists(name))
-        return false;
-    const std::string stem = name.substr(0, name.size() - 4);
-    const size_t dot = stem.rfind('.');
-    if (dot == std::string::npos)
-        return false;
-    const std::string number = stem.substr(dot + 1);
-    const size_t digits_from = number.size() > 1 && number[0] == '-' ? 1 : 0;
-    if (number.size() <= digits_from || number.size() > 9
-        || !std::all_of(number.begin() + digits_from, number.end(),
-                        [](char c) { return c >= '0' && c <= '9'; }))
-        return false;
-    const std::string candidate = stem.substr(0, dot) + name.substr(name.size() - 4);
-    if (!Filesystem::exists(candidate))
-        return false;
-    scene = candidate;
-    frame = Strutil::stoi(number);
-    return true;
-}
 
 /// A host that opens a sequence's .dof again without a frame (oiiotool
 /// --frames 1-5 shot.dof -o out.#.exr) gets the first frame each time:
@@ -165,7 +95,7 @@ bool DofInput::valid_file(const std::string& filename) const
         Shot shot;
         std::string error, scene = filename;
         int frame = 0;
-        numbered_frame(filename, scene, frame);
+        defocus::numbered_file(filename, scene, frame);
         return Strutil::iends_with(filename, ".dof") && defocus::load_shot(scene, shot, error);
     } catch (const std::exception&) {
         return false;
@@ -211,7 +141,7 @@ bool DofInput::open(const std::string& name, ImageSpec& newspec, const ImageSpec
     try {
         std::string scene = name;
         int numbered = 0;
-        const bool frame_in_name = numbered_frame(name, scene, numbered);
+        const bool frame_in_name = defocus::numbered_file(name, scene, numbered);
         if (!defocus::load_shot(scene, m_shot, error))
             return fail(error);
         bool frame_given = false;
@@ -234,7 +164,7 @@ bool DofInput::open(const std::string& name, ImageSpec& newspec, const ImageSpec
         }
         if (!defocus::frame_spec(m_shot, m_frame, m_assets, m_spec, error))
             return fail(error);
-        m_inputs = stamps(defocus::files_read(m_shot, { m_frame }));
+        m_inputs = defocus::stamp_files(defocus::files_read(m_shot, { m_frame }));
     } catch (const std::exception& e) {
         return fail(e.what());
     }
@@ -265,7 +195,7 @@ bool DofInput::render(std::string& error)
         return false;
     }
     try {
-        if (const std::string changed = changed_input(); !changed.empty()) {
+        if (const std::string changed = defocus::first_changed(m_inputs); !changed.empty()) {
             error = Strutil::fmt::format("{}: {} changed since the scene was opened: open it "
                                          "again", m_filename, changed);
             return false;

@@ -6,10 +6,13 @@
 #include <cmath>
 
 #include <OpenImageIO/deepdata.h>
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/io/file_stamps.h>
+#include <defocus/io/frames.h>
 #include <defocus/io/scene_io.h>
 
 #include "test_support.h"
@@ -356,4 +359,40 @@ TEST_CASE("a depth channel named by the user, or a depth file, stands in for Z")
     ReadOptions other_window;
     other_window.depth = wide;
     CHECK_THAT(read_error({ f }, other_window), Catch::Contains("display window"));
+}
+
+TEST_CASE("a numbered name of a file that exists names its frame; no other name does")
+{
+    const std::string dir = scratch_dir("numbered_file");
+    REQUIRE(Filesystem::write_text_file(dir + "/shot.dof", "{}"));
+    std::string file;
+    int frame = 0;
+    CHECK(numbered_file(dir + "/shot.1001.dof", file, frame));
+    CHECK(file == dir + "/shot.dof");
+    CHECK(frame == 1001);
+    CHECK(numbered_file(dir + "/shot.-5.dof", file, frame));
+    CHECK(frame == -5);
+    CHECK_FALSE(numbered_file(dir + "/shot.dof", file, frame));  // exists: no frame
+    CHECK_FALSE(numbered_file(dir + "/shot.10x.dof", file, frame));
+    CHECK_FALSE(numbered_file(dir + "/shot.1234567890.dof", file, frame));
+    CHECK_FALSE(numbered_file(dir + "/other.1001.dof", file, frame));
+}
+
+TEST_CASE("a file rewritten, replaced or made since it was stamped is the first changed")
+{
+    const std::string dir = scratch_dir("file_stamps");
+    const std::string a = dir + "/a.txt", b = dir + "/b.txt";
+    REQUIRE(Filesystem::write_text_file(a, "one"));
+    Filesystem::remove(b);
+    std::vector<FileStamp> stamps = stamp_files({ a, b });
+    CHECK(first_changed(stamps) == "");
+    REQUIRE(Filesystem::write_text_file(b, "new"));
+    CHECK(first_changed(stamps) == b);
+    stamps = stamp_files({ a, b });
+    REQUIRE(Filesystem::write_text_file(a, "three"));
+    CHECK(first_changed(stamps) == a);
+    stamps = stamp_files({ a, b });
+    REQUIRE(Filesystem::write_text_file(dir + "/c.txt", "other"));
+    REQUIRE(Filesystem::rename(dir + "/c.txt", a));
+    CHECK(first_changed(stamps) == a);
 }

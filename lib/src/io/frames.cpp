@@ -533,4 +533,27 @@ bool frame_outputs(const std::string& option, const std::string& pattern,
     return true;
 }
 
+bool numbered_file(const std::string& name, std::string& file, int& frame)
+{
+    const std::string extension = Filesystem::extension(name);
+    if (extension.empty() || Filesystem::exists(name))
+        return false;
+    const std::string stem = name.substr(0, name.size() - extension.size());
+    const size_t dot = stem.rfind('.');
+    if (dot == std::string::npos)
+        return false;
+    const std::string number = stem.substr(dot + 1);
+    const size_t digits_from = number.size() > 1 && number[0] == '-' ? 1 : 0;
+    if (number.size() <= digits_from || number.size() > 9
+        || !std::all_of(number.begin() + digits_from, number.end(),
+                        [](char c) { return c >= '0' && c <= '9'; }))
+        return false;
+    const std::string candidate = stem.substr(0, dot) + extension;
+    if (!Filesystem::exists(candidate))
+        return false;
+    file = candidate;
+    frame = Strutil::stoi(number);
+    return true;
+}
+
 }  // namespace defocus

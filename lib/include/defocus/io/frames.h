@@ -57,6 +57,12 @@ bool is_sequence(const Shot& shot);
 bool shot_frames(const Shot& shot, std::vector<int>& frames, std::string& error,
                  std::vector<int>* missing = nullptr);
 
+/// A host's frame pattern names a frame of a file as a file of its own
+/// (oiiotool --frames 1001-1005 shot.#.dof asks for shot.1001.dof): where
+/// `name` does not exist but is such a name of one that does, that file
+/// and the frame; else false.
+bool numbered_file(const std::string& name, std::string& file, int& frame);
+
 /// Frames as ranges for messages: "1001-1003, 1007, 1010-1012" (sorted;
 /// the first dozen ranges).
 std::string frame_ranges(const std::vector<int>& frames);
