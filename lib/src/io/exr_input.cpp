@@ -293,17 +293,46 @@ bool ExrInput::complete(std::string& why) const
     return true;
 }
 
-bool ExrInput::read(int part, const OIIO::ROI& window, const std::vector<ChannelTarget>& targets,
-                    std::string& error, int nthreads) const
-{
-    exr_const_context_t file = m_context->file;
-    const std::string& filename = m_context->filename;
+namespace {
+
+/// A flat part's chunks, from its headers: scanline blocks, or tiles of
+/// the top level.
+struct FlatChunks {
     exr_storage_t storage;
     exr_attr_box2i_t dw;
     exr_compression_t compression;
-    if (exr_get_storage(file, part, &storage) != EXR_ERR_SUCCESS
+    int64_t across = 1, count = 0;  ///< tiles across a row of them; chunks
+    int32_t lines = 1;              ///< scanlines a chunk
+    uint32_t tile_w = 0, tile_h = 0;
+
+    /// Chunk c's first pixel.
+    void origin(int64_t c, int64_t& x0, int64_t& y0) const
+    {
+        x0 = dw.min.x + (storage == EXR_STORAGE_SCANLINE ? 0 : (c % across) * tile_w);
+        y0 = storage == EXR_STORAGE_SCANLINE ? dw.min.y + c * lines
+                                             : dw.min.y + (c / across) * tile_h;
+    }
+
+    exr_result_t info(exr_const_context_t file, int part, int64_t c, exr_chunk_info_t& chunk) const
+    {
+        if (storage == EXR_STORAGE_SCANLINE)
+            return exr_read_scanline_chunk_info(file, part, int(dw.min.y + c * lines), &chunk);
+        return exr_read_tile_chunk_info(file, part, int(c % across), int(c / across), 0, 0,
+                                        &chunk);
+    }
+};
+
+/// Part `part`'s chunks, checked against the window and channels that
+/// `targets` were laid out for. False with `error` when the headers are
+/// damaged, read two ways, or the part is deep.
+bool flat_chunks(exr_const_context_t file, const std::string& filename, int part,
+                 const OIIO::ROI& window, const std::vector<ChannelTarget>& targets,
+                 FlatChunks& out, std::string& error)
+{
+    exr_attr_box2i_t& dw = out.dw;
+    if (exr_get_storage(file, part, &out.storage) != EXR_ERR_SUCCESS
         || exr_get_data_window(file, part, &dw) != EXR_ERR_SUCCESS
-        || exr_get_compression(file, part, &compression) != EXR_ERR_SUCCESS) {
+        || exr_get_compression(file, part, &out.compression) != EXR_ERR_SUCCESS) {
         error = damaged(filename, core_message);
         return false;
     }
@@ -327,36 +356,75 @@ bool ExrInput::read(int part, const OIIO::ROI& window, const std::vector<Channel
         error = damaged(filename, format("part {}'s headers read two ways", part));
         return false;
     }
-
-    // The chunks of the part: scanline blocks, or tiles of the top level.
-    int64_t across = 1, chunks = 0;
-    int32_t lines = 1;
-    uint32_t tile_w = 0, tile_h = 0;
-    if (storage == EXR_STORAGE_SCANLINE) {
-        if (exr_get_scanlines_per_chunk(file, part, &lines) != EXR_ERR_SUCCESS || lines < 1) {
+    if (out.storage == EXR_STORAGE_SCANLINE) {
+        if (exr_get_scanlines_per_chunk(file, part, &out.lines) != EXR_ERR_SUCCESS
+            || out.lines < 1) {
             error = damaged(filename, core_message);
             return false;
         }
-        chunks = (height + lines - 1) / lines;
-    } else if (storage == EXR_STORAGE_TILED) {
+        out.count = (height + out.lines - 1) / out.lines;
+    } else if (out.storage == EXR_STORAGE_TILED) {
         exr_tile_level_mode_t mode;
         exr_tile_round_mode_t round;
-        if (exr_get_tile_descriptor(file, part, &tile_w, &tile_h, &mode, &round) != EXR_ERR_SUCCESS
-            || tile_w < 1 || tile_h < 1) {
+        if (exr_get_tile_descriptor(file, part, &out.tile_w, &out.tile_h, &mode, &round)
+                != EXR_ERR_SUCCESS
+            || out.tile_w < 1 || out.tile_h < 1) {
             error = damaged(filename, core_message);
             return false;
         }
-        across = (width + tile_w - 1) / tile_w;
-        chunks = across * ((height + tile_h - 1) / tile_h);
+        out.across = (width + out.tile_w - 1) / out.tile_w;
+        out.count = out.across * ((height + out.tile_h - 1) / out.tile_h);
     } else {
         error = format("{}: part {} is deep, not flat", filename, part);
         return false;
     }
+    return true;
+}
 
+/// Points the decoder's channels that `targets` ask for at their place for
+/// the chunk starting at (x0, y0), as float; the others are skipped. False
+/// with `error` for a subsampled channel.
+bool aim_channels(exr_decode_pipeline_t& decoder, const std::vector<ChannelTarget>& targets,
+                  const exr_attr_box2i_t& dw, int64_t x0, int64_t y0,
+                  const std::string& filename, std::string& error)
+{
+    for (int i = 0; i < decoder.channel_count; ++i) {
+        exr_coding_channel_info_t& ch = decoder.channels[i];
+        ch.decode_to_ptr = nullptr;  // channels that are not asked for are skipped
+        for (const ChannelTarget& t : targets) {
+            if (t.channel != ch.channel_name)
+                continue;
+            if (ch.x_samples != 1 || ch.y_samples != 1) {
+                error = format("{}: channel {} is subsampled, which defocus does not read",
+                               filename, t.channel);
+                return false;
+            }
+            ch.user_data_type = EXR_PIXEL_FLOAT;
+            ch.user_bytes_per_element = sizeof(float);
+            ch.user_pixel_stride = int32_t(t.pixel_stride * sizeof(float));
+            ch.user_line_stride = int32_t(t.row_stride * sizeof(float));
+            ch.decode_to_ptr = reinterpret_cast<uint8_t*>(
+                t.origin + size_t(y0 - dw.min.y) * t.row_stride
+                + size_t(x0 - dw.min.x) * t.pixel_stride);
+        }
+    }
+    return true;
+}
+
+}  // namespace
+
+bool ExrInput::read(int part, const OIIO::ROI& window, const std::vector<ChannelTarget>& targets,
+                    std::string& error, int nthreads) const
+{
+    exr_const_context_t file = m_context->file;
+    const std::string& filename = m_context->filename;
+    FlatChunks chunks;
+    if (!flat_chunks(file, filename, part, window, targets, chunks, error))
+        return false;
     std::atomic<bool> failed { false };
     std::mutex first_error;
     // A few chunks a task: tasks of many chunks leave a thread idle.
-    OIIO::parallel_for_chunked(0, chunks, 4, [&](int64_t c0, int64_t c1) {
+    OIIO::parallel_for_chunked(0, chunks.count, 4, [&](int64_t c0, int64_t c1) {
         exr_decode_pipeline_t decoder = EXR_DECODE_PIPELINE_INITIALIZER;
         ZipChunks zip;
         auto fail = [&](const std::string& why) {
@@ -367,17 +435,9 @@ bool ExrInput::read(int part, const OIIO::ROI& window, const std::vector<Channel
         core_message.clear();
         for (int64_t c = c0; c < c1 && !failed; ++c) {
             exr_chunk_info_t chunk;
-            int64_t x0 = dw.min.x, y0;
-            exr_result_t rv;
-            if (storage == EXR_STORAGE_SCANLINE) {
-                y0 = dw.min.y + c * lines;
-                rv = exr_read_scanline_chunk_info(file, part, int(y0), &chunk);
-            } else {
-                x0 = dw.min.x + (c % across) * tile_w;
-                y0 = dw.min.y + (c / across) * tile_h;
-                rv = exr_read_tile_chunk_info(file, part, int(c % across), int(c / across), 0, 0,
-                                              &chunk);
-            }
+            int64_t x0, y0;
+            chunks.origin(c, x0, y0);
+            exr_result_t rv = chunks.info(file, part, c, chunk);
             if (rv == EXR_ERR_SUCCESS)
                 rv = decoder.channels ? exr_decoding_update(file, part, &chunk, &decoder)
                                       : exr_decoding_initialize(file, part, &chunk, &decoder);
@@ -385,33 +445,16 @@ bool ExrInput::read(int part, const OIIO::ROI& window, const std::vector<Channel
                 fail(damaged(filename, core_message));
                 break;
             }
-            for (int i = 0; i < decoder.channel_count; ++i) {
-                exr_coding_channel_info_t& ch = decoder.channels[i];
-                ch.decode_to_ptr = nullptr;  // channels that are not asked for are skipped
-                for (const ChannelTarget& t : targets) {
-                    if (t.channel != ch.channel_name)
-                        continue;
-                    if (ch.x_samples != 1 || ch.y_samples != 1) {
-                        fail(format("{}: channel {} is subsampled, which defocus does not read",
-                                    filename, t.channel));
-                        break;
-                    }
-                    ch.user_data_type = EXR_PIXEL_FLOAT;
-                    ch.user_bytes_per_element = sizeof(float);
-                    ch.user_pixel_stride = int32_t(t.pixel_stride * sizeof(float));
-                    ch.user_line_stride = int32_t(t.row_stride * sizeof(float));
-                    ch.decode_to_ptr = reinterpret_cast<uint8_t*>(
-                        t.origin + size_t(y0 - dw.min.y) * t.row_stride
-                        + size_t(x0 - dw.min.x) * t.pixel_stride);
-                }
-            }
-            if (failed)
+            std::string why;
+            if (!aim_channels(decoder, targets, chunks.dw, x0, y0, filename, why)) {
+                fail(why);
                 break;
+            }
             if (exr_decoding_choose_default_routines(file, part, &decoder) != EXR_ERR_SUCCESS) {
                 fail(damaged(filename, core_message));
                 break;
             }
-            inflate_zip_chunks(decoder, compression, zip);
+            inflate_zip_chunks(decoder, chunks.compression, zip);
             if (exr_decoding_run(file, part, &decoder) != EXR_ERR_SUCCESS) {
                 fail(damaged(filename, core_message));
                 break;
@@ -422,38 +465,122 @@ bool ExrInput::read(int part, const OIIO::ROI& window, const std::vector<Channel
     return !failed;
 }
 
+namespace {
+
+/// A deep part, scanlines or tiles, read through one frame buffer.
+struct DeepPart {
+    std::unique_ptr<Imf::DeepScanLineInputPart> lines;
+    std::unique_ptr<Imf::DeepTiledInputPart> tiles;
+    Imath::Box2i dw;
+
+    DeepPart(Imf::MultiPartInputFile& file, int part)
+        : dw(file.header(part).dataWindow())
+    {
+        if (file.header(part).type() == Imf::DEEPTILE)
+            tiles = std::make_unique<Imf::DeepTiledInputPart>(file, part);
+        else
+            lines = std::make_unique<Imf::DeepScanLineInputPart>(file, part);
+    }
+
+    /// Sets the frame buffer (once: setting it again forgets the sample
+    /// counts) and reads the sample counts into it.
+    void read_counts(const Imf::DeepFrameBuffer& frame)
+    {
+        if (tiles) {
+            tiles->setFrameBuffer(frame);
+            tiles->readPixelSampleCounts(0, tiles->numXTiles(0) - 1, 0, tiles->numYTiles(0) - 1);
+        } else {
+            lines->setFrameBuffer(frame);
+            lines->readPixelSampleCounts(dw.min.y, dw.max.y);
+        }
+    }
+
+    void read_samples()
+    {
+        if (tiles)
+            tiles->readTiles(0, tiles->numXTiles(0) - 1, 0, tiles->numYTiles(0) - 1);
+        else
+            lines->readPixels(dw.min.y, dw.max.y);
+    }
+};
+
+/// Whether a deep data window of width x height, and its per-pixel
+/// tables, may be read; else false with `error`.
+bool deep_window_allowed(const std::string& filename, int64_t width, int64_t height,
+                         const MemoryLimit& limit, std::string& error)
+{
+    if (width <= 0 || height <= 0) {
+        error = damaged(filename, format("deep data window of {}x{}", width, height));
+        return false;
+    }
+    if (!limit.allows(deep_table_bytes(width, height))) {
+        error = format("{}: {}", filename,
+                       limit.exceeded(format("a deep data window of {}x{}", width, height),
+                                      deep_table_bytes(width, height)));
+        return false;
+    }
+    return true;
+}
+
+/// Whether `total` samples, up to `most` in one pixel, may be read; else
+/// false with `error`. Each sample is held twice for a moment: as OpenEXR
+/// decodes it, one array per channel, and as the image keeps it.
+bool deep_samples_allowed(const std::string& filename, int64_t width, int64_t height,
+                          int nchannels, size_t total, unsigned most, const MemoryLimit& limit,
+                          std::string& error)
+{
+    const double sample_bytes = deep_table_bytes(width, height)
+                                + double(total) * (nchannels * sizeof(float) + sizeof(DeepSample));
+    if (limit.allows(sample_bytes))
+        return true;
+    error = format("{}: {}", filename,
+                   limit.exceeded(format("{} deep samples (up to {} in one pixel)", total, most),
+                                  sample_bytes));
+    return false;
+}
+
+/// The image of the samples decoded per channel (R, G, B, A, Z and, when
+/// there are six, ZBack), `counts` of them per pixel of `dw`.
+void gather_samples(const std::vector<std::vector<float>>& values,
+                    const std::vector<unsigned>& counts, const Imath::Box2i& dw,
+                    DeepImage& image)
+{
+    const size_t npixels = counts.size(), total = values[0].size();
+    image.roi = OIIO::ROI(dw.min.x, dw.max.x + 1, dw.min.y, dw.max.y + 1);
+    image.offsets.assign(npixels + 1, 0);
+    for (size_t p = 0; p < npixels; ++p)
+        image.offsets[p + 1] = image.offsets[p] + counts[p];
+    image.samples.resize(total);
+    for (size_t s = 0; s < total; ++s) {
+        DeepSample& d = image.samples[s];
+        d.r = values[0][s];
+        d.g = values[1][s];
+        d.b = values[2][s];
+        d.a = values[3][s];
+        d.z = values[4][s];
+        d.zback = values.size() == 6 ? values[5][s] : d.z;
+    }
+}
+
+}  // namespace
+
 bool read_deep_part(const std::string& filename, int part, const DeepChannels& channels,
                     const MemoryLimit& limit, DeepImage& image, std::string& error)
 {
     try {
         Imf::MultiPartInputFile file(filename.c_str());
-        const Imf::Header& header = file.header(part);
-        const Imath::Box2i dw = header.dataWindow();
+        const Imath::Box2i dw = file.header(part).dataWindow();
         const int64_t width = int64_t(dw.max.x) - dw.min.x + 1;
         const int64_t height = int64_t(dw.max.y) - dw.min.y + 1;
+        if (!deep_window_allowed(filename, width, height, limit, error))
+            return false;
         const size_t npixels = size_t(width) * size_t(height);
-        if (width <= 0 || height <= 0) {
-            error = damaged(filename, format("deep data window of {}x{}", width, height));
-            return false;
-        }
-        if (!limit.allows(deep_table_bytes(width, height))) {
-            error = format("{}: {}", filename,
-                           limit.exceeded(format("a deep data window of {}x{}", width, height),
-                                          deep_table_bytes(width, height)));
-            return false;
-        }
-        const bool tiled = header.type() == Imf::DEEPTILE;
-        std::unique_ptr<Imf::DeepScanLineInputPart> lines;
-        std::unique_ptr<Imf::DeepTiledInputPart> tiles;
-        if (tiled)
-            tiles = std::make_unique<Imf::DeepTiledInputPart>(file, part);
-        else
-            lines = std::make_unique<Imf::DeepScanLineInputPart>(file, part);
+        DeepPart deep(file, part);
 
-        // One frame buffer, set once (setting it again forgets the sample
-        // counts): pixel (x, y) at base + x * xstride + y * ystride. Each
-        // channel's samples go in one array, through a pointer per pixel
-        // to its first sample there, filled in once the counts are known.
+        // One frame buffer: pixel (x, y) at base + x * xstride + y * ystride.
+        // Each channel's samples go in one array, through a pointer per
+        // pixel to its first sample there, filled in once the counts are
+        // known.
         const int nchannels = channels.depth_back.empty() ? 5 : 6;
         const std::string* names[6] = { &channels.color[0], &channels.color[1],
                                         &channels.color[2], &channels.color[3], &channels.depth,
@@ -469,31 +596,15 @@ bool read_deep_part(const std::string& filename, int part, const DeepChannels& c
                          Imf::DeepSlice(Imf::FLOAT, frame_base(firsts[c].data(), origin),
                                         sizeof(float*), sizeof(float*) * size_t(width),
                                         sizeof(float)));
-        if (tiled) {
-            tiles->setFrameBuffer(frame);
-            tiles->readPixelSampleCounts(0, tiles->numXTiles(0) - 1, 0, tiles->numYTiles(0) - 1);
-        } else {
-            lines->setFrameBuffer(frame);
-            lines->readPixelSampleCounts(dw.min.y, dw.max.y);
-        }
+        deep.read_counts(frame);
         size_t total = 0;
         unsigned most = 0;
         for (unsigned n : counts) {
             total += n;
             most = std::max(most, n);
         }
-        // Each sample is held twice for a moment: as OpenEXR decodes it,
-        // one array per channel, and as the image keeps it.
-        const double sample_bytes =
-            deep_table_bytes(width, height)
-            + double(total) * (nchannels * sizeof(float) + sizeof(DeepSample));
-        if (!limit.allows(sample_bytes)) {
-            error = format("{}: {}", filename,
-                           limit.exceeded(format("{} deep samples (up to {} in one pixel)",
-                                                 total, most),
-                                          sample_bytes));
+        if (!deep_samples_allowed(filename, width, height, nchannels, total, most, limit, error))
             return false;
-        }
         std::vector<std::vector<float>> values(nchannels, std::vector<float>(total));
         for (int c = 0; c < nchannels; ++c) {
             size_t at = 0;
@@ -502,25 +613,8 @@ bool read_deep_part(const std::string& filename, int part, const DeepChannels& c
                 at += counts[p];
             }
         }
-        if (tiled)
-            tiles->readTiles(0, tiles->numXTiles(0) - 1, 0, tiles->numYTiles(0) - 1);
-        else
-            lines->readPixels(dw.min.y, dw.max.y);
-
-        image.roi = OIIO::ROI(dw.min.x, dw.max.x + 1, dw.min.y, dw.max.y + 1);
-        image.offsets.assign(npixels + 1, 0);
-        for (size_t p = 0; p < npixels; ++p)
-            image.offsets[p + 1] = image.offsets[p] + counts[p];
-        image.samples.resize(total);
-        for (size_t s = 0; s < total; ++s) {
-            DeepSample& d = image.samples[s];
-            d.r = values[0][s];
-            d.g = values[1][s];
-            d.b = values[2][s];
-            d.a = values[3][s];
-            d.z = values[4][s];
-            d.zback = nchannels == 6 ? values[5][s] : d.z;
-        }
+        deep.read_samples();
+        gather_samples(values, counts, dw, image);
         return true;
     } catch (const std::exception& e) {
         error = damaged(filename, OIIO::Strutil::replace(e.what(), "\n", " ", true));

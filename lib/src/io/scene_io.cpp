@@ -70,12 +70,11 @@ std::unique_ptr<ImageInput> open_file(const std::string& filename, ExrInput* exr
     return in;
 }
 
-/// Chooses the parts of one file that make the scene, from their headers.
-bool choose_parts(ImageInput& in, const std::string& filename, const ReadOptions& options,
-                  FileLayout& layout, std::string& error)
+/// The parts of the chosen view (the first part's when none is chosen),
+/// and those that belong to no view.
+bool parts_of_view(ImageInput& in, const std::string& filename, const ReadOptions& options,
+                   std::vector<Part>& parts, std::string& error)
 {
-    // The parts of the chosen view, and those that belong to no view.
-    std::vector<Part>& parts = layout.parts;
     std::vector<std::string> views;
     std::string view = options.view;
     for (int s = 0; in.seek_subimage(s, 0); ++s) {
@@ -103,24 +102,38 @@ bool choose_parts(ImageInput& in, const std::string& filename, const ReadOptions
         error = filename + ": has no image parts";
         return false;
     }
+    return true;
+}
 
-    // --depth names a channel of the file's parts, or else a file.
-    bool depth_is_channel = false;
-    for (const Part& part : parts)
+/// Where --depth points: a channel of the file's parts, or else a file
+/// (layout.depth_file).
+bool find_depth_source(const std::string& filename, const ReadOptions& options,
+                       FileLayout& layout, bool& depth_is_channel, std::string& error)
+{
+    depth_is_channel = false;
+    for (const Part& part : layout.parts)
         depth_is_channel |= !options.depth.empty() && part.spec.channelindex(options.depth) >= 0;
     if (!options.depth.empty() && !depth_is_channel) {
         if (!Filesystem::is_regular(options.depth)) {
             error = format("{}: --depth {}: no such channel (channels: {}) and no such file",
                            filename, options.depth,
-                           Strutil::join(parts.front().spec.channelnames, ","));
+                           Strutil::join(layout.parts.front().spec.channelnames, ","));
             return false;
         }
         layout.depth_file = options.depth;
     }
 
-    std::vector<size_t> color_only, depth_only;
-    for (size_t i = 0; i < parts.size(); ++i) {
-        Part& part = parts[i];
+    return true;
+}
+
+/// Each part's channels, and the part among the complete layers (colour and
+/// depth), the colour-only or the depth-only parts.
+bool sort_parts(const std::string& filename, const ReadOptions& options, bool depth_is_channel,
+                FileLayout& layout, std::vector<size_t>& color_only,
+                std::vector<size_t>& depth_only, std::string& error)
+{
+    for (size_t i = 0; i < layout.parts.size(); ++i) {
+        Part& part = layout.parts[i];
         std::string ambiguity;
         part.channels = find_channels(part.spec, options.layer, ambiguity);
         if (!ambiguity.empty()) {
@@ -153,18 +166,17 @@ bool choose_parts(ImageInput& in, const std::string& filename, const ReadOptions
         else if (c.has_depth() && !part.spec.deep)
             depth_only.push_back(i);
     }
-    for (size_t i : layout.complete)
-        layout.data_window = roi_union(layout.data_window, parts[i].spec.roi());
-    // Beside layers with depth, a part with colour and no depth has no
-    // place among them: it used to be dropped without a word.
-    if (!layout.complete.empty() && !color_only.empty() && layout.depth_file.empty()) {
-        const Part& part = parts[color_only.front()];
-        error = format("{}: {} has colour but no depth ({}), unlike the file's other layers: "
-                       "give it a Z channel, or leave it out of the file",
-                       filename, part.label, missing_channel(part.spec, options.layer));
-        return false;
-    }
+    return true;
+}
 
+/// A file of no complete layers, or whose depth --depth FILE gives: its
+/// colour part joined with a depth part or the depth file, as one flat
+/// render.
+bool join_flat_render(const std::string& filename, const ReadOptions& options,
+                      FileLayout& layout, const std::vector<size_t>& color_only,
+                      const std::vector<size_t>& depth_only, std::string& error)
+{
+    const std::vector<Part>& parts = layout.parts;
     if (!layout.depth_file.empty()) {
         // A beauty part, its depth in another file.
         if (color_only.size() != 1 || parts[color_only[0]].spec.deep) {
@@ -200,6 +212,32 @@ bool choose_parts(ImageInput& in, const std::string& filename, const ReadOptions
         }
     }
     return true;
+}
+
+/// Chooses the parts of one file that make the scene, from their headers.
+bool choose_parts(ImageInput& in, const std::string& filename, const ReadOptions& options,
+                  FileLayout& layout, std::string& error)
+{
+    bool depth_is_channel = false;
+    std::vector<size_t> color_only, depth_only;
+    if (!parts_of_view(in, filename, options, layout.parts, error)
+        || !find_depth_source(filename, options, layout, depth_is_channel, error)
+        || !sort_parts(filename, options, depth_is_channel, layout, color_only, depth_only,
+                       error))
+        return false;
+    const std::vector<Part>& parts = layout.parts;
+    for (size_t i : layout.complete)
+        layout.data_window = roi_union(layout.data_window, parts[i].spec.roi());
+    // Beside layers with depth, a part with colour and no depth has no
+    // place among them: it used to be dropped without a word.
+    if (!layout.complete.empty() && !color_only.empty() && layout.depth_file.empty()) {
+        const Part& part = parts[color_only.front()];
+        error = format("{}: {} has colour but no depth ({}), unlike the file's other layers: "
+                       "give it a Z channel, or leave it out of the file",
+                       filename, part.label, missing_channel(part.spec, options.layer));
+        return false;
+    }
+    return join_flat_render(filename, options, layout, color_only, depth_only, error);
 }
 
 /// What reading a file's chosen parts will allocate, from their headers

@@ -149,49 +149,29 @@ struct Occlusion {
     bool operator==(const Occlusion& o) const { return near == o.near && far == o.far; }
 };
 
-/// The distinct occlusions of a scene's flat and deep parts whose sides'
-/// CoCs differ by more than `min_step` pixels and by more than a quarter of
-/// the smaller blur: between 4-neighbour pixels (a flat pixel, a deep
-/// pixel's front sample) and between the successive samples of a deep
-/// pixel. Two surfaces spread in one layer go wrong only in a band as wide
-/// as their difference in blur at the edge of a blur as wide as the blur
-/// itself: a step of a quarter moves a blurred edge by an eighth of its
-/// width, and cutting for it costs more (each layer's hidden surface is a
-/// guess) than it gains.
-std::vector<Occlusion> find_occlusions(const Scene& scene, const std::vector<BlurField>& flats,
-                                       const CircleOfConfusion& coc, const CocHistogram& h,
-                                       double min_step, int nthreads)
-{
-    std::vector<std::vector<Occlusion>> rows;
-    auto add = [&](std::vector<Occlusion>& out, double a, double b) {
-        if (std::isnan(a) || std::isnan(b)
-            || std::abs(a - b) <= std::max(min_step, 0.25 * std::min(std::abs(a), std::abs(b))))
-            return;
-        out.push_back({ h.index(std::min(a, b)), h.index(std::max(a, b)) });
-    };
-    // A step between neighbours is a discontinuity only where it is much
-    // larger than a step beside it: a surface seen at a grazing angle
-    // changes its blur by as much from pixel to pixel, but evenly.
-    auto edge = [&](std::vector<Occlusion>& out, double before, double a, double b, double after) {
-        const double step = std::abs(b - a);
-        const double beside = std::min(std::isnan(before) ? 0.0 : std::abs(a - before),
-                                       std::isnan(after) ? 0.0 : std::abs(after - b));
-        if (!(step > 2.0 * beside))
-            return;
-        add(out, a, b);
-    };
-    // The CoC of every pixel's front surface (NaN where nothing is), row
-    // by row over `roi`, each pixel against its right and lower neighbours.
-    // Where `discontinuity` is given, only the pixels it flags: elsewhere
-    // no neighbour's CoC differs by more than its step, and min_step is
-    // larger (by more than the rounding of a difference in float).
-    auto scan = [&](const ROI& roi, const float* front_coc, const BlurField* discontinuity) {
-        const size_t first = rows.size();
-        rows.resize(first + roi.height());
+/// Occlusions found row by row (each row's on its own thread), then made
+/// distinct.
+class OcclusionRows {
+public:
+    OcclusionRows(const CocHistogram& h, double min_step, int nthreads)
+        : m_h(h), m_min_step(min_step), m_nthreads(nthreads)
+    {
+    }
+
+    /// The CoC of every pixel's front surface (NaN where nothing is), row
+    /// by row over `roi`, each pixel against its right and lower
+    /// neighbours. Where `discontinuity` is given, only the pixels it
+    /// flags: elsewhere no neighbour's CoC differs by more than its step,
+    /// and min_step is larger (by more than the rounding of a difference
+    /// in float).
+    void scan(const ROI& roi, const float* front_coc, const BlurField* discontinuity)
+    {
+        const size_t first = m_rows.size();
+        m_rows.resize(first + roi.height());
         const int width = roi.width(), height = roi.height();
         constexpr double nothing = std::numeric_limits<double>::quiet_NaN();
         parallel_for(0, height, [&](int y) {
-            std::vector<Occlusion>& out = rows[first + y];
+            std::vector<Occlusion>& out = m_rows[first + y];
             auto at = [&](int x, int y) {
                 return x >= 0 && x < width && y >= 0 && y < height
                            ? double(front_coc[size_t(y) * width + x])
@@ -209,30 +189,16 @@ std::vector<Occlusion> find_occlusions(const Scene& scene, const std::vector<Blu
                 edge(out, at(x - 1, y), c, at(x + 1, y), at(x + 2, y));
                 edge(out, at(x, y - 1), c, at(x, y + 1), at(x, y + 2));
             }
-        }, by_rows(nthreads));
-    };
-    for (const BlurField& flat : flats)
-        scan(flat.roi(), flat.blurs(),
-             min_step > 1.000001 * BlurField::discontinuity_step ? &flat : nullptr);
-    for (const DeepImage& deep : scene.deep) {
-        std::vector<float> front(deep.roi.npixels(), std::numeric_limits<float>::quiet_NaN());
+        }, by_rows(m_nthreads));
+    }
+
+    /// Between the successive samples of each pixel of a deep image.
+    void scan_samples(const DeepImage& deep, const CircleOfConfusion& coc)
+    {
+        const size_t first = m_rows.size();
+        m_rows.resize(first + deep.roi.height());
         parallel_for(deep.roi.ybegin, deep.roi.yend, [&](int y) {
-            for (int x = deep.roi.xbegin; x < deep.roi.xend; ++x) {
-                const int64_t p = deep.pixel_index(x, y);
-                float front_z = INFINITY;
-                for (uint64_t i = deep.offsets[p]; i < deep.offsets[p + 1]; ++i)
-                    if (deep.samples[i].a > 0.0f && deep.samples[i].z < front_z) {
-                        front_z = deep.samples[i].z;
-                        front[size_t(y - deep.roi.ybegin) * deep.roi.width() + (x - deep.roi.xbegin)]
-                            = float(coc.diameter(front_z, x, y));
-                    }
-            }
-        }, by_rows(nthreads));
-        scan(deep.roi, front.data(), nullptr);
-        const size_t first = rows.size();
-        rows.resize(first + deep.roi.height());
-        parallel_for(deep.roi.ybegin, deep.roi.yend, [&](int y) {
-            std::vector<Occlusion>& out = rows[first + (y - deep.roi.ybegin)];
+            std::vector<Occlusion>& out = m_rows[first + (y - deep.roi.ybegin)];
             std::vector<double> cocs;
             for (int x = deep.roi.xbegin; x < deep.roi.xend; ++x) {
                 const int64_t p = deep.pixel_index(x, y);
@@ -244,17 +210,90 @@ std::vector<Occlusion> find_occlusions(const Scene& scene, const std::vector<Blu
                 for (size_t i = 1; i < cocs.size(); ++i)
                     add(out, cocs[i - 1], cocs[i]);
             }
-        }, by_rows(nthreads));
+        }, by_rows(m_nthreads));
     }
-    std::vector<Occlusion> all;
-    for (std::vector<Occlusion>& row : rows) {
-        std::sort(row.begin(), row.end());
-        row.erase(std::unique(row.begin(), row.end()), row.end());
-        all.insert(all.end(), row.begin(), row.end());
+
+    std::vector<Occlusion> distinct()
+    {
+        std::vector<Occlusion> all;
+        for (std::vector<Occlusion>& row : m_rows) {
+            std::sort(row.begin(), row.end());
+            row.erase(std::unique(row.begin(), row.end()), row.end());
+            all.insert(all.end(), row.begin(), row.end());
+        }
+        std::sort(all.begin(), all.end());
+        all.erase(std::unique(all.begin(), all.end()), all.end());
+        return all;
     }
-    std::sort(all.begin(), all.end());
-    all.erase(std::unique(all.begin(), all.end()), all.end());
-    return all;
+
+private:
+    void add(std::vector<Occlusion>& out, double a, double b) const
+    {
+        if (std::isnan(a) || std::isnan(b)
+            || std::abs(a - b) <= std::max(m_min_step, 0.25 * std::min(std::abs(a), std::abs(b))))
+            return;
+        out.push_back({ m_h.index(std::min(a, b)), m_h.index(std::max(a, b)) });
+    }
+
+    /// A step between neighbours is a discontinuity only where it is much
+    /// larger than a step beside it: a surface seen at a grazing angle
+    /// changes its blur by as much from pixel to pixel, but evenly.
+    void edge(std::vector<Occlusion>& out, double before, double a, double b, double after) const
+    {
+        const double step = std::abs(b - a);
+        const double beside = std::min(std::isnan(before) ? 0.0 : std::abs(a - before),
+                                       std::isnan(after) ? 0.0 : std::abs(after - b));
+        if (step > 2.0 * beside)
+            add(out, a, b);
+    }
+
+    const CocHistogram& m_h;
+    double m_min_step;
+    int m_nthreads;
+    std::vector<std::vector<Occlusion>> m_rows;
+};
+
+/// The CoC of each pixel's front covered sample (NaN where none is).
+std::vector<float> front_cocs(const DeepImage& deep, const CircleOfConfusion& coc, int nthreads)
+{
+    std::vector<float> front(deep.roi.npixels(), std::numeric_limits<float>::quiet_NaN());
+    parallel_for(deep.roi.ybegin, deep.roi.yend, [&](int y) {
+        for (int x = deep.roi.xbegin; x < deep.roi.xend; ++x) {
+            const int64_t p = deep.pixel_index(x, y);
+            float front_z = INFINITY;
+            for (uint64_t i = deep.offsets[p]; i < deep.offsets[p + 1]; ++i)
+                if (deep.samples[i].a > 0.0f && deep.samples[i].z < front_z) {
+                    front_z = deep.samples[i].z;
+                    front[size_t(y - deep.roi.ybegin) * deep.roi.width() + (x - deep.roi.xbegin)]
+                        = float(coc.diameter(front_z, x, y));
+                }
+        }
+    }, by_rows(nthreads));
+    return front;
+}
+
+/// The distinct occlusions of a scene's flat and deep parts whose sides'
+/// CoCs differ by more than `min_step` pixels and by more than a quarter of
+/// the smaller blur: between 4-neighbour pixels (a flat pixel, a deep
+/// pixel's front sample) and between the successive samples of a deep
+/// pixel. Two surfaces spread in one layer go wrong only in a band as wide
+/// as their difference in blur at the edge of a blur as wide as the blur
+/// itself: a step of a quarter moves a blurred edge by an eighth of its
+/// width, and cutting for it costs more (each layer's hidden surface is a
+/// guess) than it gains.
+std::vector<Occlusion> find_occlusions(const Scene& scene, const std::vector<BlurField>& flats,
+                                       const CircleOfConfusion& coc, const CocHistogram& h,
+                                       double min_step, int nthreads)
+{
+    OcclusionRows rows(h, min_step, nthreads);
+    for (const BlurField& flat : flats)
+        rows.scan(flat.roi(), flat.blurs(),
+                  min_step > 1.000001 * BlurField::discontinuity_step ? &flat : nullptr);
+    for (const DeepImage& deep : scene.deep) {
+        rows.scan(deep.roi, front_cocs(deep, coc, nthreads).data(), nullptr);
+        rows.scan_samples(deep, coc);
+    }
+    return rows.distinct();
 }
 
 /// The fewest boundary bins that separate the two sides of every
