@@ -121,6 +121,24 @@ private:
 
 }  // namespace
 
+/// Pixel p's colour (at column x, radius r) and those after it in its
+/// block of 2^level columns (the smaller of its two block sizes) that go
+/// alike: along a row a block's pixels
+/// mostly do (one radius, none kept exact), so they are summed here, in
+/// registers, and go to the blocks once. x moves to the last one summed.
+DEFOCUS_KERNEL d4 alike_in_block(const SpreadSource& source, size_t p, int& x, int level, float r)
+{
+    d4 value = load4(source.color + p * 4);
+    const int block_end = std::min(source.roi.xend, (floor_shift(x, level) + 1) * (1 << level));
+    for (size_t q = p + 1; x + 1 < block_end; ++q, ++x) {
+        const float* u = source.color + q * 4;
+        if (is_zero(u) || source.radius[q] != r || (source.keep_exact && source.keep_exact[q]))
+            break;
+        value += load4(u);
+    }
+    return value;
+}
+
 DEFOCUS_CLONES
 void survey_rows(const SpreadSource& source, SpreadMethod method,
                  const std::vector<std::unique_ptr<SpreadEngine::Sparse>>& levels, int y0, int y1,
@@ -162,22 +180,8 @@ void survey_rows(const SpreadSource& source, SpreadMethod method,
                     if (method != SpreadMethod::Box)
                         blend[i] = levels[c[i].level]->pick(r);
             }
-            // Along a row a block's pixels mostly go alike (one radius,
-            // none kept exact): those after this one in its block (the
-            // smaller one of two sizes) are summed here, in registers, and
-            // go to the blocks once.
-            d4 value = load4(v);
-            if (c[0].level > 0) {
-                const int block_end =
-                    std::min(roi.xend, (floor_shift(x, c[0].level) + 1) * (1 << c[0].level));
-                for (size_t q = p + 1; x + 1 < block_end; ++q, ++x) {
-                    const float* u = source.color + q * 4;
-                    if (is_zero(u) || source.radius[q] != r
-                        || (source.keep_exact && source.keep_exact[q]))
-                        break;
-                    value += load4(u);
-                }
-            }
+            const d4 value = c[0].level > 0 ? alike_in_block(source, p, x, c[0].level, r)
+                                            : load4(v);
             for (int i = 0; i < n; ++i) {
                 const int l = c[i].level;
                 if (method == SpreadMethod::Box || (l == 0 && r <= dense_limit)) {

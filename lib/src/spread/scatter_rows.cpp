@@ -108,69 +108,71 @@ DEFOCUS_KERNEL void carried_items_body(double* cells, const Colors& c, int lo, i
         store4(cells + u * 4, load4(cells + u * 4) + carry[u]);
 }
 
-/// Adds one cluster of m <= max_cluster_taps(shift) taps for items
-/// [lo, hi) of a run whose items are 2^shift columns apart, item 0's first
-/// tap at cell cb. Along a run of pixels one column apart, which share
-/// cells, each cell is written once; blocks further apart are written item
-/// by item.
+/// add_cluster for items 2^shift > 1 columns apart: written item by item.
 template<typename Colors>
-DEFOCUS_KERNEL void add_cluster(double* row, const Colors& c, int m, int cb, int shift, int lo,
-                                int hi, const Tile& tile)
+DEFOCUS_KERNEL void add_spaced_cluster(double* row, const Colors& c, int m, int cb, int shift,
+                                       int lo, int hi, const Tile& tile)
 {
     const int last_cell = tile.cells() - 1;
-    if (shift > 0) {
-        // Items whose taps all lie left of the tile, those that touch it
-        // at its edges (tap by tap), and those wholly inside.
-        const int stride = 1 << shift;
-        const int touch_lo = std::max(lo, -floor_shift(cb + m - 2, shift));
-        const int touch_hi = std::min(hi, floor_shift(last_cell - cb, shift) + 1);
-        const int inside_lo = std::max(touch_lo, -floor_shift(cb - 1, shift));
-        const int inside_hi =
-            std::max(inside_lo, std::min(touch_hi, floor_shift(last_cell - m + 1 - cb, shift) + 1));
-        if (tile.first && lo < touch_lo) {
-            d4 sum = splat(0.0);
-            for (int i = lo; i < std::min(hi, touch_lo); ++i)
-                for (int t = 0; t < m; ++t)
-                    sum += c.tap(t, i);
-            store4(row, load4(row) + sum);
-        }
-        auto add_item = [&](int i) {
-            for (int t = 0; t < m; ++t) {
-                const int cell = tile.cell(tile.x_begin - 1 + cb + stride * i + t);
-                if (cell >= 0)
-                    store4(row + size_t(cell) * 4, load4(row + size_t(cell) * 4) + c.tap(t, i));
-            }
-        };
-        for (int i = touch_lo; i < std::min(touch_hi, inside_lo); ++i)
-            add_item(i);
-        if (inside_lo < inside_hi) {
-            double* cells = row + size_t(cb + stride * inside_lo) * 4;
-            switch (m) {
-            case 1: items_body<1>(cells, c, stride, inside_lo, inside_hi); break;
-            case 2: items_body<2>(cells, c, stride, inside_lo, inside_hi); break;
-            case 3:
-                if (shift == 1)
-                    carried_items_body<2, 3>(cells, c, inside_lo, inside_hi);
-                else
-                    items_body<3>(cells, c, stride, inside_lo, inside_hi);
-                break;
-            case 4:
-                if (shift == 1)
-                    carried_items_body<2, 4>(cells, c, inside_lo, inside_hi);
-                else
-                    items_body<4>(cells, c, stride, inside_lo, inside_hi);
-                break;
-            // Wider clusters come at blocks 4 columns apart only.
-            case 5: carried_items_body<4, 5>(cells, c, inside_lo, inside_hi); break;
-            case 6: carried_items_body<4, 6>(cells, c, inside_lo, inside_hi); break;
-            case 7: carried_items_body<4, 7>(cells, c, inside_lo, inside_hi); break;
-            default: carried_items_body<4, 8>(cells, c, inside_lo, inside_hi); break;
-            }
-        }
-        for (int i = inside_hi; i < touch_hi; ++i)
-            add_item(i);
-        return;
+    // Items whose taps all lie left of the tile, those that touch it
+    // at its edges (tap by tap), and those wholly inside.
+    const int stride = 1 << shift;
+    const int touch_lo = std::max(lo, -floor_shift(cb + m - 2, shift));
+    const int touch_hi = std::min(hi, floor_shift(last_cell - cb, shift) + 1);
+    const int inside_lo = std::max(touch_lo, -floor_shift(cb - 1, shift));
+    const int inside_hi =
+        std::max(inside_lo, std::min(touch_hi, floor_shift(last_cell - m + 1 - cb, shift) + 1));
+    if (tile.first && lo < touch_lo) {
+        d4 sum = splat(0.0);
+        for (int i = lo; i < std::min(hi, touch_lo); ++i)
+            for (int t = 0; t < m; ++t)
+                sum += c.tap(t, i);
+        store4(row, load4(row) + sum);
     }
+    auto add_item = [&](int i) {
+        for (int t = 0; t < m; ++t) {
+            const int cell = tile.cell(tile.x_begin - 1 + cb + stride * i + t);
+            if (cell >= 0)
+                store4(row + size_t(cell) * 4, load4(row + size_t(cell) * 4) + c.tap(t, i));
+        }
+    };
+    for (int i = touch_lo; i < std::min(touch_hi, inside_lo); ++i)
+        add_item(i);
+    if (inside_lo < inside_hi) {
+        double* cells = row + size_t(cb + stride * inside_lo) * 4;
+        switch (m) {
+        case 1: items_body<1>(cells, c, stride, inside_lo, inside_hi); break;
+        case 2: items_body<2>(cells, c, stride, inside_lo, inside_hi); break;
+        case 3:
+            if (shift == 1)
+                carried_items_body<2, 3>(cells, c, inside_lo, inside_hi);
+            else
+                items_body<3>(cells, c, stride, inside_lo, inside_hi);
+            break;
+        case 4:
+            if (shift == 1)
+                carried_items_body<2, 4>(cells, c, inside_lo, inside_hi);
+            else
+                items_body<4>(cells, c, stride, inside_lo, inside_hi);
+            break;
+        // Wider clusters come at blocks 4 columns apart only.
+        case 5: carried_items_body<4, 5>(cells, c, inside_lo, inside_hi); break;
+        case 6: carried_items_body<4, 6>(cells, c, inside_lo, inside_hi); break;
+        case 7: carried_items_body<4, 7>(cells, c, inside_lo, inside_hi); break;
+        default: carried_items_body<4, 8>(cells, c, inside_lo, inside_hi); break;
+        }
+    }
+    for (int i = inside_hi; i < touch_hi; ++i)
+        add_item(i);
+}
+
+/// add_cluster for items one column apart, which share cells: each cell is
+/// written once.
+template<typename Colors>
+DEFOCUS_KERNEL void add_adjacent_cluster(double* row, const Colors& c, int m, int cb, int lo,
+                                         int hi, const Tile& tile)
+{
+    const int last_cell = tile.cells() - 1;
     // Cells q of the run: cell cb + q for q in [lo, hi + m - 2].
     const int q_last = hi + m - 2;
     if (tile.first && lo < 1 - cb) {  // left of the tile: into cell 0
@@ -202,6 +204,19 @@ DEFOCUS_KERNEL void add_cluster(double* row, const Colors& c, int m, int cb, int
     }
     for (int q = tail_lo; q <= in_hi; ++q)
         add_value(q);
+}
+
+/// Adds one cluster of m <= max_cluster_taps(shift) taps for items
+/// [lo, hi) of a run whose items are 2^shift columns apart, item 0's first
+/// tap at cell cb.
+template<typename Colors>
+DEFOCUS_KERNEL void add_cluster(double* row, const Colors& c, int m, int cb, int shift, int lo,
+                                int hi, const Tile& tile)
+{
+    if (shift > 0)
+        add_spaced_cluster(row, c, m, cb, shift, lo, hi, tile);
+    else
+        add_adjacent_cluster(row, c, m, cb, lo, hi, tile);
 }
 
 /// Adds row `o` of a run's program for its items [lo, hi), which are

@@ -97,6 +97,89 @@ Footprint smooth_footprint(int order, double coc_radius)
     return fp;
 }
 
+namespace {
+
+/// The accumulation buffer of spread_smooth: rows of `ext`, `nc` fixed-point
+/// channels a pixel.
+struct SmoothAccumulator {
+    ROI ext;
+    int nc, order;
+    size_t row_len;
+    std::unique_ptr<Fixed[]> acc;
+
+    SmoothAccumulator(const ROI& ext, int nc, int order)
+        : ext(ext), nc(nc), order(order), row_len(size_t(ext.width()) * nc)
+        , acc(new Fixed[row_len * ext.height()])
+    {
+    }
+
+    /// Pixel (x, y)'s value `v` as the corner deltas of its four
+    /// separable pieces (widths `ws`), those in rows [r0, r1). Deltas
+    /// beyond the right edge only reach further out: dropped.
+    void scatter(int x, int y, const float* v, const Widths& ws, int r0, int r1)
+    {
+        for (int a = 0; a < 2; ++a)
+            for (int b = 0; b < 2; ++b) {
+                const double scale = ws.weight[a] * ws.weight[b]
+                                     / std::pow(double(ws.w[a]), order)
+                                     / std::pow(double(ws.w[b]), order);
+                if (scale == 0.0)
+                    continue;
+                Fixed amplitude[8];
+                for (int c = 0; c < nc; ++c)
+                    amplitude[c] = Fixed(__int128(
+                        std::nearbyint(double(v[c]) * scale * fixed_scale)));
+                for (int k = 0; k <= order; ++k) {
+                    const int row = y - ext.ybegin - half_support(order, ws.w[b]) + k * ws.w[b];
+                    if (row < r0 || row >= r1)
+                        continue;
+                    const int ck = (k % 2 ? -1 : 1) * binomial(order, k);
+                    for (int l = 0; l <= order; ++l) {
+                        const int col = x - ext.xbegin - half_support(order, ws.w[a]) + l * ws.w[a];
+                        if (col >= ext.width())
+                            continue;
+                        const __int128 coef = __int128(ck) * ((l % 2 ? -1 : 1) * binomial(order, l));
+                        Fixed* p = &acc[row * row_len + size_t(col) * nc];
+                        for (int c = 0; c < nc; ++c)
+                            p[c] += amplitude[c] * Fixed(coef);
+                    }
+                }
+            }
+    }
+
+    /// Each of rows [r0, r1) integrated `order` times.
+    void integrate_rows(int r0, int r1)
+    {
+        for (int row = r0; row < r1; ++row) {
+            Fixed* p = &acc[row * row_len];
+            for (int pass = 0; pass < order; ++pass)
+                for (size_t k = nc; k < row_len; ++k)
+                    p[k] += p[k - nc];
+        }
+    }
+
+    /// Each column integrated `order` times, in column chunks, into float.
+    void integrate_columns(float* out, int nthreads) const
+    {
+        OIIO::parallel_for_chunked(0, int64_t(row_len), 0, [&](int64_t k0, int64_t k1) {
+            std::vector<Fixed> sums(size_t(k1 - k0) * order, Fixed(0));
+            for (int64_t y = 0; y < ext.height(); ++y) {
+                const Fixed* a = &acc[y * row_len];
+                float* o = out + y * row_len;
+                for (int64_t k = k0; k < k1; ++k) {
+                    Fixed* s = &sums[size_t(k - k0) * order];
+                    s[0] += a[k];
+                    for (int pass = 1; pass < order; ++pass)
+                        s[pass] += s[pass - 1];
+                    o[k] = float(double(__int128(s[order - 1])) / fixed_scale);
+                }
+            }
+        }, by_rows(nthreads));
+    }
+};
+
+}  // namespace
+
 bool spread_smooth(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, int order,
                    ROI roi, int nthreads)
 {
@@ -114,77 +197,29 @@ bool spread_smooth(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, i
     }
     roi = in.roi;
     const int reach = half_support(order, smooth_widths(order, in.max_radius).w[1]);
-    const ROI ext(roi.xbegin - reach, roi.xend + reach, roi.ybegin - reach,
-                  roi.yend + reach, 0, 1, 0, nc);
-    const size_t row_len = size_t(ext.width()) * nc;
-    std::unique_ptr<Fixed[]> acc(new Fixed[row_len * ext.height()]);
+    SmoothAccumulator acc(ROI(roi.xbegin - reach, roi.xend + reach, roi.ybegin - reach,
+                              roi.yend + reach, 0, 1, 0, nc),
+                          nc, order);
+    const ROI& ext = acc.ext;
 
     // Scatter, then integrate each row `order` times, band by band. Deltas
-    // beyond the right or bottom edge only reach further out: dropped.
+    // beyond the bottom edge only reach further out: dropped.
     for_each_row_band(0, ext.height(), nthreads, [&](int r0, int r1) {
-        std::fill(&acc[r0 * row_len], &acc[r1 * row_len], Fixed(0));
+        std::fill(&acc.acc[r0 * acc.row_len], &acc.acc[r1 * acc.row_len], Fixed(0));
         // A source row writes rows from y - half to y + half + order.
         const int ylo = std::max(roi.ybegin, ext.ybegin + r0 - reach - order);
         const int yhi = std::min(roi.yend, ext.ybegin + r1 + reach);
         for (int y = ylo; y < yhi; ++y)
             for (int x = roi.xbegin; x < roi.xend; ++x) {
                 const float* v = in.pixels(x, y);
-                if (is_zero(v, nc))
-                    continue;
-                const Widths ws = smooth_widths(order, *in.radii(x, y));
-                for (int a = 0; a < 2; ++a)
-                    for (int b = 0; b < 2; ++b) {
-                        const double scale = ws.weight[a] * ws.weight[b]
-                                             / std::pow(double(ws.w[a]), order)
-                                             / std::pow(double(ws.w[b]), order);
-                        if (scale == 0.0)
-                            continue;
-                        Fixed amplitude[8];
-                        for (int c = 0; c < nc; ++c)
-                            amplitude[c] = Fixed(__int128(
-                                std::nearbyint(double(v[c]) * scale * fixed_scale)));
-                        for (int k = 0; k <= order; ++k) {
-                            const int row = y - ext.ybegin - half_support(order, ws.w[b]) + k * ws.w[b];
-                            if (row < r0 || row >= r1)
-                                continue;
-                            const int ck = (k % 2 ? -1 : 1) * binomial(order, k);
-                            for (int l = 0; l <= order; ++l) {
-                                const int col = x - ext.xbegin - half_support(order, ws.w[a]) + l * ws.w[a];
-                                if (col >= ext.width())
-                                    continue;
-                                const __int128 coef = __int128(ck) * ((l % 2 ? -1 : 1) * binomial(order, l));
-                                Fixed* p = &acc[row * row_len + size_t(col) * nc];
-                                for (int c = 0; c < nc; ++c)
-                                    p[c] += amplitude[c] * Fixed(coef);
-                            }
-                        }
-                    }
+                if (!is_zero(v, nc))
+                    acc.scatter(x, y, v, smooth_widths(order, *in.radii(x, y)), r0, r1);
             }
-        for (int row = r0; row < r1; ++row) {
-            Fixed* p = &acc[row * row_len];
-            for (int pass = 0; pass < order; ++pass)
-                for (size_t k = nc; k < row_len; ++k)
-                    p[k] += p[k - nc];
-        }
+        acc.integrate_rows(r0, r1);
     });
 
-    // Integrate each column `order` times, in column chunks, into float.
     dst.reset(output_spec(src, ext), OIIO::InitializePixels::No);  // every pixel is written below
-    float* out = static_cast<float*>(dst.localpixels());
-    OIIO::parallel_for_chunked(0, int64_t(row_len), 0, [&](int64_t k0, int64_t k1) {
-        std::vector<Fixed> sums(size_t(k1 - k0) * order, Fixed(0));
-        for (int64_t y = 0; y < ext.height(); ++y) {
-            const Fixed* a = &acc[y * row_len];
-            float* o = out + y * row_len;
-            for (int64_t k = k0; k < k1; ++k) {
-                Fixed* s = &sums[size_t(k - k0) * order];
-                s[0] += a[k];
-                for (int pass = 1; pass < order; ++pass)
-                    s[pass] += s[pass - 1];
-                o[k] = float(double(__int128(s[order - 1])) / fixed_scale);
-            }
-        }
-    }, by_rows(nthreads));
+    acc.integrate_columns(static_cast<float*>(dst.localpixels()), nthreads);
     return true;
 }
 
