@@ -51,7 +51,7 @@ constexpr int straight_run = 4;
 }  // namespace
 
 ContinuedLines::ContinuedLines(const FloatPixels& color, const FloatPixels& depth,
-                               const std::vector<uint8_t>& holes, const ROI& window,
+                               const HoleMap& holes, const ROI& window,
                                int max_length, int nthreads)
     : m_color(color)
     , m_depth(depth)

@@ -8,6 +8,7 @@
 
 #include <OpenImageIO/imagebuf.h>
 
+#include "layers/hole_map.h"
 #include "util/float_pixels.h"
 
 namespace defocus {
@@ -26,8 +27,8 @@ class ContinuedLines {
 public:
     /// `holes` flags the hidden pixels of `color`'s ROI; lines are found
     /// for those within `window`.
-    ContinuedLines(const FloatPixels& color, const FloatPixels& depth,
-                   const std::vector<uint8_t>& holes, const OIIO::ROI& window,
+    ContinuedLines(const FloatPixels& color, const FloatPixels& depth, const HoleMap& holes,
+                   const OIIO::ROI& window,
                    int max_length, int nthreads);
 
     /// How far from a hidden pixel the lines read: the line, the pixels
@@ -50,11 +51,7 @@ private:
     static constexpr uint32_t blocked = UINT32_MAX;
 
     std::vector<uint8_t> in_wide_holes(int limit, int nthreads) const;
-    bool hidden(int x, int y) const
-    {
-        const OIIO::ROI& roi = m_color.roi();
-        return m_holes[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)] != 0;
-    }
+    bool hidden(int x, int y) const { return m_holes(x, y); }
     /// Of a window pixel: its index in m_pixels + 1 where it is tracked,
     /// 0 where it is observed, `blocked` where it lies in a wide hole.
     uint32_t slot(int x, int y) const;
@@ -68,7 +65,7 @@ private:
 
     const FloatPixels& m_color;
     const FloatPixels& m_depth;
-    const std::vector<uint8_t>& m_holes;
+    const HoleMap& m_holes;
     OIIO::ROI m_window;
     int m_max_length;
     struct Pixel {

@@ -12,6 +12,7 @@
 
 #include "layers/brightness.h"
 #include "layers/continued_lines.h"
+#include "layers/hole_map.h"
 #include "util/bounding_box.h"
 #include "util/float_pixels.h"
 #include "util/fresh_array.h"
@@ -118,17 +119,12 @@ int line_length(double max_distance)
 }
 
 /// The first pyramid level over `window`: per cell of 2x2 pixels, the sums
-/// over its observed pixels (those not flagged in `holes`, which covers
-/// `color`'s ROI), each weighed so that it counts as no brighter than
+/// over its observed pixels (those not in `holes`), each weighed so that it counts as no brighter than
 /// `highlight`.
 Level observed_cells(const FloatPixels& color, const FloatPixels& depth,
-                     const std::vector<uint8_t>& holes, const ROI& window, float highlight,
+                     const HoleMap& holes, const ROI& window, float highlight,
                      int nthreads)
 {
-    const ROI& roi = color.roi();
-    auto is_hidden = [&](int x, int y) {
-        return holes[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)] != 0;
-    };
     Level first((window.width() + 1) / 2, (window.height() + 1) / 2, nthreads);
     parallel_for(0, first.height, [&](int y) {
         for (int x = 0; x < first.width; ++x) {
@@ -140,7 +136,7 @@ Level observed_cells(const FloatPixels& color, const FloatPixels& depth,
                     // Every pixel not hidden is an observation of the layer,
                     // empty ones too: the fill estimates coverage as well as
                     // colour.
-                    if (is_hidden(px, py))
+                    if (holes(px, py))
                         continue;
                     const float* c = color(px, py);
                     // A highlight weighs as much light as the layer's mean
@@ -218,15 +214,12 @@ ROI hidden_background_window(const ROI& content, const ROI& frame, double max_di
 void fill_hidden_background(Layer& layer, const HiddenPixels& hidden_pixels,
                             double max_distance, int nthreads)
 {
-    const std::vector<uint8_t>& holes = hidden_pixels.flags;
     const ROI roi = layer.color.roi();
+    const HoleMap holes(hidden_pixels.flags, roi);
     const FloatPixels color(layer.color, roi);
     const FloatPixels depth(layer.depth, ROI(roi.xbegin, roi.xend, roi.ybegin, roi.yend, 0, 1, 0, 1));
     // Only the pixels around the holes matter, as far as the fill reaches.
-    auto is_hidden = [&](int x, int y) {
-        return holes[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)] != 0;
-    };
-    const ROI hidden = bounding_box(roi, is_hidden, nthreads);
+    const ROI hidden = bounding_box(roi, holes, nthreads);
     if (hidden.width() == 0)
         return;
     const ROI window = hidden_background_window(hidden, roi, max_distance);
@@ -251,8 +244,7 @@ void fill_hidden_background(Layer& layer, const HiddenPixels& hidden_pixels,
     reset_zeroed_except(layer.rebuilt, rebuilt_spec, ROI(), nthreads);
     parallel_for(window.ybegin, window.yend, [&](int y) {
         // Row y's pixels from the window's first column on.
-        const uint8_t* const hidden_row
-            = &holes[size_t(y - roi.ybegin) * roi.width() + (window.xbegin - roi.xbegin)];
+        const uint8_t* const hidden_row = holes.row(window.xbegin, y);
         float* const color_row = static_cast<float*>(layer.color.pixeladdr(window.xbegin, y));
         float* const depth_row = static_cast<float*>(layer.depth.pixeladdr(window.xbegin, y));
         uint8_t* const rebuilt_row = static_cast<uint8_t*>(layer.rebuilt.pixeladdr(window.xbegin, y));
