@@ -98,10 +98,12 @@ const char* switch_name(bool on)
     return on ? "on" : "off";
 }
 
-const std::vector<SettingRule>& rules()
+using K = ShotValueKind;
+
+/// What is read, and how it is cut into layers.
+std::vector<SettingRule> scene_rules()
 {
-    using K = ShotValueKind;
-    static const std::vector<SettingRule> table = {
+    return {
         text({ "frames", "scene", "frames", K::Text }, [](auto& s) -> auto& { return s.frames; }),
         choice({ "missing-frames", "scene", "missing_frames", K::Text },
                [](auto& s) -> auto& { return s.missing_frames; }, parse_missing_frames,
@@ -123,7 +125,13 @@ const std::vector<SettingRule>& rules()
               return true;
           },
           [](const Shot& shot) { return shot.read.memory_limit.to_string(); } },
+    };
+}
 
+/// The camera: focus, lens and filmback, and the lens's effects.
+std::vector<SettingRule> camera_rules()
+{
+    return {
         keyframes({ "focus", "camera", "focus", K::Keyframes }, &Shot::focus, 1, 1e-6,
                   1e30, &Shot::focus_at),
         keyframes({ "focus-at", "camera", "focus_at", K::Point }, &Shot::focus_at, 2,
@@ -179,7 +187,13 @@ const std::vector<SettingRule>& rules()
                [](auto& s) -> auto& { return s.camera.lateral_ca; }, -0.05, 0.05),
         number({ "cateye", "camera", "cateye", K::Number },
                [](auto& s) -> auto& { return s.camera.cateye; }, 0.0, 1.5),
+    };
+}
 
+/// The bokeh's shape and how it is spread.
+std::vector<SettingRule> aperture_rules()
+{
+    return {
         { { "aperture", "aperture", "shape", K::Text },
           [](Shot& shot, const std::string& label, const std::string& value, std::string& error) {
               Aperture& a = shot.spread.aperture;
@@ -223,14 +237,26 @@ const std::vector<SettingRule>& rules()
              [](auto& s) -> auto& { return s.spread.psf_image; }),
         number({ "hybrid-threshold", "aperture", "hybrid_threshold", K::Number },
                [](auto& s) -> auto& { return s.spread.hybrid_threshold; }, 1.0, 1e6),
+    };
+}
 
+/// Colour spaces.
+std::vector<SettingRule> color_rules()
+{
+    return {
         text({ "colorconfig", "color", "config", K::Path },
              [](auto& s) -> auto& { return s.color_config; }),
         text({ "iscolorspace", "color", "input", K::Text },
              [](auto& s) -> auto& { return s.input_space; }),
         text({ "tocolorspace", "color", "output", K::Text },
              [](auto& s) -> auto& { return s.output_space; }),
+    };
+}
 
+/// What is written, and how the frame's edges are treated.
+std::vector<SettingRule> output_rules()
+{
+    return {
         { { "output", "output", "kind", K::Text },
           [](Shot& shot, const std::string& label, const std::string& value, std::string& error) {
               if (value == "image" || value == "focusmap") {
@@ -266,6 +292,20 @@ const std::vector<SettingRule>& rules()
         choice({ "edge", "scene", "edge", K::Text }, [](auto& s) -> auto& { return s.edge; },
                parse_edge_mode, edge_mode_name, "edge", "auto, extend or black"),
     };
+}
+
+/// Every setting, in the order of a .dof's sections and of --help.
+const std::vector<SettingRule>& rules()
+{
+    static const std::vector<SettingRule> table = [] {
+        std::vector<SettingRule> all;
+        for (auto section : { scene_rules, camera_rules, aperture_rules, color_rules,
+                              output_rules }) {
+            std::vector<SettingRule> rules = section();
+            all.insert(all.end(), rules.begin(), rules.end());
+        }
+        return all;
+    }();
     return table;
 }
 

@@ -2,10 +2,14 @@
 
 namespace defocus {
 
-const std::vector<ShotOption>& shot_options()
+namespace {
+
+using G = OptionGroup;
+
+/// Which frames.
+std::vector<ShotOption> sequence_options()
 {
-    using G = OptionGroup;
-    static const std::vector<ShotOption> options = {
+    return {
         { G::Sequences, "--frames LIST", "frames",
           "Frames to render: 1001-1100, 1-99x2 (every other), 1,5,9-12 "
           "(default: the frames the input pattern finds on disk)" },
@@ -14,7 +18,13 @@ const std::vector<ShotOption>& shot_options()
           "frame of --frames): error refuses the shot, naming them; skip renders the "
           "others; hold renders each from the nearest earlier frame's inputs "
           "(default: error)" },
+    };
+}
 
+/// Focus, lens and filmback, and the lens's effects.
+std::vector<ShotOption> camera_options()
+{
+    return {
         { G::Camera, "--focus DIST", "focus",
           "Focus distance in metres, e.g. 3 or 1001:3,1040:1.2 (required, or --focus-at, "
           "unless the render's header records it)" },
@@ -65,7 +75,13 @@ const std::vector<ShotOption>& shot_options()
         { G::Camera, "--optical-centre X,Y", "optical-centre",
           "Where the lens's axis meets the image, display-window pixels, for "
           "--lateral-ca and --cateye (default: the display window's centre)" },
+    };
+}
 
+/// The bokeh's shape and how it is spread.
+std::vector<ShotOption> aperture_options()
+{
+    return {
         { G::Aperture, "--aperture SHAPE", "aperture",
           "Bokeh shape: disc (default); polygon (an iris of --blades blades, its "
           "vertices on the CoC circle, as render cameras draw it); mask:FILE (the "
@@ -92,7 +108,13 @@ const std::vector<ShotOption>& shot_options()
         { G::Aperture, "--hybrid-threshold T", "hybrid-threshold",
           "Hybrid: a pixel's bokeh is visible when it is T times brighter than the "
           "mean over its CoC (default: 4)" },
+    };
+}
 
+/// What in the input is read, and how it is cut into layers.
+std::vector<ShotOption> scene_options()
+{
+    return {
         { G::Scene, "--view NAME", "view",
           "View of a multi-view EXR (default: the first part's view)" },
         { G::Scene, "--layer NAME", "layer",
@@ -114,7 +136,13 @@ const std::vector<ShotOption>& shot_options()
           "header asks for more (a giant data window, a deep file with billions of "
           "samples) is refused before anything is allocated (default: half the "
           "machine's memory)" },
+    };
+}
 
+/// The input's and the output's colour spaces.
+std::vector<ShotOption> color_options()
+{
+    return {
         { G::InputColor, "--colorconfig FILE", "colorconfig",
           "OCIO config (default: $OCIO, else the config shipped with defocus)" },
         { G::InputColor, "--iscolorspace NAME", "iscolorspace",
@@ -125,7 +153,13 @@ const std::vector<ShotOption>& shot_options()
         { G::OutputColor, "--tocolorspace NAME", "tocolorspace",
           "Colour space of the output (default: the input's), named in its header by "
           "chromaticities and colorInteropID" },
+    };
+}
 
+/// What is written.
+std::vector<ShotOption> output_options()
+{
+    return {
         { G::Output, "--output KIND", "output",
           "image: the defocused image (default); focusmap: where the focus falls, "
           "green in focus, red in front, blue behind, brighter with more blur, "
@@ -153,6 +187,21 @@ const std::vector<ShotOption>& shot_options()
           "beyond the input's data window",
           "grown" },
     };
+}
+
+}  // namespace
+
+const std::vector<ShotOption>& shot_options()
+{
+    static const std::vector<ShotOption> options = [] {
+        std::vector<ShotOption> all;
+        for (auto group : { sequence_options, camera_options, aperture_options, scene_options,
+                            color_options, output_options }) {
+            std::vector<ShotOption> options = group();
+            all.insert(all.end(), options.begin(), options.end());
+        }
+        return all;
+    }();
     return options;
 }
 
