@@ -42,23 +42,15 @@ struct CommandLine {
     int chunk_k = 0, chunk_n = 0;  ///< --chunk K/N; 0: all frames
 };
 
-/// Reads the arguments into `cl`. False with `error` the problem; true
-/// with `help_only` set when --help printed the help.
-bool parse_command_line(int argc, const char* argv[], CommandLine& cl, bool& help_only,
-                        std::string& error)
+/// The command's options, in --help order: the shot's (into `shot_args`)
+/// among the command's own (into `cl`); the inputs into `inputs`.
+void add_options(ArgParse& ap, CommandLine& cl, ShotArguments& shot_args,
+                 std::vector<std::string>& inputs)
 {
-    auto fail = [&](std::string why) {
-        error = std::move(why);
-        return false;
-    };
-    ArgParse ap;
-    describe_defocus(ap);
-    std::vector<std::string> inputs;
     ap.arg("filename").hidden().action([&](cspan<const char*> argv) {
         inputs.emplace_back(argv[0]);
     });
 
-    ShotArguments shot_args;
     shot_args.add_options(ap, OptionGroup::Sequences);
     ap.arg("--stop-on-error").help("Stop at the first bad frame (default: report it, "
                                    "write the others, exit non-zero)")
@@ -109,7 +101,22 @@ bool parse_command_line(int argc, const char* argv[], CommandLine& cl, bool& hel
         .action([&](cspan<const char*>) { cl.quiet = true; });
     shot_args.add_threads(ap);
     add_version_option(ap, "defocus");
+}
 
+/// Reads the arguments into `cl`. False with `error` the problem; true
+/// with `help_only` set when --help printed the help.
+bool parse_command_line(int argc, const char* argv[], CommandLine& cl, bool& help_only,
+                        std::string& error)
+{
+    auto fail = [&](std::string why) {
+        error = std::move(why);
+        return false;
+    };
+    ArgParse ap;
+    describe_defocus(ap);
+    std::vector<std::string> inputs;
+    ShotArguments shot_args;
+    add_options(ap, cl, shot_args, inputs);
     if (parse_arguments(ap, argc, argv) < 0)
         return fail(unknown_option_hint(ap, ap.geterror()));
     if (ap.aborted()) {  // --help
