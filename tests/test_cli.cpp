@@ -277,51 +277,6 @@ TEST_CASE("every bad input ends in a one-line error and no output")
     CHECK(files.size() == 3);  // only the inputs written above
 }
 
-TEST_CASE("a uniform field stays uniform to the corners without overscan")
-{
-    // No overscan and a 17 px CoC: the edges are extended by default (and
-    // -v says so); with --edge black the corners lose most of their light.
-    const std::string dir = scratch_dir("cli_edges");
-    write_uniform_image(dir + "/field.exr", { "R", "G", "B", "A", "Z" },
-                        { 0.5f, 0.5f, 0.5f, 1, 250 }, 48, 48);
-    const std::string close_up = " --focal 50 --fstop 1 --focus 2 --sensor 3.6 -d float";
-    std::string log;
-    REQUIRE(run_defocus(dir + "/field.exr -o " + dir + "/auto.exr -v" + close_up, log) == 0);
-    CHECK(Strutil::contains(log, "edges: layers extended up to"));
-    REQUIRE(run_defocus(dir + "/field.exr -o " + dir + "/black.exr --edge black" + close_up, log)
-            == 0);
-    const auto extended = ImageBufAlgo::computePixelStats(read_image(dir + "/auto.exr"));
-    const auto black = ImageBufAlgo::computePixelStats(read_image(dir + "/black.exr"));
-    for (int c = 0; c < 4; ++c) {
-        const float expected = c == 3 ? 1.0f : 0.5f;
-        CHECK(extended.min[c] == Approx(expected).epsilon(1e-5));
-        CHECK(extended.max[c] == Approx(expected).epsilon(1e-5));
-    }
-    CHECK(black.min[3] < 0.5f);
-}
-
-TEST_CASE("Z in other units than metres is read with --depth-scale")
-{
-    // The same scene with Z in metres and in centimetres.
-    const std::string dir = scratch_dir("cli_depth_scale");
-    write_uniform_image(dir + "/m.exr", { "R", "G", "B", "A", "Z" }, { 1, 0.5f, 0.25f, 1, 2.5f },
-                        48, 48);
-    write_uniform_image(dir + "/cm.exr", { "R", "G", "B", "A", "Z" }, { 1, 0.5f, 0.25f, 1, 250 },
-                        48, 48);
-    // CoC 3.4 px at 2.5 m, 17 px at 250 m.
-    const std::string close_up = " --focal 50 --fstop 1 --focus 2 --sensor 3.6";
-    std::string log;
-    for (const std::string& args : { "m.exr -o " + dir + "/m_out.exr",
-                                      "cm.exr -o " + dir + "/cm_out.exr --depth-scale 0.01",
-                                      "cm.exr -o " + dir + "/cm_unscaled.exr" })
-        REQUIRE(run_defocus(dir + "/" + args + " -d float --grow" + close_up, log) == 0);
-    const ImageBuf metres = read_image(dir + "/m_out.exr"),
-                   centimetres = read_image(dir + "/cm_out.exr"),
-                   unscaled = read_image(dir + "/cm_unscaled.exr");
-    CHECK(ImageBufAlgo::compare(centimetres, metres, 1e-6f, 1e-6f).nfail == 0);
-    CHECK(ImageBufAlgo::compare(unscaled, metres, 1e-3f, 1e-3f).nfail > 0);
-}
-
 TEST_CASE("options take --option=value as well as --option value")
 {
     const std::string dir = scratch_dir("cli_equals");

@@ -19,32 +19,6 @@ using namespace OIIO;
 
 namespace {
 
-using Settings = std::vector<std::pair<std::string, std::string>>;
-
-/// Frame `frame` of `input` rendered with `settings` (by setting name), or
-/// the first error on the way.
-bool render(const std::string& input, const Settings& settings, FrameResult& result,
-            std::string& error, int frame = 1)
-{
-    Shot shot;
-    shot.inputs = { input };
-    ShotAssets assets;
-    for (const auto& [name, value] : settings)
-        if (!set_shot_setting(shot, name, value, error))
-            return false;
-    return check_shot(shot, error) && read_shot_assets(shot, assets, error)
-           && render_frame(shot, frame, assets, result, error);
-}
-
-ImageBuf rendered(const std::string& input, const Settings& settings, int frame = 1)
-{
-    FrameResult result;
-    std::string error;
-    INFO(error);
-    REQUIRE(render(input, settings, result, error, frame));
-    return result.image;
-}
-
 /// A flat RGBA+Z render, width x height, of a fine checkerboard: a ground
 /// plane `height_m` below a level camera (focal 50 mm, filmback 36 mm)
 /// below the horizon, a far sky above it; or, with height_m = 0, a wall
@@ -156,7 +130,7 @@ TEST_CASE("a split diopter: each half matches a plain render at its distance")
     // A line of one point is an error.
     FrameResult result;
     std::string error;
-    CHECK_FALSE(render(wall, with({ { "focus", "10" }, { "split-diopter", "5,5,5,5:3" } }), result,
+    CHECK_FALSE(render_with(wall, with({ { "focus", "10" }, { "split-diopter", "5,5,5,5:3" } }), result,
                        error));
     CHECK(Strutil::contains(error, "two different points"));
 }

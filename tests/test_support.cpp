@@ -16,6 +16,7 @@
 
 #include <defocus/io/image_input.h>
 #include <defocus/layers/layering.h>
+#include <defocus/io/shot_assets.h>
 #include <defocus/io/shot_file.h>
 
 namespace defocus_test {
@@ -207,6 +208,29 @@ int run(const std::string& command, std::string& output)
         output.append(buf.data(), n);
     const int status = pclose(pipe);
     return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+bool render_with(const std::string& input, const Settings& settings, defocus::FrameResult& result,
+                 std::string& error, int frame)
+{
+    defocus::Shot shot;
+    shot.inputs = { input };
+    defocus::ShotAssets assets;
+    for (const auto& [name, value] : settings)
+        if (!defocus::set_shot_setting(shot, name, value, error))
+            return false;
+    return defocus::check_shot(shot, error) && defocus::read_shot_assets(shot, assets, error)
+           && defocus::render_frame(shot, frame, assets, result, error);
+}
+
+ImageBuf rendered(const std::string& input, const Settings& settings, int frame)
+{
+    defocus::FrameResult result;
+    std::string error;
+    const bool ok = render_with(input, settings, result, error, frame);
+    INFO(error);
+    REQUIRE(ok);
+    return result.image;
 }
 
 void write_uniform_image(const std::string& path, const std::vector<std::string>& channels,

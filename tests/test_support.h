@@ -9,6 +9,7 @@
 #include <OpenImageIO/imagebuf.h>
 
 #include <defocus/layers/layered_scene.h>
+#include <defocus/render_frame.h>
 #include <defocus/scene.h>
 #include <defocus/optics/camera.h>
 
@@ -80,6 +81,18 @@ double garden_psnr(const ImageBuf& result, const ImageBuf& truth, int dx = 0, in
 
 /// Runs a shell command, returns its exit status; stdout+stderr into `output`.
 int run(const std::string& command, std::string& output);
+
+/// Settings by name and value, as set_shot_setting() takes them:
+/// { "focal", "50" }.
+using Settings = std::vector<std::pair<std::string, std::string>>;
+
+/// Frame `frame` of `input` rendered through the library (render_frame),
+/// with `settings`; false with the first error on the way.
+bool render_with(const std::string& input, const Settings& settings,
+                 defocus::FrameResult& result, std::string& error, int frame = 1);
+
+/// render_with()'s image, which must render.
+ImageBuf rendered(const std::string& input, const Settings& settings, int frame = 1);
 
 /// Writes a `width` x `height` image of the given channels, every pixel
 /// `pixel`, as `type`.
