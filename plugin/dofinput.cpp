@@ -1,7 +1,8 @@
 // An OpenImageIO format plugin: any OIIO program opens a .dof scene file as
 // the defocused image it describes. open() reports the spec from the
-// inputs' headers; the first read of pixels renders the frame, through the
-// same library call as the defocus command, and later reads reuse it.
+// inputs' headers; the first read of pixels renders the frame through
+// render_frame, as the defocus command's render service does (run_shot.h),
+// and later reads reuse it.
 
 #include <map>
 #include <mutex>
