@@ -336,16 +336,30 @@ TEST_CASE("pixels of a textured background beside an edge are not taken for mixe
 {
     // Dark and light stripes beside a grey pole, with no antialiasing: the
     // stripes' mean lies near the pole's grey, and a two-colour fit took
-    // every stripe pixel at the edge for a blend of the two.
+    // every stripe pixel at the edge for a blend of the two. No pixel is
+    // split; the pole's edge pixels stay whole, with the stripes continued
+    // behind them as they are beside them.
     const float pole_z = 1.0f / 2.9f, stripes_z = 0.5f;
+    auto stripe = [](int y) { return (y / 4) % 2 ? 1.0f : 0.1f; };
     const Scene scene = flat_scene([&](int x, int y, float* rgba, float& z) {
         const bool in_pole = x >= 55 && x < 65;
-        std::fill(rgba, rgba + 3, in_pole ? 0.5f : (y / 4) % 2 ? 1.0f : 0.1f);
+        std::fill(rgba, rgba + 3, in_pole ? 0.5f : stripe(y));
         rgba[3] = 1.0f;
         z = in_pole ? pole_z : stripes_z;
     });
     const CircleOfConfusion coc(synthetic_camera(0.5), ROI(0, 120, 0, 80));
-    CHECK(find_mixed_pixels(scene.flat.front(), coc).empty());
+    const std::vector<MixedPixel> mixed = find_mixed_pixels(scene.flat.front(), coc);
+    CHECK(mixed.size() == 2 * 80);
+    for (const MixedPixel& m : mixed) {
+        INFO("pixel " << m.x << "," << m.y);
+        CHECK((m.x == 55 || m.x == 64));
+        CHECK(m.near[0] == 0.5f);
+        CHECK(m.near[3] == 1.0f);
+        CHECK(m.near_z == pole_z);
+        CHECK(m.far[0] == stripe(m.y));
+        CHECK(m.far[3] == 1.0f);
+        CHECK(m.far_z == stripes_z);
+    }
 }
 
 TEST_CASE("the confidence AOV is the share of light from rebuilt surfaces, and 0 where all was seen")

@@ -174,8 +174,8 @@ TEST_CASE("flat renders score above plain hard slicing, directly and through lay
     const double blender125 = score(blender, 1.25, 96);
     WARN("flat.exr: " << flat3 << " / " << flat125 << " dB; blender_multilayer.exr: "
                       << blender3 << " / " << blender125 << " dB");
-    CHECK(flat3 >= 33.6);
-    CHECK(flat125 >= 35.6);
+    CHECK(flat3 >= 33.7);
+    CHECK(flat125 >= 35.9);
     CHECK(blender3 >= 29.3);
     CHECK(blender125 >= 27.5);
     CHECK(score_via_layerize(garden("flat.exr"), 3.0) == Approx(flat3).margin(0.01));
@@ -207,20 +207,19 @@ TEST_CASE("deep.exr scores close to the layers and no lower than flat.exr")
 
 TEST_CASE("flat and deep input come close to the layers with the disc aperture")
 {
-    // The fidelity issue's bars (disc, the garden README's metric). At
-    // focus 3 flat.exr stays below deep's bar: a light on the far wall lies
-    // wholly behind the torus in both files, and flat.exr also lacks
-    // deep's exact coverage at edges. It scored 37.83 / 35.05 dB before
-    // its mixed pixels were split and its hidden surfaces rebuilt with
-    // structure.
+    // The fidelity issue's bars (disc, the garden README's metric): 38.4 /
+    // 37.6 dB for both. flat.exr scored 37.83 / 35.05 dB before its mixed
+    // pixels were split and its hidden surfaces rebuilt with structure, and
+    // 38.27 / 38.03 dB before the far surface was continued behind the
+    // near edge pixels, as deep.exr holds it.
     const double flat3 = score(garden("flat.exr"), 3.0, 0, "disc");
     const double flat125 = score(garden("flat.exr"), 1.25, 0, "disc");
     const double deep3 = score(garden("deep.exr"), 3.0, 0, "disc");
     const double deep125 = score(garden("deep.exr"), 1.25, 0, "disc");
     WARN("disc: flat.exr " << flat3 << " / " << flat125 << " dB, deep.exr " << deep3 << " / "
                            << deep125 << " dB");
-    CHECK(flat3 >= 38.2);
-    CHECK(flat125 >= 37.9);
+    CHECK(flat3 >= 38.4);
+    CHECK(flat125 >= 38.5);
     CHECK(deep3 >= 38.4);
     CHECK(deep125 >= 37.6);
     CHECK(deep3 >= flat3);

@@ -36,17 +36,28 @@ struct Side {
     double mean_depth() const { return z / count; }
 };
 
+/// Where `color` projects on the line from `far` to `near`: 0 at far, 1 at
+/// near (unclamped), and the line's squared length.
+struct Projection {
+    double along, length;
+
+    Projection(const float* color, const double near[3], const float* far)
+        : along(0.0), length(0.0)
+    {
+        for (int i = 0; i < 3; ++i) {
+            const double d = near[i] - far[i];
+            along += (color[i] - far[i]) * d;
+            length += d * d;
+        }
+    }
+    double t() const { return length > 0.0 ? std::clamp(along / length, 0.0, 1.0) : 0.0; }
+};
+
 /// How far `color` lies from the nearest blend of `near` and `far`,
 /// relative to its own level (squared).
 double blend_error(const float* color, const double near[3], const float* far)
 {
-    double along = 0.0, length = 0.0;
-    for (int i = 0; i < 3; ++i) {
-        const double d = near[i] - far[i];
-        along += (color[i] - far[i]) * d;
-        length += d * d;
-    }
-    const double t = length > 0.0 ? std::clamp(along / length, 0.0, 1.0) : 0.0;
+    const double t = Projection(color, near, far).t();
     double error = 0.0, level = 1e-12;
     for (int i = 0; i < 3; ++i) {
         const double e = color[i] - (far[i] + t * (near[i] - far[i]));
@@ -55,6 +66,11 @@ double blend_error(const float* color, const double near[3], const float* far)
     }
     return error / level;
 }
+
+/// A pixel of the neighbourhood.
+struct Where {
+    int x, y;
+};
 
 /// The pixels within `reach` of a mixed pixel, each on the near or the
 /// far side of the CoC midway between the pixel's own and the other
@@ -85,45 +101,99 @@ struct Neighbourhood {
             }
     }
 
-    /// The colour of the far side's pixel (of its unmixed ones, or its mixed
-    /// ones when `mixed`) which, blended with `near`, comes closest to the
-    /// pixel's; between equals, the nearest. A far side of several colours
-    /// (a light beside a wall, a checker) has a mean that explains no pixel
-    /// (colour sampling for matting: Wang & Cohen, "Optimized Color
-    /// Sampling for Robust Matting", CVPR 2007).
-    const float* far_color(const double near[3], bool mixed) const
+    /// The far side's pixel with the least `cost(sx, sy)` of those
+    /// `chosen(sx, sy)`; between equals, the first.
+    template<typename Chosen, typename Cost>
+    Where least_far(Chosen&& chosen, Cost&& cost) const
     {
-        const float* color = field.color(x, y);
-        const float* best = nullptr;
+        Where best { x, y };
         double least = INFINITY;
         each([&](int sx, int sy, bool is_near) {
-            if (is_near || field.at_discontinuity(sx, sy) != mixed)
+            if (is_near || !chosen(sx, sy))
                 return;
-            const double error = blend_error(color, near, field.color(sx, sy))
-                                 + 1e-4 * ((sx - x) * (sx - x) + (sy - y) * (sy - y));
-            if (error < least) {
-                least = error;
-                best = field.color(sx, sy);
+            const double c = cost(sx, sy);
+            if (c < least) {
+                least = c;
+                best = { sx, sy };
             }
         });
         return best;
     }
+
+    int distance2(int sx, int sy) const { return (sx - x) * (sx - x) + (sy - y) * (sy - y); }
+
+    /// The far side's pixel (of its unmixed ones, or its mixed ones when
+    /// `mixed`) which, blended with `near`, comes closest to the pixel's
+    /// colour; between equals, the nearest. A far side of
+    /// several colours (a light beside a wall, a checker) has a mean that
+    /// explains no pixel (colour sampling for matting: Wang & Cohen,
+    /// "Optimized Color Sampling for Robust Matting", CVPR 2007).
+    Where best_explaining_far(const double near[3], bool mixed) const
+    {
+        const float* color = field.color(x, y);
+        auto of_kind = [&](int sx, int sy) { return field.at_discontinuity(sx, sy) == mixed; };
+        return least_far(of_kind, [&](int sx, int sy) {
+            return blend_error(color, near, field.color(sx, sy)) + 1e-4 * distance2(sx, sy);
+        });
+    }
+
+    /// The far side's nearest pixel (of its unmixed ones, or its mixed ones
+    /// when `mixed`).
+    Where nearest_far(bool mixed) const
+    {
+        auto of_kind = [&](int sx, int sy) { return field.at_discontinuity(sx, sy) == mixed; };
+        return least_far(of_kind, [&](int sx, int sy) { return double(distance2(sx, sy)); });
+    }
+
+    /// The far side's nearest pixel, mixed or not.
+    Where nearest_far() const
+    {
+        return least_far([](int, int) { return true; },
+                         [&](int sx, int sy) { return double(distance2(sx, sy)); });
+    }
 };
 
+bool split(const BlurField& field, int x, int y, MixedPixel& out, Where* far_source = nullptr);
+
+/// A pixel written at the near surface's depth and wholly covered by it,
+/// with the far surface continued behind it as it is at its nearest pixel:
+/// a deep render holds such a sample wherever an edge covers a pixel
+/// partly. It changes nothing where the near surface is sharp; where it is
+/// blurred, what shows through its edge starts from the far surface at the
+/// edge, and the hidden-surface fill continues from there rather than from
+/// whatever lies a pixel beyond (a far light beside a pole's edge, with
+/// nothing else of the far surface along that edge, flooded the whole band
+/// behind the pole).
+bool continue_behind(const BlurField& field, const Neighbourhood& around, MixedPixel& out)
+{
+    const int x = around.x, y = around.y;
+    // The nearest far pixel is often a blend of the two sides itself; its
+    // split tells which pixel stands for its far side.
+    Where far = around.nearest_far();
+    if (MixedPixel ignored; field.at_discontinuity(far.x, far.y))
+        split(field, far.x, far.y, ignored, &far);
+    const float* color = field.color(x, y);
+    const float* behind = field.color(far.x, far.y);
+    if (!(color[3] >= 0.999f) || !(behind[3] > 0.0f))
+        return false;
+    out.x = x;
+    out.y = y;
+    std::copy(color, color + 4, out.near);
+    std::copy(behind, behind + 4, out.far);
+    out.near_z = field.depth(x, y);
+    out.far_z = field.depth(far.x, far.y);
+    return true;
+}
+
 /// Pixel (x, y), mixed, as its two surfaces; false when it is better left
-/// whole.
-bool split(const BlurField& field, int x, int y, MixedPixel& out)
+/// whole. Where `far_source` is given, a pixel written at the far depth
+/// that splits sets it to the pixel whose colour stands for its far side,
+/// and no far surface is continued.
+bool split(const BlurField& field, int x, int y, MixedPixel& out, Where* far_source)
 {
     const float own = field.blur(x, y);
     const float other = field.other_side(x, y);
-    // Only a pixel written at the far surface's depth is split. One at the
-    // near surface's depth is spread with the near blur, which is right for
-    // its main part; its far part, cut off, would become a sample of the
-    // surface hidden behind the near one, and the hidden-surface fill
-    // spreads such samples over the whole hole (a far light beside a
-    // pole's edge flooded the pole's band: 1 dB lost on garden).
-    if (own < other)
-        return false;
+    const bool written_near = own < other;
     const Neighbourhood around(field, x, y, 0.5f * (own + other));
     // The near side's colour is the mean of its unmixed pixels; a side only
     // a pixel or two wide (a wire, a small light) has none, and takes its
@@ -138,28 +208,33 @@ bool split(const BlurField& field, int x, int y, MixedPixel& out)
     if (near.count == 0 || sides[0][far_mixed].count == 0)
         return false;
     const double near_color[3] = { near.mean(0), near.mean(1), near.mean(2) };
-    const float* far = around.far_color(near_color, far_mixed);
+    // Behind a pixel written at the near depth, the far surface continues
+    // from its nearest pixel: the near side's mean stands for a textured
+    // near surface badly, and a far colour chosen to explain the pixel
+    // against it makes up a far surface (a dark checker behind a pole's
+    // dark stripe).
+    const Where far_pixel = written_near ? around.nearest_far(far_mixed)
+                                         : around.best_explaining_far(near_color, far_mixed);
+    const float* far = field.color(far_pixel.x, far_pixel.y);
     const float* color = field.color(x, y);
+    auto whole = [&] { return written_near && !far_source && continue_behind(field, around, out); };
 
     // The pixel's colour as near·alpha + far·(1 - alpha): alpha is where its
     // colour projects on the line between the sides' colours.
-    double along = 0.0, length = 0.0, scale = 0.0;
-    for (int i = 0; i < 3; ++i) {
-        const double d = near_color[i] - far[i];
-        along += (color[i] - far[i]) * d;
-        length += d * d;
+    const Projection projection(color, near_color, far);
+    double scale = 0.0;
+    for (int i = 0; i < 3; ++i)
         scale += near_color[i] * near_color[i] + double(far[i]) * far[i];
-    }
     // Sides that differ by less than about 1% in colour look the same
     // wherever the pixel's light goes.
-    if (!(length > 1e-4 * scale) || !(far[3] > 0.0f))
-        return false;
+    if (!(projection.length > 1e-4 * scale) || !(far[3] > 0.0f))
+        return whole();
     // A colour well beyond either side is not a blend of the two: the
     // near side's mean stands for a textured surface badly, and such a pixel
     // (a dark stripe beside a grey pole) is left whole.
-    if (along < -0.1 * length || along > 1.1 * length)
-        return false;
-    const double alpha = std::clamp(along / length, 0.0, 1.0);
+    if (projection.along < -0.1 * projection.length || projection.along > 1.1 * projection.length)
+        return whole();
+    const double alpha = projection.t();
     // The far surface lies whole behind the near one, in its side's colour,
     // and is seen through what the near one leaves uncovered; the near
     // fragment takes the rest of the pixel's light. So no estimate is
@@ -172,6 +247,10 @@ bool split(const BlurField& field, int x, int y, MixedPixel& out)
         if (far[i] > 0.0f)
             covered = std::max(covered, a - color[i] * double(far[3]) / far[i]);
     const double behind = a - covered;  // the far side's share of coverage
+    // Nothing of the near surface, or nothing of the far one: the pixel is
+    // right as it is.
+    if (!(covered > 1e-3 * a && behind > 1e-3 * a))
+        return whole();
     const double through = 1.0 - covered;
     out.x = x;
     out.y = y;
@@ -182,11 +261,11 @@ bool split(const BlurField& field, int x, int y, MixedPixel& out)
     }
     out.near[3] = float(covered);
     out.far[3] = through > 0.0 ? float(behind / through) : 0.0f;
-    out.near_z = float(near.mean_depth());
-    out.far_z = field.depth(x, y);
-    // Nothing of the near surface, or nothing of the far one: the pixel is
-    // right as it is.
-    return covered > 1e-3 * a && behind > 1e-3 * a;
+    out.near_z = written_near ? field.depth(x, y) : float(near.mean_depth());
+    out.far_z = field.depth(written_near ? far_pixel.x : x, written_near ? far_pixel.y : y);
+    if (far_source && !written_near)
+        *far_source = far_pixel;
+    return true;
 }
 
 }  // namespace

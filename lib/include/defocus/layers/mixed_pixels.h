@@ -22,14 +22,16 @@ struct MixedPixel {
 };
 
 /// The mixed pixels of `flat`, ordered by row, then column. A pixel is
-/// mixed where a nearer neighbour's CoC differs from its own by more than
-/// a pixel (less is no visible difference in blur): it carries the far
-/// side's depth and some of the near side's light. Its two sides' colours are the
-/// means of the unmixed pixels of each side around it, and its colour is
-/// taken as a blend of the two: the near side's coverage is the position
-/// of the colour on the line between them (a two-colour matting model, as
-/// in Ruzon & Tomasi 2000 and Levin et al. 2008). A pixel whose sides have
-/// one colour is left whole: a split would change nothing one could see.
+/// mixed where a neighbour's CoC differs from its own by more than a pixel
+/// (less is no visible difference in blur): it carries the depth of one
+/// side and may hold light of both. Its two sides' colours come from the
+/// pixels of each side around it, and its colour is taken as a blend of
+/// the two: the near side's coverage is the position of the colour on the
+/// line between them (a two-colour matting model, as in Ruzon & Tomasi 2000
+/// and Levin et al. 2008). A pixel whose sides have one colour, or whose
+/// colour is no blend of them, is not split; where it carries the near
+/// side's depth, it stays whole over the far surface continued behind it
+/// from its nearest pixel, as a deep render holds it.
 std::vector<MixedPixel> find_mixed_pixels(const Layer& flat, const CircleOfConfusion& coc,
                                           int nthreads = 0);
 
