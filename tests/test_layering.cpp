@@ -364,11 +364,14 @@ TEST_CASE("pixels of a textured background beside an edge are not taken for mixe
 
 TEST_CASE("the confidence AOV is the share of light from rebuilt surfaces, and 0 where all was seen")
 {
-    // In-focus stripes behind a 10 px pole blurred to 30 px: the stripes the
-    // pole hides are rebuilt, and show through its blurred edges.
+    // In-focus stripes behind a pole blurred to 30 px: the stripes the
+    // pole hides are rebuilt, and show through its blurred edges. Behind a
+    // pole 2 px wide nothing is filled: the stripes are continued behind
+    // its edge pixels, which is as made up.
+    const int width = GENERATE(10, 2);
     const float pole_z = 1.0f / 2.9f, stripes_z = 0.5f;
     auto shade = [&](int x, int y, float* rgba, float& z) {
-        const bool in_pole = x >= 55 && x < 65;
+        const bool in_pole = x >= 60 - width / 2 && x < 60 + width / 2;
         std::fill(rgba, rgba + 3, in_pole ? 0.5f : (y / 4) % 2 ? 1.0f : 0.1f);
         rgba[3] = 1.0f;
         z = in_pole ? pole_z : stripes_z;
@@ -390,6 +393,7 @@ TEST_CASE("the confidence AOV is the share of light from rebuilt surfaces, and 0
     };
 
     const ImageBuf flat = confidence(flat_scene(shade));
+    INFO("pole " << width << " px wide: confidence " << flat.getchannel(60, 40, 0, 4));
     auto at = [&](const ImageBuf& image, int x, int y) { return image.getchannel(x, y, 0, 4); };
     // Behind the pole the light is the rebuilt stripes' as much as the
     // pole's; beyond the blur's reach all of it was seen.

@@ -33,7 +33,7 @@ void split_volume(const DeepSample& s, const std::vector<double>& planes,
         const double a = -std::expm1(x * log_transmit);
         const double scale = s.a > 0.0f ? a / s.a : x;
         out.push_back({ float(s.r * scale), float(s.g * scale), float(s.b * scale),
-                        float(a), float(0.5 * (cuts[i] + cuts[i + 1])), 0, 1, 0 });
+                        float(a), float(0.5 * (cuts[i] + cuts[i + 1])), 0, false, 1, 0 });
     }
 }
 
@@ -68,13 +68,13 @@ Fragments deep_fragments(const DeepImage& deep, const CircleOfConfusion& coc,
                 if (s.zback > s.z && std::isfinite(s.zback))
                     split_volume(s, planes, row);
                 else
-                    row.push_back({ s.r, s.g, s.b, s.a, s.z, 0, 1, 0 });
+                    row.push_back({ s.r, s.g, s.b, s.a, s.z, 0, false, 1, 0 });
             }
             std::stable_sort(row.begin() + first, row.end(),
                              [](const Fragment& a, const Fragment& b) { return a.z < b.z; });
             for (size_t i = first; i < row.size(); ++i)
                 assign_layers(row[i], x, y, coc, bounds);
-            row.push_back({ 0, 0, 0, 0, -1, -1, 0, 0 });  // end of pixel
+            row.push_back({ 0, 0, 0, 0, -1, -1, false, 0, 0 });  // end of pixel
         }
     }, by_rows(nthreads));
 

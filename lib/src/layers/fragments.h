@@ -23,7 +23,10 @@ namespace defocus {
 /// alpha, the layers it belongs to and its share of each.
 struct Fragment {
     float r, g, b, a, z;
-    int front;  ///< layer index; the back share goes to front + 1
+    int16_t front;  ///< layer index; the back share goes to front + 1
+    /// Not seen in the pixel: a surface continued behind a nearer one
+    /// (MixedPixel::far_continued).
+    bool continued;
     float front_weight, back_weight;
 };
 
@@ -102,8 +105,8 @@ public:
         for (const MixedPixel& m : mixed) {
             m_mixed.push_back({ m.y, m.x });
             const Fragment sides[2] = {
-                { m.near[0], m.near[1], m.near[2], m.near[3], m.near_z, 0, 1, 0 },
-                { m.far[0], m.far[1], m.far[2], m.far[3], m.far_z, 0, 1, 0 },
+                { m.near[0], m.near[1], m.near[2], m.near[3], m.near_z, 0, false, 1, 0 },
+                { m.far[0], m.far[1], m.far[2], m.far[3], m.far_z, 0, m.far_continued, 1, 0 },
             };
             for (Fragment f : sides) {
                 if (f.a > 0.0f)
@@ -129,7 +132,7 @@ public:
                 continue;
             }
             const float* c = pixels.color + 4 * size_t(i);
-            Fragment f { c[0], c[1], c[2], c[3], pixels.depth[i], 0, 1, 0 };
+            Fragment f { c[0], c[1], c[2], c[3], pixels.depth[i], 0, false, 1, 0 };
             if (f.a > 0.0f)
                 assign_layers(f, pixels.blur[i], m_bounds);
             visit(x, &f, 1);

@@ -211,23 +211,20 @@ ROI hidden_background_window(const ROI& content, const ROI& frame, double max_di
                0, 1, 0, 4);
 }
 
-void fill_hidden_background(Layer& layer, const HiddenPixels& hidden_pixels,
-                            double max_distance, int nthreads)
+namespace {
+
+/// The hidden pixels of `layer` within `window`, those of holes within
+/// `hidden`, filled and marked in layer.rebuilt.
+void fill_holes(Layer& layer, const HoleMap& holes, const ROI& hidden, const ROI& window,
+                float seen_brightness, double max_distance, int nthreads)
 {
     const ROI roi = layer.color.roi();
-    const HoleMap holes(hidden_pixels.flags, roi);
     const FloatPixels color(layer.color, roi);
     const FloatPixels depth(layer.depth, ROI(roi.xbegin, roi.xend, roi.ybegin, roi.yend, 0, 1, 0, 1));
-    // Only the pixels around the holes matter, as far as the fill reaches.
-    const ROI hidden = bounding_box(roi, holes, nthreads);
-    if (hidden.width() == 0)
-        return;
-    const ROI window = hidden_background_window(hidden, roi, max_distance);
-
     // The pyramid starts at 2x2 pixels a cell: the pixels themselves are
     // read where they are, and only the hidden ones are written.
     const std::vector<Level> pyramid = push_pull(
-        observed_cells(color, depth, holes, window, hidden_pixels.seen_brightness, nthreads),
+        observed_cells(color, depth, holes, window, seen_brightness, nthreads),
         pyramid_levels(max_distance), nthreads);
 
     // Lines start at hidden pixels and read as far as their reach.
@@ -238,18 +235,14 @@ void fill_hidden_background(Layer& layer, const HiddenPixels& hidden_pixels,
         window);
     const ContinuedLines lines(color, depth, holes, line_window, length, nthreads);
 
-    ImageSpec rebuilt_spec(window, TypeUInt8);
-    rebuilt_spec.nchannels = 1;
-    rebuilt_spec.channelnames = { "rebuilt" };
-    reset_zeroed_except(layer.rebuilt, rebuilt_spec, ROI(), nthreads);
     parallel_for(window.ybegin, window.yend, [&](int y) {
         // Row y's pixels from the window's first column on.
-        const uint8_t* const hidden_row = holes.row(window.xbegin, y);
+        const uint8_t* const flags = holes.row(window.xbegin, y);
         float* const color_row = static_cast<float*>(layer.color.pixeladdr(window.xbegin, y));
         float* const depth_row = static_cast<float*>(layer.depth.pixeladdr(window.xbegin, y));
         uint8_t* const rebuilt_row = static_cast<uint8_t*>(layer.rebuilt.pixeladdr(window.xbegin, y));
         for (int i = 0; i < window.width(); ++i) {
-            if (!hidden_row[i])
+            if (flags[i] != HiddenPixels::hidden)
                 continue;
             const int x = window.xbegin + i;
             float mean[5], line[5], trust = 0.0f;
@@ -268,6 +261,42 @@ void fill_hidden_background(Layer& layer, const HiddenPixels& hidden_pixels,
             rebuilt_row[i] = 1;
         }
     }, by_rows(nthreads));
+}
+
+}  // namespace
+
+void fill_hidden_background(Layer& layer, const HiddenPixels& hidden_pixels,
+                            double max_distance, int nthreads)
+{
+    const ROI roi = layer.color.roi();
+    const HoleMap holes(hidden_pixels.flags, roi);
+    // Only the pixels around the holes matter, as far as the fill reaches.
+    const ROI hidden = bounding_box(roi, holes, nthreads);
+    const ROI& continued = hidden_pixels.continued_box;
+    if (hidden.width() == 0 && continued.width() == 0)
+        return;
+    const ROI window = hidden.width() > 0 ? hidden_background_window(hidden, roi, max_distance)
+                                          : continued;
+
+    ImageSpec rebuilt_spec(continued.width() > 0 ? roi_union(window, continued) : window,
+                           TypeUInt8);
+    rebuilt_spec.nchannels = 1;
+    rebuilt_spec.channelnames = { "rebuilt" };
+    reset_zeroed_except(layer.rebuilt, rebuilt_spec, ROI(), nthreads);
+    if (hidden.width() > 0)
+        fill_holes(layer, holes, hidden, window, hidden_pixels.seen_brightness, max_distance,
+                   nthreads);
+    // A surface continued behind a nearer one's edge is made up as much as
+    // a filled one.
+    if (continued.width() > 0)
+        parallel_for(continued.ybegin, continued.yend, [&](int y) {
+            const uint8_t* const flags = holes.row(continued.xbegin, y);
+            uint8_t* const rebuilt_row
+                = static_cast<uint8_t*>(layer.rebuilt.pixeladdr(continued.xbegin, y));
+            for (int i = 0; i < continued.width(); ++i)
+                if (flags[i] == HiddenPixels::continued)
+                    rebuilt_row[i] = 1;
+        }, by_rows(nthreads));
 }
 
 }  // namespace defocus

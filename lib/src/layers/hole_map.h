@@ -6,10 +6,12 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <defocus/layers/layering.h>
+
 namespace defocus {
 
-/// A layer's hole flags (HiddenPixels::flags) over its ROI: nonzero where
-/// a nearer layer covers the pixel and this one has nothing.
+/// A layer's hole flags (HiddenPixels::flags) over its ROI: the hidden
+/// pixels are those a nearer layer covers where this one has nothing.
 class HoleMap {
 public:
     HoleMap(const std::vector<uint8_t>& flags, const OIIO::ROI& roi)
@@ -25,7 +27,7 @@ public:
         return &m_flags[size_t(y - m_roi.ybegin) * m_roi.width() + (x - m_roi.xbegin)];
     }
 
-    bool operator()(int x, int y) const { return *row(x, y) != 0; }
+    bool operator()(int x, int y) const { return *row(x, y) == HiddenPixels::hidden; }
 
 private:
     const std::vector<uint8_t>& m_flags;

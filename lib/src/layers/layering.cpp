@@ -16,6 +16,7 @@
 #include "layers/brightness.h"
 #include "layers/fragments.h"
 #include "layers/layer_bounds.h"
+#include "util/bounding_box.h"
 #include "util/fresh_image.h"
 #include "util/parallel_rows.h"
 
@@ -71,8 +72,9 @@ std::vector<ROI> layer_extents(const Source& frags, int layers, int nthreads)
 
 /// Layer k of the fragments over `window`: each pixel's share of it
 /// composited front to back, with the alpha-weighted depth. Returns the
-/// pixels that a nearer layer covers and layer k does not: where its
-/// hidden background lies.
+/// pixels that a nearer layer covers and layer k does not, where its
+/// hidden background lies, and those where it holds a surface continued
+/// behind a nearer one.
 template<typename Source>
 HiddenPixels extract_layer(const Source& frags, int k, const ROI& window, Layer& layer,
                                    int nthreads)
@@ -92,17 +94,20 @@ HiddenPixels extract_layer(const Source& frags, int k, const ROI& window, Layer&
     std::vector<uint8_t> hidden(window.npixels());
     // Per row, then added in order: the same sums on any number of threads.
     std::vector<double> light(window.height(), 0.0), coverage(window.height(), 0.0);
+    RowRanges continued = empty_rows(window);
     parallel_for(window.ybegin, window.yend, [&](int y) {
         const size_t row = size_t(y - window.ybegin) * window.width();
         frags.row(y, window.xbegin, window.xend, [&](int x, const Fragment* f, int count) {
             double rgba[4] = { 0, 0, 0, 0 }, zsum = 0, wsum = 0;
             const bool nearer = count > 0 && f->a > 0.0f && f->front < k;
+            bool is_continued = false;
             for (const Fragment* end = f + count; f < end; ++f) {
                 const float w = f->front == k ? f->front_weight
                                 : f->front + 1 == k ? f->back_weight : 0.0f;
                 if (w <= 0.0f || f->a <= 0.0f)
                     continue;
                 const double t = 1.0 - rgba[3];
+                is_continued |= f->continued && t > 0.0;
                 rgba[0] += t * w * f->r;
                 rgba[1] += t * w * f->g;
                 rgba[2] += t * w * f->b;
@@ -116,8 +121,15 @@ HiddenPixels extract_layer(const Source& frags, int k, const ROI& window, Layer&
                 color[4 * p + i] = float(rgba[i]);
             // Infinite depths (the sky) stay infinite.
             depth[p] = wsum > 0 ? float(std::isinf(zsum) ? INFINITY : zsum / wsum) : 0.0f;
-            hidden[p] = nearer && !(color[4 * p + 3] > 0.0f);
-            if (!hidden[p] && color[4 * p + 3] > 0.0f) {
+            hidden[p] = nearer && !(color[4 * p + 3] > 0.0f) ? HiddenPixels::hidden
+                        : is_continued                            ? HiddenPixels::continued
+                                                                  : HiddenPixels::seen;
+            if (is_continued) {
+                auto& [first, last] = continued[y - window.ybegin];
+                first = std::min(first, x);
+                last = std::max(last, x);
+            }
+            if (hidden[p] == HiddenPixels::seen && color[4 * p + 3] > 0.0f) {
                 const float* c = &color[4 * p];
                 light[y - window.ybegin] += brightness(c);
                 coverage[y - window.ybegin] += c[3];
@@ -126,7 +138,8 @@ HiddenPixels extract_layer(const Source& frags, int k, const ROI& window, Layer&
     }, by_rows(nthreads));
     const double all_light = std::accumulate(light.begin(), light.end(), 0.0);
     const double all_coverage = std::accumulate(coverage.begin(), coverage.end(), 0.0);
-    return { std::move(hidden), all_coverage > 0.0 ? float(all_light / all_coverage) : 1.0f };
+    return { std::move(hidden), box_of_rows(window, continued),
+             all_coverage > 0.0 ? float(all_light / all_coverage) : 1.0f };
 }
 
 /// "cutting NAME into N layers needs X, more than the memory limit"

@@ -182,6 +182,7 @@ bool continue_behind(const BlurField& field, const Neighbourhood& around, MixedP
     std::copy(behind, behind + 4, out.far);
     out.near_z = field.depth(x, y);
     out.far_z = field.depth(far.x, far.y);
+    out.far_continued = true;
     return true;
 }
 

@@ -88,7 +88,14 @@ bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
 /// The pixels of a layer that nearer layers hide and it does not cover,
 /// and what the layer shows elsewhere, as cutting it finds them.
 struct HiddenPixels {
+    enum Flag : uint8_t {
+        seen = 0,
+        hidden = 1,     ///< nearer layers cover the pixel, and this one has nothing
+        continued = 2,  ///< what this layer has is a surface continued behind a
+                        ///< nearer one's edge (MixedPixel::far_continued)
+    };
     std::vector<uint8_t> flags;  ///< per pixel of the layer's window, row by row
+    OIIO::ROI continued_box;     ///< bounds the `continued` pixels; empty when none
     /// Mean brightness ((R + G + B) / 3, at least 0) per unit of alpha of
     /// the covered pixels not hidden (1 where there are none): the fill
     /// weighs brighter pixels down to it, so that a small light beside a
@@ -96,8 +103,8 @@ struct HiddenPixels {
     float seen_brightness = 1.0f;
 };
 
-/// Hidden-surface filling: the pixels of `layer` flagged in `holes` (hidden
-/// behind nearer layers) are rebuilt from the layer's observed pixels around
+/// Hidden-surface filling: the pixels of `layer` flagged `hidden` in `holes`
+/// (hidden behind nearer layers) are rebuilt from the layer's observed pixels around
 /// them, covered or empty. Where a straight line crosses the hole within
 /// 4 * max_distance pixels between two ends that agree, and along which the
 /// surface runs outside the hole, the structure is continued along it
@@ -105,7 +112,8 @@ struct HiddenPixels {
 /// in as the ends disagree, pixels take the push-pull average (Gortler et al.
 /// 1996) found on the coarsest pyramid level needed, up to `max_distance`
 /// pixels away. Premultiplied colour and alpha are filled, and the
-/// alpha-weighted depth; the pixels filled are marked in layer.rebuilt.
+/// alpha-weighted depth. The pixels filled, and those flagged `continued`,
+/// are marked in layer.rebuilt.
 void fill_hidden_background(Layer& layer, const HiddenPixels& holes, double max_distance,
                             int nthreads = 0);
 

@@ -19,6 +19,9 @@ struct MixedPixel {
     int x, y;
     float near[4], far[4];
     float near_z, far_z;
+    /// The near fragment covers the pixel: the far one is not seen in it,
+    /// but is the far surface continued behind the near one's edge.
+    bool far_continued = false;
 };
 
 /// The mixed pixels of `flat`, ordered by row, then column. A pixel is
