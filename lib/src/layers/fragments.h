@@ -29,6 +29,8 @@ struct Fragment {
     bool continued;
     float front_weight, back_weight;
 };
+// A 4K deep frame holds tens of millions of them.
+static_assert(sizeof(Fragment) == 32);
 
 /// Every pixel's fragments, sorted front to back.
 struct Fragments {
