@@ -295,7 +295,8 @@ TEST_CASE(".dof files: every setting round-trips, paths relative to the file")
              { "rotation", "15" }, { "roundness", "0.25" }, { "aspect", "0.5" },
              { "hybrid-threshold", "6" }, { "iscolorspace", "ACEScg" },
              { "tocolorspace", "srgb_tx" }, { "output", "focusmap" },
-             { "pixel-type", "float" }, { "compression", "dwaa" }, { "window", "grown" } })
+             { "pixel-type", "float" }, { "compression", "dwaa" }, { "window", "grown" },
+             { "memory-limit", "1536M" } })
         REQUIRE(set_shot_setting(shot, name, value, error));
     REQUIRE(save_shot(shot, dir + "/shot.dof", error));
 

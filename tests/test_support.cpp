@@ -210,11 +210,11 @@ int run(const std::string& command, std::string& output)
     return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
-bool render_with(const std::string& input, const Settings& settings, defocus::FrameResult& result,
-                 std::string& error, int frame)
+bool render_with(const std::vector<std::string>& inputs, const Settings& settings,
+                 defocus::FrameResult& result, std::string& error, int frame)
 {
     defocus::Shot shot;
-    shot.inputs = { input };
+    shot.inputs = inputs;
     defocus::ShotAssets assets;
     for (const auto& [name, value] : settings)
         if (!defocus::set_shot_setting(shot, name, value, error))
@@ -231,6 +231,15 @@ ImageBuf rendered(const std::string& input, const Settings& settings, int frame)
     INFO(error);
     REQUIRE(ok);
     return result.image;
+}
+
+bool no_nan(const ImageBuf& image)
+{
+    const ImageBufAlgo::PixelStats stats = ImageBufAlgo::computePixelStats(image);
+    for (size_t c = 0; c < stats.nancount.size(); ++c)
+        if (stats.nancount[c] || stats.infcount[c])
+            return false;
+    return true;
 }
 
 void write_uniform_image(const std::string& path, const std::vector<std::string>& channels,
@@ -272,6 +281,11 @@ std::string example_scene()
 bool one_line_naming(const std::string& text, const std::string& what)
 {
     return text.find(what) != std::string::npos && text.find('\n') == text.size() - 1;
+}
+
+bool one_line_error(const std::string& error, const std::string& what)
+{
+    return error.find(what) != std::string::npos && error.find('\n') == std::string::npos;
 }
 
 std::string shared_data()

@@ -86,13 +86,21 @@ int run(const std::string& command, std::string& output);
 /// { "focal", "50" }.
 using Settings = std::vector<std::pair<std::string, std::string>>;
 
-/// Frame `frame` of `input` rendered through the library (render_frame),
+/// Frame `frame` of `inputs` rendered through the library (render_frame),
 /// with `settings`; false with the first error on the way.
-bool render_with(const std::string& input, const Settings& settings,
+bool render_with(const std::vector<std::string>& inputs, const Settings& settings,
                  defocus::FrameResult& result, std::string& error, int frame = 1);
+inline bool render_with(const std::string& input, const Settings& settings,
+                        defocus::FrameResult& result, std::string& error, int frame = 1)
+{
+    return render_with(std::vector<std::string> { input }, settings, result, error, frame);
+}
 
 /// render_with()'s image, which must render.
 ImageBuf rendered(const std::string& input, const Settings& settings, int frame = 1);
+
+/// True where no pixel of `image` is NaN or infinite.
+bool no_nan(const ImageBuf& image);
 
 /// Writes a `width` x `height` image of the given channels, every pixel
 /// `pixel`, as `type`.
@@ -110,6 +118,10 @@ std::string example_scene();
 
 /// True when the text is one line (ending in a newline) mentioning `what`.
 bool one_line_naming(const std::string& text, const std::string& what);
+
+/// True where a library error is one line (no newline at all) containing
+/// `what`.
+bool one_line_error(const std::string& error, const std::string& what);
 
 /// Writes a scanline OpenEXR (half R,G,B,A,Z, zip) whose header declares a
 /// `width` x `height` data window, with its chunk table but one tiny
