@@ -104,66 +104,6 @@ TEST_CASE("defocus renders a generated multi-part scene")
     CHECK(files.size() == 3);
 }
 
-TEST_CASE("bad pixels are handled, counted and never reach the output")
-{
-    const std::string dir = scratch_dir("cli_bad_pixels");
-    // Three pixels of NaN colour, bad depths, and transparent light.
-    ImageSpec spec(8, 8, 5, TypeFloat);
-    spec.channelnames = { "R", "G", "B", "A", "Z" };
-    ImageBuf image(spec);
-    ImageBufAlgo::fill(image, { 0.5f, 0.5f, 0.5f, 1.0f, 2.0f });
-    const float nan_color[5] = { NAN, 0.5f, 0.5f, 1.0f, 2.0f };
-    const float inf_alpha[5] = { 0.5f, 0.5f, 0.5f, INFINITY, 2.0f };
-    const float zero_z[5] = { 0.5f, 0.5f, 0.5f, 1.0f, 0.0f };
-    const float nan_z[5] = { 0.5f, 0.5f, 0.5f, 1.0f, NAN };
-    const float negative_z[5] = { 0.5f, 0.5f, 0.5f, 1.0f, -3.0f };
-    const float glow[5] = { 4.0f, 4.0f, 4.0f, 0.0f, 1e10f };
-    image.setpixel(1, 1, nan_color);
-    image.setpixel(2, 1, inf_alpha);
-    image.setpixel(3, 3, zero_z);
-    image.setpixel(4, 3, nan_z);
-    image.setpixel(5, 3, negative_z);
-    image.setpixel(6, 6, glow);
-    const std::string in = dir + "/bad.exr", out = dir + "/out.exr";
-    REQUIRE(image.write(in));
-    std::string log;
-    REQUIRE(run_defocus(in + " -o " + out + camera + " -v", log) == 0);
-    CHECK(Strutil::contains(log, "2 with NaN/inf colour dropped"));
-    CHECK(Strutil::contains(log, "3 with bad depth taken as infinitely far"));
-    CHECK(Strutil::contains(log, "1 transparent with colour cleared"));
-    const ImageBuf result = read_image(out);
-    REQUIRE(result.initialized());
-    CHECK(no_nan(result));
-    const auto stats = ImageBufAlgo::computePixelStats(result);
-    CHECK(stats.max[0] <= 0.5f + 1e-3f);  // the alpha-0 glow carried no light
-
-    // Finite colour near float's limit overflowed the spreading sums into
-    // NaN (disc, box, polygon): it is clamped to 1e30, and counted.
-    ImageBuf hot(ImageSpec(48, 48, 5, TypeFloat));
-    hot.specmod().channelnames = { "R", "G", "B", "A", "Z" };
-    ImageBufAlgo::fill(hot, { 0.0f, 0.0f, 0.0f, 1.0f, 2.0f });
-    for (int y = 0; y < 48; ++y)
-        for (int x = 0; x < 48; ++x)
-            if ((x * 7 + y * 3) % 5 < 3) {
-                const float v = (x + y) % 2 ? 3e38f : -3e38f;
-                const float pixel[5] = { v, 3e38f, 1e30f, (x + y) % 3 ? 1.0f : 1.5f, 1e30f };
-                hot.setpixel(x, y, pixel);
-            }
-    const float below_zero[5] = { 0.5f, 0.5f, 0.5f, -0.5f, 2.0f };
-    hot.setpixel(0, 0, below_zero);
-    REQUIRE(hot.write(dir + "/hot.exr"));
-    for (const char* aperture : { "disc", "box", "polygon", "tent" }) {
-        INFO(aperture);
-        REQUIRE(run_defocus(dir + "/hot.exr -o " + out
-                                + " --focal 100 --fstop 1 --focus 0.5 -v --aperture " + aperture,
-                            log)
-                == 0);
-        CHECK(Strutil::contains(log, "1382 with colour beyond 1e30 clamped"));
-        CHECK(Strutil::contains(log, "1 transparent with colour cleared"));
-        CHECK(no_nan(read_image(out)));
-    }
-}
-
 TEST_CASE("a mistyped option is answered with the nearest one")
 {
     std::string log;
@@ -666,18 +606,6 @@ std::set<std::string> option_names(const std::string& text, const std::string& b
 
 /// A flat RGBA+Z scene, 20x20: opaque, the left half at 2 m, the right
 /// half at 6 m.
-std::string two_depth_scene(const std::string& dir)
-{
-    ImageSpec spec(20, 20, 5, TypeFloat);
-    spec.channelnames = { "R", "G", "B", "A", "Z" };
-    ImageBuf image(spec);
-    ImageBufAlgo::fill(image, { 0.5f, 0.5f, 0.5f, 1.0f, 2.0f });
-    ImageBufAlgo::fill(image, { 0.2f, 0.4f, 0.8f, 1.0f, 6.0f }, ROI(10, 20, 0, 20));
-    const std::string path = dir + "/two_depths.exr";
-    REQUIRE(image.write(path));
-    return path;
-}
-
 float attribute(const std::string& file, const char* name)
 {
     const ImageSpec spec = read_spec(file);
@@ -847,83 +775,6 @@ TEST_CASE(".dof scene files: saved, rendered, overridden by flags, errors in one
     CHECK(one_line_naming(log, "gone.exr: no such file"));
     REQUIRE(run_defocus(dir + "/shot.dof " + example_scene() + " -o " + dir + "/x.exr", log) == 1);
     CHECK(one_line_naming(log, "must be the only input"));
-    CHECK_FALSE(Filesystem::exists(dir + "/x.exr"));
-}
-
-TEST_CASE("defocus --focus-at focuses on what is seen at a pixel, keyframed too")
-{
-    const std::string dir = scratch_dir("cli_focus_at");
-    const std::string scene = two_depth_scene(dir);
-    std::string log;
-    REQUIRE(run_defocus(scene + " -o " + dir + "/a.exr --focus-at 3,10", log) == 0);
-    CHECK(attribute(dir + "/a.exr", "defocus:focusDistance") == 2.0f);
-    // -v prints a depth read from a float image with sensible precision.
-    const std::string at_1_7 = dir + "/at_1_7.exr";
-    write_uniform_image(at_1_7, { "R", "G", "B", "A", "Z" }, { 1, 1, 1, 1, 1.7f });
-    REQUIRE(run_defocus(at_1_7 + " -o " + dir + "/c.exr --focus-at 0,0 -v", log) == 0);
-    CHECK(Strutil::contains(log, " focus 1.7 sensor"));  // not 1.7000000476837158
-    // At x=10 the 5x5 window sees 10 pixels at 2 m and 15 at 6 m.
-    REQUIRE(run_defocus(scene + " -o " + dir + "/b.#.exr --frames 1-3 --focus-at 1:3,10,3:17,10",
-                        log) == 0);
-    CHECK(attribute(dir + "/b.0001.exr", "defocus:focusDistance") == 2.0f);
-    CHECK(attribute(dir + "/b.0002.exr", "defocus:focusDistance") == 6.0f);
-    CHECK(attribute(dir + "/b.0003.exr", "defocus:focusDistance") == 6.0f);
-    REQUIRE(run_defocus(scene + " -o " + dir + "/c.exr --focus-at 30,10", log) == 1);
-    CHECK(one_line_naming(log, "outside the 20x20 display window"));
-}
-
-TEST_CASE("a render without alpha is opaque, and one without Z takes its depth from --depth")
-{
-    const std::string dir = scratch_dir("cli_depth");
-    const std::string scene_file = two_depth_scene(dir);
-    const ImageBuf scene(scene_file);
-    auto write_channels = [&](const std::string& name, const std::vector<int>& order,
-                              const std::vector<std::string>& names) {
-        const std::string path = dir + "/" + name;
-        ImageBuf part = ImageBufAlgo::channels(scene, int(order.size()), order, {}, names);
-        REQUIRE(part.write(path));
-        return path;
-    };
-    const std::string rgbz  = write_channels("rgbz.exr", { 0, 1, 2, 4 }, { "R", "G", "B", "Z" });
-    const std::string rgba  = write_channels("rgba.exr", { 0, 1, 2, 3 }, { "R", "G", "B", "A" });
-    const std::string named = write_channels("named.exr", { 0, 1, 2, 3, 4 },
-                                             { "R", "G", "B", "A", "P.depth" });
-    for (int f : { 1, 2 })
-        write_channels(format("depth.{:04}.exr", f), { 4 }, { "Y" });
-    const std::string depth = dir + "/depth.0001.exr";
-    for (int f : { 1, 2 })
-        REQUIRE(Filesystem::copy(rgba, format("{}/rgba.{:04}.exr", dir, f)));
-    const std::string look = " -d float --focal 50 --fstop 1.4 --focus 2 --sensor 3.6";
-
-    std::string log;
-    REQUIRE(run_defocus(scene_file + " -o " + dir + "/reference.exr" + look, log) == 0);
-    REQUIRE(run_defocus(rgbz + " -o " + dir + "/opaque.exr -v" + look, log) == 0);
-    CHECK(Strutil::contains(log, "rgbz.exr: no alpha channel, taken as opaque"));
-    REQUIRE(run_defocus(rgba + " -o " + dir + "/file.exr -v --depth " + depth + look, log) == 0);
-    CHECK(Strutil::contains(log, "depth from " + depth));
-    REQUIRE(run_defocus(named + " -o " + dir + "/channel.exr --depth P.depth" + look, log) == 0);
-    // A depth sequence beside a colour sequence, frame by frame.
-    REQUIRE(run_defocus(dir + "/rgba.#.exr -o " + dir + "/seq.#.exr --depth " + dir
-                            + "/depth.#.exr" + look,
-                        log) == 0);
-    // A .dof keeps a depth file relative to itself.
-    REQUIRE(run_defocus(rgba + " --depth " + depth + look + " --save-scene " + dir + "/shot.dof",
-                        log) == 0);
-    std::string dof;
-    REQUIRE(Filesystem::read_text_file(dir + "/shot.dof", dof));
-    CHECK(Strutil::contains(dof, "\"depth\": \"depth.0001.exr\""));
-    REQUIRE(run_defocus(dir + "/shot.dof -o " + dir + "/dof.exr", log) == 0);
-
-    const ImageBuf reference = read_image(dir + "/reference.exr");
-    for (const char* result : { "opaque", "file", "channel", "seq.0002", "dof" }) {
-        INFO(result);
-        CHECK(ImageBufAlgo::compare(read_image(dir + "/" + result + ".exr"), reference, 1e-6f, 1e-6f)
-                  .nfail
-              == 0);
-    }
-    REQUIRE(run_defocus(rgba + " -o " + dir + "/x.exr" + look, log) == 1);
-    CHECK(one_line_naming(log, "rgba.exr: part 0 has no Z channel (channels: R,G,B,A): give its "
-                               "depth with --depth FILE or --depth CHANNEL"));
     CHECK_FALSE(Filesystem::exists(dir + "/x.exr"));
 }
 

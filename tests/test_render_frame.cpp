@@ -1,10 +1,14 @@
 // One frame through the library, as every front end renders it: what is
-// read, and what the frame's edges and depth units make of it.
+// read (depth from files and channels, focus at a pixel), what bad pixels
+// become, and what the frame's edges and depth units make of it.
 #include <catch2/catch.hpp>
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/frame_report.h>
+#include <defocus/io/shot_file.h>
 #include <defocus/render_frame.h>
 
 #include "test_support.h"
@@ -12,6 +16,7 @@
 using namespace defocus;
 using namespace defocus_test;
 using namespace OIIO;
+using Strutil::fmt::format;
 
 namespace {
 
@@ -61,4 +66,166 @@ TEST_CASE("Z in other units than metres is read with the depth scale")
     const ImageBuf unscaled = rendered(dir + "/cm.exr", with({ { "window", "grown" } }));
     CHECK(ImageBufAlgo::compare(centimetres, metres, 1e-6f, 1e-6f).nfail == 0);
     CHECK(ImageBufAlgo::compare(unscaled, metres, 1e-3f, 1e-3f).nfail > 0);
+}
+
+TEST_CASE("bad pixels are handled, counted and never reach the output")
+{
+    const std::string dir = scratch_dir("render_bad_pixels");
+    // Pixels of NaN colour, bad depths, and transparent light.
+    ImageSpec spec(8, 8, 5, TypeFloat);
+    spec.channelnames = { "R", "G", "B", "A", "Z" };
+    ImageBuf image(spec);
+    ImageBufAlgo::fill(image, { 0.5f, 0.5f, 0.5f, 1.0f, 2.0f });
+    const float nan_color[5] = { NAN, 0.5f, 0.5f, 1.0f, 2.0f };
+    const float inf_alpha[5] = { 0.5f, 0.5f, 0.5f, INFINITY, 2.0f };
+    const float zero_z[5] = { 0.5f, 0.5f, 0.5f, 1.0f, 0.0f };
+    const float nan_z[5] = { 0.5f, 0.5f, 0.5f, 1.0f, NAN };
+    const float negative_z[5] = { 0.5f, 0.5f, 0.5f, 1.0f, -3.0f };
+    const float glow[5] = { 4.0f, 4.0f, 4.0f, 0.0f, 1e10f };
+    image.setpixel(1, 1, nan_color);
+    image.setpixel(2, 1, inf_alpha);
+    image.setpixel(3, 3, zero_z);
+    image.setpixel(4, 3, nan_z);
+    image.setpixel(5, 3, negative_z);
+    image.setpixel(6, 6, glow);
+    const std::string in = dir + "/bad.exr";
+    REQUIRE(image.write(in));
+    const Settings camera = { { "focal", "50" }, { "fstop", "1.8" }, { "focus", "4" } };
+    FrameResult result;
+    std::string error;
+    REQUIRE(render_with(in, camera, result, error));
+    CHECK(result.fixed.nonfinite_color == 2);
+    CHECK(result.fixed.bad_depth == 3);
+    CHECK(result.fixed.transparent_light == 1);
+    const std::string report = frame_report(result, shot_with({ in }, camera), "out.exr");
+    CHECK(Strutil::contains(report, "2 with NaN/inf colour dropped"));
+    CHECK(Strutil::contains(report, "3 with bad depth taken as infinitely far"));
+    CHECK(Strutil::contains(report, "1 transparent with colour cleared"));
+    CHECK(no_nan(result.image));
+    const auto stats = ImageBufAlgo::computePixelStats(result.image);
+    CHECK(stats.max[0] <= 0.5f + 1e-3f);  // the alpha-0 glow carried no light
+
+    // Finite colour near float's limit overflowed the spreading sums into
+    // NaN (disc, box, polygon): it is clamped to 1e30, and counted.
+    ImageBuf hot(ImageSpec(48, 48, 5, TypeFloat));
+    hot.specmod().channelnames = { "R", "G", "B", "A", "Z" };
+    ImageBufAlgo::fill(hot, { 0.0f, 0.0f, 0.0f, 1.0f, 2.0f });
+    for (int y = 0; y < 48; ++y)
+        for (int x = 0; x < 48; ++x)
+            if ((x * 7 + y * 3) % 5 < 3) {
+                const float v = (x + y) % 2 ? 3e38f : -3e38f;
+                const float pixel[5] = { v, 3e38f, 1e30f, (x + y) % 3 ? 1.0f : 1.5f, 1e30f };
+                hot.setpixel(x, y, pixel);
+            }
+    const float below_zero[5] = { 0.5f, 0.5f, 0.5f, -0.5f, 2.0f };
+    hot.setpixel(0, 0, below_zero);
+    REQUIRE(hot.write(dir + "/hot.exr"));
+    for (const char* aperture : { "disc", "box", "polygon", "tent" }) {
+        INFO(aperture);
+        FrameResult hot_result;
+        REQUIRE(render_with(dir + "/hot.exr",
+                            { { "focal", "100" }, { "fstop", "1" }, { "focus", "0.5" },
+                              { "aperture", aperture } },
+                            hot_result, error));
+        CHECK(hot_result.fixed.huge_color == 1382);
+        CHECK(hot_result.fixed.transparent_light == 1);
+        CHECK(no_nan(hot_result.image));
+    }
+}
+
+TEST_CASE("focusing at a pixel takes the depth seen there, keyframed too")
+{
+    const std::string dir = scratch_dir("render_focus_at");
+    const std::string scene = two_depth_scene(dir);
+    auto focus_at = [&](const std::string& input, const std::string& at, int frame) {
+        FrameResult result;
+        std::string error;
+        const bool ok = render_with(input, { { "focus-at", at } }, result, error, frame);
+        INFO(error);
+        REQUIRE(ok);
+        return result.camera.focus_distance;
+    };
+    CHECK(focus_at(scene, "3,10", 1) == 2.0);
+    // At x=10 the 5x5 window sees 10 pixels at 2 m and 15 at 6 m.
+    CHECK(focus_at(scene, "1:3,10,3:17,10", 1) == 2.0);
+    CHECK(focus_at(scene, "1:3,10,3:17,10", 2) == 6.0);
+    CHECK(focus_at(scene, "1:3,10,3:17,10", 3) == 6.0);
+
+    // The report prints a depth read from a float image with sensible
+    // precision.
+    const std::string at_1_7 = dir + "/at_1_7.exr";
+    write_uniform_image(at_1_7, { "R", "G", "B", "A", "Z" }, { 1, 1, 1, 1, 1.7f });
+    const Settings corner = { { "focus-at", "0,0" } };
+    FrameResult result;
+    std::string error;
+    REQUIRE(render_with(at_1_7, corner, result, error));
+    CHECK(Strutil::contains(frame_report(result, shot_with({ at_1_7 }, corner), "c.exr"),
+                            " focus 1.7 sensor"));  // not 1.7000000476837158
+
+    CHECK_FALSE(render_with(scene, { { "focus-at", "30,10" } }, result, error));
+    CHECK(one_line_error(error, "outside the 20x20 display window"));
+}
+
+TEST_CASE("a render without alpha is opaque, and one without Z takes its depth from a file, "
+          "a channel or a sequence")
+{
+    const std::string dir = scratch_dir("render_depth");
+    const std::string scene_file = two_depth_scene(dir);
+    const ImageBuf scene(scene_file);
+    auto write_channels = [&](const std::string& name, const std::vector<int>& order,
+                              const std::vector<std::string>& names) {
+        const std::string path = dir + "/" + name;
+        ImageBuf part = ImageBufAlgo::channels(scene, int(order.size()), order, {}, names);
+        REQUIRE(part.write(path));
+        return path;
+    };
+    const std::string rgbz = write_channels("rgbz.exr", { 0, 1, 2, 4 }, { "R", "G", "B", "Z" });
+    const std::string rgba = write_channels("rgba.exr", { 0, 1, 2, 3 }, { "R", "G", "B", "A" });
+    const std::string named = write_channels("named.exr", { 0, 1, 2, 3, 4 },
+                                             { "R", "G", "B", "A", "P.depth" });
+    for (int f : { 1, 2 })
+        write_channels(format("depth.{:04}.exr", f), { 4 }, { "Y" });
+    const std::string depth = dir + "/depth.0001.exr";
+    for (int f : { 1, 2 })
+        REQUIRE(Filesystem::copy(rgba, format("{}/rgba.{:04}.exr", dir, f)));
+    const Settings look = { { "focal", "50" }, { "fstop", "1.4" }, { "focus", "2" },
+                            { "sensor", "3.6" } };
+    auto look_and = [&](Settings more) {
+        more.insert(more.begin(), look.begin(), look.end());
+        return more;
+    };
+    auto notes = [](const FrameResult& result) { return Strutil::join(result.notes, "\n"); };
+    auto same_as = [&](const FrameResult& result) {
+        return ImageBufAlgo::compare(result.image, rendered(scene_file, look), 1e-6f, 1e-6f).nfail
+               == 0;
+    };
+
+    FrameResult result;
+    std::string error;
+    REQUIRE(render_with(rgbz, look, result, error));
+    CHECK(Strutil::contains(notes(result), "rgbz.exr: no alpha channel, taken as opaque"));
+    CHECK(same_as(result));
+    REQUIRE(render_with(rgba, look_and({ { "depth", depth } }), result, error));
+    CHECK(Strutil::contains(notes(result), "depth from " + depth));
+    CHECK(same_as(result));
+    REQUIRE(render_with(named, look_and({ { "depth", "P.depth" } }), result, error));
+    CHECK(same_as(result));
+    // A depth sequence beside a colour sequence, frame by frame.
+    REQUIRE(render_with(dir + "/rgba.#.exr", look_and({ { "depth", dir + "/depth.#.exr" } }), result,
+                        error, 2));
+    CHECK(same_as(result));
+    // A .dof keeps a depth file relative to itself.
+    REQUIRE(save_shot(shot_with({ rgba }, look_and({ { "depth", depth } })), dir + "/shot.dof",
+                      error));
+    std::string dof;
+    REQUIRE(Filesystem::read_text_file(dir + "/shot.dof", dof));
+    CHECK(Strutil::contains(dof, "\"depth\": \"depth.0001.exr\""));
+    Shot loaded;
+    REQUIRE(load_shot(dir + "/shot.dof", loaded, error));
+    REQUIRE(render_shot(loaded, result, error));
+    CHECK(same_as(result));
+
+    CHECK_FALSE(render_with(rgba, look, result, error));
+    CHECK(one_line_error(error, "rgba.exr: part 0 has no Z channel (channels: R,G,B,A): give its "
+                                "depth with --depth FILE or --depth CHANNEL"));
 }

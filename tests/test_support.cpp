@@ -210,15 +210,45 @@ int run(const std::string& command, std::string& output)
     return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
+std::string two_depth_scene(const std::string& dir)
+{
+    ImageSpec spec(20, 20, 5, TypeFloat);
+    spec.channelnames = { "R", "G", "B", "A", "Z" };
+    ImageBuf image(spec);
+    ImageBufAlgo::fill(image, { 0.5f, 0.5f, 0.5f, 1.0f, 2.0f });
+    ImageBufAlgo::fill(image, { 0.2f, 0.4f, 0.8f, 1.0f, 6.0f }, ROI(10, 20, 0, 20));
+    const std::string path = dir + "/two_depths.exr";
+    REQUIRE(image.write(path));
+    return path;
+}
+
+defocus::Shot shot_with(const std::vector<std::string>& inputs, const Settings& settings)
+{
+    defocus::Shot shot;
+    shot.inputs = inputs;
+    std::string error;
+    for (const auto& [name, value] : settings) {
+        INFO(name << " = " << value);
+        REQUIRE(defocus::set_shot_setting(shot, name, value, error));
+    }
+    return shot;
+}
+
 bool render_with(const std::vector<std::string>& inputs, const Settings& settings,
                  defocus::FrameResult& result, std::string& error, int frame)
 {
     defocus::Shot shot;
     shot.inputs = inputs;
-    defocus::ShotAssets assets;
     for (const auto& [name, value] : settings)
         if (!defocus::set_shot_setting(shot, name, value, error))
             return false;
+    return render_shot(shot, result, error, frame);
+}
+
+bool render_shot(const defocus::Shot& shot, defocus::FrameResult& result, std::string& error,
+                 int frame)
+{
+    defocus::ShotAssets assets;
     return defocus::check_shot(shot, error) && defocus::read_shot_assets(shot, assets, error)
            && defocus::render_frame(shot, frame, assets, result, error);
 }

@@ -86,6 +86,18 @@ int run(const std::string& command, std::string& output);
 /// { "focal", "50" }.
 using Settings = std::vector<std::pair<std::string, std::string>>;
 
+/// A 20x20 RGBA+Z render in `dir`: grey at 2 m on the left half, blue at
+/// 6 m on the right; its path.
+std::string two_depth_scene(const std::string& dir);
+
+/// A shot of `inputs` with `settings`, which must be valid.
+defocus::Shot shot_with(const std::vector<std::string>& inputs, const Settings& settings);
+
+/// Frame `frame` of `shot` rendered through the library (check_shot,
+/// read_shot_assets, render_frame); false with the first error on the way.
+bool render_shot(const defocus::Shot& shot, defocus::FrameResult& result, std::string& error,
+                 int frame = 1);
+
 /// Frame `frame` of `inputs` rendered through the library (render_frame),
 /// with `settings`; false with the first error on the way.
 bool render_with(const std::vector<std::string>& inputs, const Settings& settings,
