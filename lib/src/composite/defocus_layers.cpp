@@ -95,9 +95,9 @@ void composite_over(float* out, const double* rgba, int n, const Lanes& written,
         const double scale = a > 1.0 ? 1.0 / a : 1.0;
         const double alpha = a > 1.0 ? 1.0 : std::max(0.0, a);
         spread *= splat(scale);
-        spread[3] = alpha;
+        spread.v[3] = alpha;
         const d4 under = onto_black ? splat(0.0) : load4(out);
-        store4(out, written ? spread + splat(1.0 - alpha) * under : under);
+        store4(out, d4 { written ? (spread + splat(1.0 - alpha) * under).v : under.v });
     }
 }
 

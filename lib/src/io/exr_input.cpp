@@ -425,7 +425,9 @@ bool ExrInput::read(int part, const OIIO::ROI& window, const std::vector<Channel
     std::mutex first_error;
     // A few chunks a task: tasks of many chunks leave a thread idle.
     OIIO::parallel_for_chunked(0, chunks.count, 4, [&](int64_t c0, int64_t c1) {
-        exr_decode_pipeline_t decoder = EXR_DECODE_PIPELINE_INITIALIZER;
+        // Zeroed, as EXR_DECODE_PIPELINE_INITIALIZER makes it ({ 0 }, which
+        // clang warns of).
+        exr_decode_pipeline_t decoder {};
         ZipChunks zip;
         auto fail = [&](const std::string& why) {
             std::lock_guard<std::mutex> lock(first_error);

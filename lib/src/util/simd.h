@@ -12,49 +12,81 @@
 /// so that they are compiled for that clone's instruction set.
 #define DEFOCUS_KERNEL inline __attribute__((always_inline))
 /// The callers are compiled for AVX-512, AVX2 and the baseline, the one
-/// the CPU runs picked at load time. clang 14 refuses 4-double vectors in
-/// the baseline clone of such a function (an ABI error, not a warning),
-/// so a clang build has the baseline only: slower, the same results.
-#if defined(__clang__)
-#define DEFOCUS_CLONES
-#else
+/// the CPU runs picked at load time.
 #define DEFOCUS_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
-#endif
 
 namespace defocus {
 
-/// A pixel's four channels.
-using d4 = double __attribute__((vector_size(32)));
-using f4 = float __attribute__((vector_size(16)));
+using double4 = double __attribute__((vector_size(32)));
+using float4 = float __attribute__((vector_size(16)));
+
+/// A pixel's four channels. The vector is wrapped: clang refuses a bare
+/// 32-byte vector as an argument or result in the baseline clone (an ABI
+/// error, even for a function always inlined), and takes it in a struct.
+struct d4 {
+    double4 v;
+
+    DEFOCUS_KERNEL double operator[](int i) const { return v[i]; }
+    DEFOCUS_KERNEL d4& operator+=(const d4& b)
+    {
+        v += b.v;
+        return *this;
+    }
+    DEFOCUS_KERNEL d4& operator-=(const d4& b)
+    {
+        v -= b.v;
+        return *this;
+    }
+    DEFOCUS_KERNEL d4& operator*=(const d4& b)
+    {
+        v *= b.v;
+        return *this;
+    }
+};
+
+DEFOCUS_KERNEL d4 operator+(const d4& a, const d4& b)
+{
+    return { a.v + b.v };
+}
+
+DEFOCUS_KERNEL d4 operator-(const d4& a, const d4& b)
+{
+    return { a.v - b.v };
+}
+
+DEFOCUS_KERNEL d4 operator*(const d4& a, const d4& b)
+{
+    return { a.v * b.v };
+}
 
 DEFOCUS_KERNEL d4 load4(const double* p)
 {
     d4 v;
-    std::memcpy(&v, p, sizeof v);
+    std::memcpy(&v.v, p, sizeof v.v);
     return v;
 }
 
 DEFOCUS_KERNEL void store4(double* p, const d4& v)
 {
-    std::memcpy(p, &v, sizeof v);
+    std::memcpy(p, &v.v, sizeof v.v);
 }
 
 DEFOCUS_KERNEL d4 load4(const float* p)
 {
-    f4 v;
+    float4 v;
     std::memcpy(&v, p, sizeof v);
-    return __builtin_convertvector(v, d4);
+    return { __builtin_convertvector(v, double4) };
 }
 
 DEFOCUS_KERNEL void store4(float* p, const d4& v)
 {
-    const f4 f = __builtin_convertvector(v, f4);
+    const float4 f = __builtin_convertvector(v.v, float4);
     std::memcpy(p, &f, sizeof f);
 }
 
 DEFOCUS_KERNEL d4 splat(double w)
 {
-    return d4 { w, w, w, w };
+    return { double4 { w, w, w, w } };
 }
 
 }  // namespace defocus
