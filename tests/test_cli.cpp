@@ -792,44 +792,6 @@ TEST_CASE("the help and the README document the same options")
     CHECK(Strutil::contains(help, "Examples:"));
 }
 
-TEST_CASE("the camera a render recorded in its header is used frame by frame, flags override")
-{
-    const std::string dir = scratch_dir("cli_camera_from_file");
-    // A focus pull baked into the render: 2, 4, 6 m over three frames, with
-    // OpenEXR's standard focus and aperture and Arnold's focal length.
-    for (int f = 1; f <= 3; ++f) {
-        ImageSpec spec(16, 16, 5, TypeFloat);
-        spec.channelnames = { "R", "G", "B", "A", "Z" };
-        spec.attribute("focus", float(2 * f));
-        spec.attribute("FNumber", 2.8f);  // OpenImageIO's name for `aperture`
-        spec.attribute("CameraFocalLength", 85.0f);
-        ImageBuf image(spec);
-        ImageBufAlgo::fill(image, { 0.5f, 0.5f, 0.5f, 1.0f, 3.0f });
-        REQUIRE(image.write(format("{}/pull.{:04}.exr", dir, f)));
-    }
-    std::string log;
-    REQUIRE(run_defocus(dir + "/pull.#.exr -o " + dir + "/out.#.exr -v", log) == 0);
-    for (int f = 1; f <= 3; ++f) {
-        const std::string out = format("{}/out.{:04}.exr", dir, f);
-        CHECK(attribute(out, "defocus:focusDistance") == float(2 * f));
-        CHECK(attribute(out, "defocus:fNumber") == 2.8f);
-        CHECK(attribute(out, "defocus:focalLength") == 85.0f);
-    }
-    CHECK(Strutil::contains(log, "camera values from: focal file: CameraFocalLength, f-number "
-                                 "file: FNumber, focus file: focus, sensor default"));
-    // Flags win; off reads nothing.
-    REQUIRE(run_defocus(dir + "/pull.#.exr -o " + dir + "/flag.#.exr --focus 5 --frames 2", log) == 0);
-    CHECK(attribute(dir + "/flag.0002.exr", "defocus:focusDistance") == 5.0f);
-    CHECK(attribute(dir + "/flag.0002.exr", "defocus:focalLength") == 85.0f);
-    REQUIRE(run_defocus(dir + "/pull.#.exr -o " + dir + "/off.#.exr --focus 5 --frames 2"
-                            " --camera-from-file off", log) == 0);
-    CHECK(attribute(dir + "/off.0002.exr", "defocus:focalLength") == 50.0f);
-    REQUIRE(run_defocus(dir + "/pull.#.exr -o " + dir + "/none.#.exr --frames 2"
-                            " --camera-from-file off", log) != 0);
-    CHECK(one_line_naming(log, "--focus DIST or --focus-at X,Y is required"));
-    CHECK_FALSE(Filesystem::exists(dir + "/none.0002.exr"));
-}
-
 TEST_CASE("a frame list of billions, a device or a pipe as input: one-line errors, no hang")
 {
     const std::string dir = scratch_dir("cli_hostile");

@@ -229,3 +229,42 @@ TEST_CASE("a render without alpha is opaque, and one without Z takes its depth f
     CHECK(one_line_error(error, "rgba.exr: part 0 has no Z channel (channels: R,G,B,A): give its "
                                 "depth with --depth FILE or --depth CHANNEL"));
 }
+
+TEST_CASE("the camera a render recorded in its header is used frame by frame, settings override")
+{
+    const std::string dir = scratch_dir("render_camera_from_file");
+    // A focus pull baked into the render: 2, 4, 6 m over three frames, with
+    // OpenEXR's standard focus and aperture and Arnold's focal length.
+    for (int f = 1; f <= 3; ++f) {
+        ImageSpec spec(16, 16, 5, TypeFloat);
+        spec.channelnames = { "R", "G", "B", "A", "Z" };
+        spec.attribute("focus", float(2 * f));
+        spec.attribute("FNumber", 2.8f);  // OpenImageIO's name for `aperture`
+        spec.attribute("CameraFocalLength", 85.0f);
+        ImageBuf image(spec);
+        ImageBufAlgo::fill(image, { 0.5f, 0.5f, 0.5f, 1.0f, 3.0f });
+        REQUIRE(image.write(format("{}/pull.{:04}.exr", dir, f)));
+    }
+    const std::string pull = dir + "/pull.#.exr";
+    FrameResult result;
+    std::string error;
+    for (int f = 1; f <= 3; ++f) {
+        INFO("frame " << f);
+        REQUIRE(render_with(pull, {}, result, error, f));
+        CHECK(result.camera.focus_distance == 2.0 * f);
+        CHECK(result.camera.fstop == Approx(2.8));
+        CHECK(result.camera.focal_length_mm == 85.0);
+    }
+    CHECK(Strutil::contains(frame_report(result, shot_with({ pull }, {}), "out.exr"),
+                            "camera values from: focal file: CameraFocalLength, f-number file: "
+                            "FNumber, focus file: focus, sensor default"));
+    // Settings win; off reads nothing.
+    REQUIRE(render_with(pull, { { "focus", "5" } }, result, error, 2));
+    CHECK(result.camera.focus_distance == 5.0);
+    CHECK(result.camera.focal_length_mm == 85.0);
+    const Settings off = { { "camera-from-file", "off" } };
+    REQUIRE(render_with(pull, { { "focus", "5" }, off.front() }, result, error, 2));
+    CHECK(result.camera.focal_length_mm == Camera().focal_length_mm);
+    CHECK_FALSE(render_with(pull, off, result, error, 2));
+    CHECK(one_line_error(error, "or --focus-at X,Y is required"));
+}
