@@ -7,11 +7,11 @@
 // Every render runs on a thread of its own with the GIL released; the
 // calling thread waits for it and checks Python's signals, so Ctrl-C
 // cancels the render at its next stage and raises KeyboardInterrupt.
-#include <algorithm>
 #include <atomic>
 #include <exception>
 #include <mutex>
 #include <optional>
+#include <unordered_map>
 
 #include <pybind11/functional.h>
 #include <pybind11/numpy.h>
@@ -82,6 +82,11 @@ std::pair<ScheduleResult, std::vector<std::string>> run_cancellable_plan(
 {
     const ShotAssets assets = read_assets(shot);
     std::vector<std::string> errors(plan.frames.size());
+    // A plan's frames are distinct; a search per failure was quadratic in
+    // a long sequence that fails throughout.
+    std::unordered_map<int, size_t> index_of;
+    for (size_t i = 0; i < plan.frames.size(); ++i)
+        index_of.emplace(plan.frames[i], i);
     std::exception_ptr written_failure;
     std::mutex mutex;
     ScheduleResult run;
@@ -90,8 +95,7 @@ std::pair<ScheduleResult, std::vector<std::string>> run_cancellable_plan(
         RunCallbacks callbacks;
         callbacks.stage = [&](int, const char*) { return !cancelled && !stop; };
         callbacks.failed = [&](int frame, const std::string& error) {
-            const auto at = std::find(plan.frames.begin(), plan.frames.end(), frame);
-            errors[at - plan.frames.begin()] = error;
+            errors[index_of.at(frame)] = error;
         };
         if (written)
             callbacks.written = [&](int frame, const std::string& output, const FrameResult&,
