@@ -12,6 +12,7 @@
 #include <defocus/color/color.h>
 #include <defocus/color/color_plan.h>
 #include <defocus/color/primaries.h>
+#include <defocus/render_frame.h>
 
 #include "test_support.h"
 
@@ -233,5 +234,29 @@ TEST_CASE("P3-D65 and Rec.2020 convert to Rec.709 by the matrices of their prima
         REQUIRE(c.convert(image, c.find_space(k.space), c.find_space("lin_rec709"), error));
         for (int ch = 0; ch < 3; ++ch)
             CHECK(image.getchannel(0, 0, 0, ch) == Approx(k.red_in_rec709[ch]).margin(2e-4));
+    }
+}
+
+TEST_CASE("colour spaces and configs that cannot be used are one-line errors")
+{
+    const std::string dir = scratch_dir("color_errors");
+    const std::string broken = dir + "/broken.ocio";
+    OIIO::Filesystem::write_text_file(broken, "not: [a config\n");
+    const std::vector<std::pair<Settings, std::string>> cases = {
+        { { { "iscolorspace", "Rec.2020" } }, "spaces: CIE-XYZ-D65, sRGB - Display, ACES2065-1" },
+        { { { "tocolorspace", "P3" } }, "unknown colour space 'P3'" },
+        { { { "iscolorspace", "raw" } }, "'Raw' is data" },
+        { { { "colorconfig", broken } }, "broken.ocio: colour config (--colorconfig) fails to load" },
+        { { { "colorconfig", dir + "/gone.ocio" } },
+          "gone.ocio: colour config (--colorconfig) not found" },
+    };
+    for (const auto& [settings, mentions] : cases) {
+        INFO(settings.front().first << " " << settings.front().second);
+        Settings all = settings;
+        all.push_back({ "focus", "4" });
+        FrameResult result;
+        std::string error;
+        CHECK_FALSE(render_with(example_scene(), all, result, error));
+        CHECK(one_line_error(error, mentions));
     }
 }
