@@ -122,6 +122,12 @@ struct Neighbourhood {
 
     int distance2(int sx, int sy) const { return (sx - x) * (sx - x) + (sy - y) * (sy - y); }
 
+    /// Chooses the far side's unmixed pixels, or its mixed ones when `mixed`.
+    auto of_kind(bool mixed) const
+    {
+        return [this, mixed](int sx, int sy) { return field.at_discontinuity(sx, sy) == mixed; };
+    }
+
     /// The far side's pixel (of its unmixed ones, or its mixed ones when
     /// `mixed`) which, blended with `near`, comes closest to the pixel's
     /// colour; between equals, the nearest. A far side of
@@ -131,8 +137,7 @@ struct Neighbourhood {
     Where best_explaining_far(const double near[3], bool mixed) const
     {
         const float* color = field.color(x, y);
-        auto of_kind = [&](int sx, int sy) { return field.at_discontinuity(sx, sy) == mixed; };
-        return least_far(of_kind, [&](int sx, int sy) {
+        return least_far(of_kind(mixed), [&](int sx, int sy) {
             return blend_error(color, near, field.color(sx, sy)) + 1e-4 * distance2(sx, sy);
         });
     }
@@ -141,8 +146,8 @@ struct Neighbourhood {
     /// when `mixed`).
     Where nearest_far(bool mixed) const
     {
-        auto of_kind = [&](int sx, int sy) { return field.at_discontinuity(sx, sy) == mixed; };
-        return least_far(of_kind, [&](int sx, int sy) { return double(distance2(sx, sy)); });
+        return least_far(of_kind(mixed),
+                         [&](int sx, int sy) { return double(distance2(sx, sy)); });
     }
 
     /// The far side's nearest pixel, mixed or not.
@@ -167,14 +172,16 @@ bool split(const BlurField& field, int x, int y, MixedPixel& out, Where* far_sou
 bool continue_behind(const BlurField& field, const Neighbourhood& around, MixedPixel& out)
 {
     const int x = around.x, y = around.y;
+    const float* color = field.color(x, y);
+    if (!(color[3] >= 0.999f))
+        return false;
     // The nearest far pixel is often a blend of the two sides itself; its
     // split tells which pixel stands for its far side.
     Where far = around.nearest_far();
     if (MixedPixel ignored; field.at_discontinuity(far.x, far.y))
         split(field, far.x, far.y, ignored, &far);
-    const float* color = field.color(x, y);
     const float* behind = field.color(far.x, far.y);
-    if (!(color[3] >= 0.999f) || !(behind[3] > 0.0f))
+    if (!(behind[3] > 0.0f))
         return false;
     out.x = x;
     out.y = y;
