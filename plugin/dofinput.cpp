@@ -132,7 +132,8 @@ bool DofInput::open(const std::string& name, ImageSpec& newspec, const ImageSpec
     m_filename = name;
     std::string error;
     auto fail = [&](const std::string& message) {
-        errorfmt("{}", defocus::error_line(defocus::error_about(name, message)));
+        errorfmt("{}", defocus::error_line(defocus::error_about(name, message),
+                                           defocus::SettingForm::SceneFile));
         return false;
     };
     const Nesting nested;
@@ -227,7 +228,7 @@ bool DofInput::render_once()
             m_render_error = m_filename + ": cannot render";
     }
     if (!m_render_error.empty()) {
-        errorfmt("{}", defocus::error_line(m_render_error));
+        errorfmt("{}", defocus::error_line(m_render_error, defocus::SettingForm::SceneFile));
         return false;
     }
     return true;

@@ -7,13 +7,8 @@
 
 namespace defocus_python {
 
-/// The library's message with each setting's option named as its Python
-/// keyword: "--focus-at X,Y" reads "focus_at=X,Y", "--aperture polygon"
-/// reads 'aperture="polygon"'.
-std::string python_words(const std::string& message);
-
 /// Raised as defocus.Error, with the one-line message the CLI prints, the
-/// settings named as Python keywords.
+/// settings named as Python keywords ("focus_at=(10, 20)").
 struct Error : std::runtime_error {
     explicit Error(const std::string& message);
 };

@@ -131,7 +131,7 @@ TEST_CASE("the config comes from the argument, then $OCIO, then the shipped one"
     std::string error;
     ColorManagement from_file;
     REQUIRE(from_file.load(SHIPPED_OCIO_CONFIG, error));
-    CHECK(from_file.origin() == "--colorconfig");
+    CHECK(command_line_words(from_file.origin()) == "--colorconfig");
 
     const std::string broken = scratch_dir("color_config") + "/broken.ocio";
     OIIO::Filesystem::write_text_file(broken, "ocio_profile_version: 2.1\nroles: [\n");

@@ -302,9 +302,16 @@ TEST_CASE("a broken .dof is an error line from oiiotool, never a crash")
     Filesystem::write_text_file(dir + "/nested.dof",
                                 "{\"version\": 1, \"inputs\": [\"missing_sequence.dof\"], "
                                 "\"camera\": {\"focus\": 3}}");
+    // Settings are named as a .dof writes them.
+    Filesystem::write_text_file(dir + "/no_focus.dof",
+                                "{\"version\": 1, \"inputs\": [\"small.exr\"], \"camera\": "
+                                "{\"from_file\": false}}");
     const std::pair<const char*, const char*> cases[] = {
-        { "nested.dof", "nested.dof: missing_sequence.dof: gone.#.exr: no files match" },
+        { "nested.dof", "nested.dof: missing_sequence.dof: gone.#.exr: no files match (give "
+                        "scene.frames to name them)" },
         { "giant_input.dof", "a 200000x200000 result needs 596 GB, more than the memory limit" },
+        { "giant_input.dof", "(scene.memory_limit)" },
+        { "no_focus.dof", "camera.focus DIST or camera.focus_at X,Y is required" },
         { "giant_blur.dof", "a window grown by blur up to 100000 px needs" },
         { "bad_json.dof", "bad_json.dof: not valid JSON: parse error at line 1" },
         { "overflow.dof", "overflow.dof: not valid JSON: number overflow" },

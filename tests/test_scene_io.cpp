@@ -99,7 +99,7 @@ std::string read_error(const std::vector<std::string>& files, const ReadOptions&
     Scene scene;
     std::string error;
     CHECK_FALSE(read_scene(files, options, scene, error));
-    return error;
+    return command_line_words(error);
 }
 
 float value(const ImageBuf& image, int channel)

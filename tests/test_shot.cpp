@@ -18,7 +18,6 @@
 #include <defocus/shot/keyframes.h>
 #include <defocus/shot/shot.h>
 #include <defocus/io/shot_file.h>
-#include <defocus/shot/shot_options.h>
 
 #include "test_support.h"
 
@@ -115,7 +114,7 @@ TEST_CASE("frame patterns in oiiotool's syntax")
     CHECK(frames == std::vector<int> { 1, 5, 9, 20, 12, 11, 10 });
     shot.frames = "1-";
     CHECK_FALSE(shot_frames(shot, frames, error));
-    CHECK(contains(error, "--frames"));
+    CHECK(contains(command_line_words(error), "--frames"));
 
     // Without a list, an embedded range, else the files on disk.
     const std::string dir = scratch_dir("shot_frames");
@@ -148,7 +147,7 @@ TEST_CASE("frame patterns in oiiotool's syntax")
     shot.inputs = { "still.exr" };
     REQUIRE(set_shot_setting(shot, "focus", "1:1.25,24:3", error));
     CHECK_FALSE(shot_frames(shot, frames, error));
-    CHECK(contains(error, "--frames"));
+    CHECK(contains(command_line_words(error), "--frames"));
 }
 
 TEST_CASE("a frame is missing exactly when no entry has the name its pattern writes")
@@ -207,7 +206,7 @@ TEST_CASE("shot settings: command-line text, errors, focus and focus-at exclude 
     CHECK(shot.pixel_type == OIIO::TypeHalf);
 
     CHECK_FALSE(set_shot_setting(shot, "blades", "2", error));
-    CHECK(contains(error, "--blades"));
+    CHECK(contains(command_line_words(error), "--blades"));
     CHECK_FALSE(set_shot_setting(shot, "blades", "6.5", error));
     CHECK(contains(error, "whole number"));
     CHECK_FALSE(set_shot_setting(shot, "lens", "fisheye", error, "camera.lens"));
@@ -224,25 +223,18 @@ TEST_CASE("shot settings: command-line text, errors, focus and focus-at exclude 
     CHECK(camera.focal_length_mm == 50.0);
 }
 
-TEST_CASE("every command-line option sets a setting; every setting but the mask file has one")
+TEST_CASE("every setting but the mask file is on the command line, with help")
 {
-    std::set<std::string> with_option;
-    for (const ShotOption& option : shot_options()) {
-        INFO(option.spec);
-        Shot shot;
-        std::string error;
-        // A switch sets its own value; other options are checked for a
-        // setting of that name by an unknown value's error.
-        if (option.value)
-            CHECK(set_shot_setting(shot, option.setting, option.value, error));
-        else if (!set_shot_setting(shot, option.setting, "?", error))
-            CHECK_FALSE(contains(error, "unknown setting"));
-        with_option.insert(option.setting);
-    }
     for (const ShotSetting& s : shot_settings()) {
         INFO(s.name);
         // The mask's file is given with its shape: --aperture mask:FILE.
-        CHECK(with_option.count(s.name) == (std::string(s.name) == "aperture-mask" ? 0 : 1));
+        CHECK((s.option || !s.switches.empty()) == (std::string(s.name) != "aperture-mask"));
+        CHECK(std::string(s.help).size() > 10);
+        for (const SettingSwitch& on : s.switches) {
+            Shot shot;
+            std::string error;
+            CHECK(set_shot_setting(shot, s.name, on.value, error));
+        }
     }
 }
 
@@ -500,20 +492,40 @@ TEST_CASE("the camera a render recorded: read from its header unless given, and 
     REQUIRE(shot_camera(shot, scene, 1, camera, origins, error));
     CHECK(camera.focal_length_mm == Camera().focal_length_mm);
     CHECK(origins.focal_length == "default");
-    CHECK(origins.focus == "--focus");
+    CHECK(in_words(origins.focus, SettingForm::CommandLine) == "--focus");
 }
 
 TEST_CASE("error lines: control characters escaped, overlong messages cut in the middle")
 {
-    CHECK(error_line("shot.dof: unknown key 'a\nb\tc\x01'")
+    CHECK(error_line("shot.dof: unknown key 'a\nb\tc\x01'", SettingForm::SceneFile)
           == "shot.dof: unknown key 'a\\nb\\tc\\x01'");
     const std::string huge = "shot.dof: unknown key '" + std::string(100000, 'k') + "'";
-    const std::string line = error_line(huge, 200);
+    const std::string line = error_line(huge, SettingForm::SceneFile, 200);
     CHECK(line.size() <= 200);
     CHECK(OIIO::Strutil::starts_with(line, "shot.dof: unknown key 'kkk"));
     CHECK(OIIO::Strutil::ends_with(line, "kkk'"));
     CHECK(contains(line, " ... "));
-    CHECK(error_line("short") == "short");
+    CHECK(error_line("short", SettingForm::SceneFile) == "short");
+}
+
+TEST_CASE("a library message names settings as each front end writes them")
+{
+    const std::string message =
+        "give " + mention("focus-at", "X,Y") + " or " + mention("focus-at", "10,20") + "; "
+        + mention("window", "display") + ", " + mention("pixel-type", "half") + ", "
+        + mention("camera-from-file", "off") + ", " + mention("memory-limit");
+    CHECK(error_line(message, SettingForm::CommandLine)
+          == "give --focus-at X,Y or --focus-at 10,20; --crop, -d half, --camera-from-file off, "
+             "--memory-limit");
+    CHECK(error_line(message, SettingForm::Python)
+          == "give focus_at=X,Y or focus_at=(10, 20); window=\"display\", pixel_type=\"half\", "
+             "camera_from_file=False, memory_limit");
+    CHECK(error_line(message, SettingForm::SceneFile)
+          == "give camera.focus_at X,Y or camera.focus_at [10, 20]; output.window \"display\", "
+             "output.type \"half\", camera.from_file \"off\", scene.memory_limit");
+    // A file name holding the marks stays visible.
+    CHECK(error_line("a\x1f" "b.exr: no such file", SettingForm::Python)
+          == "a\\x1fb.exr: no such file");
 }
 
 TEST_CASE("an error passed up through scene files names each file once")

@@ -14,6 +14,7 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/shot/setting_words.h>
 #include <defocus/io/image_input.h>
 #include <defocus/layers/layering.h>
 #include <defocus/io/shot_assets.h>
@@ -315,7 +316,13 @@ bool one_line_naming(const std::string& text, const std::string& what)
 
 bool one_line_error(const std::string& error, const std::string& what)
 {
-    return error.find(what) != std::string::npos && error.find('\n') == std::string::npos;
+    return command_line_words(error).find(what) != std::string::npos
+           && error.find('\n') == std::string::npos;
+}
+
+std::string command_line_words(const std::string& message)
+{
+    return defocus::in_words(message, defocus::SettingForm::CommandLine);
 }
 
 std::string shared_data()

@@ -132,8 +132,12 @@ std::string example_scene();
 bool one_line_naming(const std::string& text, const std::string& what);
 
 /// True where a library error is one line (no newline at all) containing
-/// `what`.
+/// `what`, its settings worded as the command line writes them.
 bool one_line_error(const std::string& error, const std::string& what);
+
+/// A library message with its settings worded as the command line writes
+/// them ("--focus-at 10,20").
+std::string command_line_words(const std::string& message);
 
 /// Writes a scanline OpenEXR (half R,G,B,A,Z, zip) whose header declares a
 /// `width` x `height` data window, with its chunk table but one tiny

@@ -91,6 +91,20 @@ std::string wrap_help_line(const std::string& line, size_t width)
     return out;
 }
 
+/// The heading printed above a group's options, "" for the groups whose
+/// heading the tool words itself (it shares it with its own options).
+const char* option_group_heading(OptionGroup group)
+{
+    switch (group) {
+    case OptionGroup::Sequences: return "Sequences:";
+    case OptionGroup::Camera:
+        return "Camera (DIST, N and MM take keyframes FRAME:VALUE,... for a focus pull):";
+    case OptionGroup::Aperture: return "Aperture:";
+    case OptionGroup::Scene: return "Scene:";
+    default: return "";
+    }
+}
+
 }  // namespace
 
 int terminal_columns()
@@ -168,11 +182,19 @@ void ShotArguments::add_options(ArgParse& ap, OptionGroup group)
 {
     if (*option_group_heading(group))
         ap.separator(option_group_heading(group));
-    for (const ShotOption& option : shot_options())
-        if (option.group == group)
-            ap.arg(option.spec).help(option.help).action([this, &option](cspan<const char*> argv) {
-                m_given.push_back({ argv[0], option.setting, option.value ? option.value : argv[1] });
+    for (const ShotSetting& setting : shot_settings()) {
+        if (setting.group != group)
+            continue;
+        if (setting.option)
+            ap.arg(setting.option).help(setting.help).action(
+                [this, &setting](cspan<const char*> argv) {
+                    m_given.push_back({ argv[0], setting.name, argv[1] });
+                });
+        for (const SettingSwitch& on : setting.switches)
+            ap.arg(on.flag).help(on.help).action([this, &setting, &on](cspan<const char*> argv) {
+                m_given.push_back({ argv[0], setting.name, on.value });
             });
+    }
 }
 
 void ShotArguments::add_threads(ArgParse& ap)

@@ -10,7 +10,6 @@
 #include <OpenImageIO/argparse.h>
 
 #include <defocus/shot/shot.h>
-#include <defocus/shot/shot_options.h>
 
 namespace defocus {
 
@@ -42,8 +41,8 @@ public:
     /// An ArgParse action that stores the option's value into `into`.
     std::function<void(OIIO::cspan<const char*>)> store_into(std::string& into);
 
-    /// Adds the options of `group` (see shot_options.h), under the group's
-    /// heading when it has one.
+    /// Adds the options of the settings of `group` (see shot_settings()),
+    /// under the group's heading when it has one.
     void add_options(OIIO::ArgParse& ap, OptionGroup group);
     /// --threads.
     void add_threads(OIIO::ArgParse& ap);

@@ -232,7 +232,8 @@ int render(const CommandLine& cl, const ShotAssets& assets, const RunRequest& re
     if (sequence) {
         const std::string summary = frames_written(run, plan.frames, int(plan.skipped.size()));
         if (!run.failed.empty())
-            Strutil::print(stderr, "defocus: {}\n", error_line(summary));
+            Strutil::print(stderr, "defocus: {}\n",
+                           error_line(summary, SettingForm::CommandLine));
         else if (!cl.quiet)
             Strutil::print("defocus: {}\n", summary);
     } else if (!plan.skipped.empty() && !cl.quiet) {
@@ -254,7 +255,8 @@ int main(int argc, const char* argv[])
     if (help_only)
         return EXIT_SUCCESS;
     auto fail = [](const std::string& message) {
-        Strutil::print(stderr, "defocus: {}\n", error_line(message));
+        Strutil::print(stderr, "defocus: {}\n",
+                       error_line(message, SettingForm::CommandLine));
         return EXIT_FAILURE;
     };
     if (!parsed)

@@ -29,7 +29,8 @@ namespace {
 template<typename... Args>
 int fail(const char* fmt, const Args&... args)
 {
-    Strutil::print(stderr, "layerize: {}\n", error_line(Strutil::fmt::format(fmt, args...)));
+    Strutil::print(stderr, "layerize: {}\n",
+                   error_line(Strutil::fmt::format(fmt, args...), SettingForm::CommandLine));
     return EXIT_FAILURE;
 }
 

@@ -61,7 +61,7 @@ void Progress::text(const std::string& text)
         return;
     std::lock_guard<std::mutex> lock(m_mutex);
     clear_bar();
-    OIIO::Strutil::print("{}", text);
+    OIIO::Strutil::print("{}", in_words(text, SettingForm::CommandLine));
     std::fflush(stdout);
     draw_bar();
 }
@@ -70,7 +70,8 @@ void Progress::error(const std::string& message)
 {
     std::lock_guard<std::mutex> lock(m_mutex);
     clear_bar();
-    OIIO::Strutil::print(stderr, "defocus: {}\n", error_line(message));
+    OIIO::Strutil::print(stderr, "defocus: {}\n",
+                         error_line(message, SettingForm::CommandLine));
     std::fflush(stderr);
     draw_bar();
 }

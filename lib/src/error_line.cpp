@@ -4,8 +4,9 @@
 
 namespace defocus {
 
-std::string error_line(const std::string& message, size_t limit)
+std::string error_line(const std::string& worded_or_not, SettingForm form, size_t limit)
 {
+    const std::string message = in_words(worded_or_not, form);
     std::string line;
     line.reserve(std::min(message.size(), 2 * limit));
     for (const char c : message) {

@@ -13,6 +13,7 @@
 #include <defocus/layers/edges.h>
 #include <defocus/layers/layering.h>
 #include <defocus/io/settings_hash.h>
+#include <defocus/shot/setting_words.h>
 #include <defocus/version.h>
 
 namespace defocus {
@@ -313,11 +314,12 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
         const int extended = extend_edges(layered, coc, shot.edge, nthreads);
         if (extended > 0)
             out.edges = format("edges: layers extended up to {} px past the data window ({}; "
-                               "--edge black keeps them dark)",
+                               "{} keeps them dark)",
                                extended,
                                shot.edge == EdgeMode::Extend
-                                   ? "--edge extend"
-                                   : "the data window does not cover the blur's reach");
+                                   ? mention("edge", "extend")
+                                   : "the data window does not cover the blur's reach",
+                               mention("edge", "black"));
         SpreadTimings timings;
         if (!defocus_layers(image, layered, out.camera, shot.spread, images, shot.window,
                             &out.layers, &timings, nthreads)) {

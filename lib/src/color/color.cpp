@@ -14,6 +14,8 @@
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/sysutil.h>
 
+#include <defocus/shot/setting_words.h>
+
 namespace OCIO = OCIO_NAMESPACE;
 
 namespace defocus {
@@ -89,7 +91,7 @@ bool ColorManagement::load(const std::string& explicit_file, std::string& error)
     const char* env = std::getenv("OCIO");
     if (!explicit_file.empty()) {
         m_path = explicit_file;
-        m_origin = "--colorconfig";
+        m_origin = mention("colorconfig");
     } else if (env && *env) {
         m_path = env;
         m_origin = "$OCIO";

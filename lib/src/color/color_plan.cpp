@@ -3,6 +3,7 @@
 #include <OpenImageIO/strutil.h>
 
 #include <defocus/color/primaries.h>
+#include <defocus/shot/setting_words.h>
 
 namespace defocus {
 
@@ -60,7 +61,7 @@ bool plan_color(ColorPlan& plan, std::shared_ptr<const ColorManagement> config,
     if (!input_space.empty()) {
         plan.input = c.require_space(input_space, error);
         if (plan.input.empty()) {
-            error = "--iscolorspace: " + error;
+            error = mention("iscolorspace") + ": " + error;
             return false;
         }
     } else {
@@ -80,9 +81,8 @@ bool plan_color(ColorPlan& plan, std::shared_ptr<const ColorManagement> config,
         }
     }
     if (!plan.input.empty() && c.is_data(plan.input)) {
-        error = format("--iscolorspace: '{}' is data, not colour: the input must be in "
-                       "a colour space",
-                       plan.input);
+        error = format("{}: '{}' is data, not colour: the input must be in a colour space",
+                       mention("iscolorspace"), plan.input);
         return false;
     }
     if (plan.input.empty()) {
@@ -95,7 +95,7 @@ bool plan_color(ColorPlan& plan, std::shared_ptr<const ColorManagement> config,
     if (!output_space.empty()) {
         plan.output = c.require_space(output_space, error);
         if (plan.output.empty()) {
-            error = "--tocolorspace: " + error;
+            error = mention("tocolorspace") + ": " + error;
             return false;
         }
     }

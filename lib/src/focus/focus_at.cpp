@@ -7,6 +7,8 @@
 
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/shot/setting_words.h>
+
 namespace defocus {
 
 using OIIO::Strutil::fmt::format;
@@ -57,8 +59,8 @@ bool focus_distance_at(const Scene& scene, double x, double y, double& distance,
 {
     const OIIO::ImageSpec& s = scene.spec;
     if (!(x >= 0 && x < s.full_width && y >= 0 && y < s.full_height)) {
-        error = format("--focus-at {},{} is outside the {}x{} display window", x, y,
-                       s.full_width, s.full_height);
+        error = format("{} is outside the {}x{} display window",
+                       mention("focus-at", format("{},{}", x, y)), s.full_width, s.full_height);
         return false;
     }
     const int cx = s.full_x + int(x), cy = s.full_y + int(y);
@@ -70,7 +72,8 @@ bool focus_distance_at(const Scene& scene, double x, double y, double& distance,
                 depths.push_back(z);
         }
     if (depths.empty()) {
-        error = format("--focus-at {},{}: nothing opaque there to focus on", x, y);
+        error = format("{}: nothing opaque there to focus on",
+                       mention("focus-at", format("{},{}", x, y)));
         return false;
     }
     const size_t middle = depths.size() / 2;
@@ -123,8 +126,8 @@ bool shot_camera(const Shot& shot, const Scene& scene, int frame, Camera& camera
         has_focus = true;
     }
     if (!has_focus) {
-        error = "no focus distance: give --focus DIST or --focus-at X,Y (the file's header "
-                "records none)";
+        error = format("no focus distance: give {} or {} (the file's header records none)",
+                       mention("focus", "DIST"), mention("focus-at", "X,Y"));
         return false;
     }
     return check_camera(camera, scene.spec.roi_full(), error);

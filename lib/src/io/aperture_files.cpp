@@ -1,6 +1,7 @@
 #include <defocus/io/aperture_files.h>
 
 #include <defocus/io/image_input.h>
+#include <defocus/shot/setting_words.h>
 
 namespace defocus {
 
@@ -40,7 +41,7 @@ bool read_aperture_images(const Shot& shot, const Imath::V3d& luma, ApertureImag
     if (aperture.shape == ApertureShape::Mask) {
         auto mask = std::make_shared<MaskProfile>();
         if (!read_aperture_mask(aperture.mask_file, aperture.aspect, luma, *mask, error)) {
-            error = "--aperture: " + error;
+            error = mention("aperture") + ": " + error;
             return false;
         }
         images.mask = std::move(mask);
@@ -48,7 +49,7 @@ bool read_aperture_images(const Shot& shot, const Imath::V3d& luma, ApertureImag
     if (!shot.spread.psf_image.empty()) {
         auto psf = std::make_shared<PsfImage>();
         if (!read_psf_image(shot.spread.psf_image, luma, *psf, error)) {
-            error = "--psf-image: " + error;
+            error = mention("psf-image") + ": " + error;
             return false;
         }
         images.psf = std::move(psf);

@@ -15,6 +15,7 @@
 #include <OpenImageIO/strutil.h>
 
 #include <defocus/shot/option_value.h>
+#include <defocus/shot/setting_words.h>
 
 namespace defocus {
 
@@ -444,11 +445,12 @@ bool shot_frames(const Shot& shot, std::vector<int>& frames, std::string& error,
     const auto first_input_pattern =
         std::find_if(shot.inputs.begin(), shot.inputs.end(), is_frame_pattern);
     if (!shot.frames.empty()) {
-        if (!enumerate_frames(shot.frames, frames, error, "--frames"))
+        if (!enumerate_frames(shot.frames, frames, error, setting_label(shot, "frames")))
             return false;
     } else if (first_input_pattern == shot.inputs.end()) {
         if (is_animated(shot)) {
-            error = "the camera has keyframes but the input is one image: give --frames";
+            error = "the camera has keyframes but the input is one image: give "
+                    + mention("frames");
             return false;
         }
         frames = { 1 };
@@ -461,7 +463,8 @@ bool shot_frames(const Shot& shot, std::vector<int>& frames, std::string& error,
         if (range.empty()) {
             const std::vector<int> found = frames_on_disk(first);
             if (found.empty()) {
-                error = format("{}: no files match (give --frames to name them)", first);
+                error = format("{}: no files match (give {} to name them)", first,
+                               mention("frames"));
                 return false;
             }
             range = found.front() == found.back() ? std::to_string(found.front())
@@ -485,7 +488,8 @@ bool shot_frames(const Shot& shot, std::vector<int>& frames, std::string& error,
                                      sequence.first_missing(missing.front()),
                                      frame_ranges(missing));
     if (shot.missing_frames == MissingFrames::Error) {
-        error = which + " (--missing-frames skip or hold renders the shot without them)";
+        error = format("{} ({} or {} renders the shot without them)", which,
+                       mention("missing-frames", "skip"), mention("missing-frames", "hold"));
         return false;
     }
     if (present.empty()) {

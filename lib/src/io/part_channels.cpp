@@ -4,6 +4,8 @@
 
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/shot/setting_words.h>
+
 namespace defocus {
 
 using namespace OIIO;
@@ -55,8 +57,8 @@ Channels find_channels(const ImageSpec& spec, const std::string& layer,
     }
     const auto& complete = rgba_sets.empty() ? rgb_sets : rgba_sets;
     if (complete.size() > 1 && !complete.front().empty())
-        error = format("it holds several layers ({}): choose one with --layer NAME",
-                       Strutil::join(complete, ", "));
+        error = format("it holds several layers ({}): choose one with {}",
+                       Strutil::join(complete, ", "), mention("layer", "NAME"));
 
     std::string view_layer = ch.prefix;
     if (Strutil::ends_with(view_layer, ".Combined"))

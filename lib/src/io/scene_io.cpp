@@ -12,6 +12,7 @@
 
 #include <defocus/error_line.h>
 #include <defocus/io/image_input.h>
+#include <defocus/shot/setting_words.h>
 
 #include "io/exr_input.h"
 #include "io/part_channels.h"
@@ -93,7 +94,8 @@ bool parts_of_view(ImageInput& in, const std::string& filename, const ReadOption
     }
     if (!options.view.empty() && std::find(views.begin(), views.end(), options.view) == views.end()) {
         error = views.empty()
-                    ? format("{}: has no views, so --view {} does not apply", filename, options.view)
+                    ? format("{}: has no views, so {} does not apply", filename,
+                             mention("view", options.view))
                     : format("{}: no view '{}' (views: {})", filename, options.view,
                              Strutil::join(views, ", "));
         return false;
@@ -115,8 +117,8 @@ bool find_depth_source(const std::string& filename, const ReadOptions& options,
         depth_is_channel |= !options.depth.empty() && part.spec.channelindex(options.depth) >= 0;
     if (!options.depth.empty() && !depth_is_channel) {
         if (!Filesystem::is_regular(options.depth)) {
-            error = format("{}: --depth {}: no such channel (channels: {}) and no such file",
-                           filename, options.depth,
+            error = format("{}: {}: no such channel (channels: {}) and no such file",
+                           filename, mention("depth", options.depth),
                            Strutil::join(layout.parts.front().spec.channelnames, ","));
             return false;
         }
@@ -150,8 +152,9 @@ bool sort_parts(const std::string& filename, const ReadOptions& options, bool de
         // Alpha as depth gave a transparent frame and exit 0.
         for (int k = 0; k < 4 && c.depth >= 0; ++k)
             if (c.color[k] == c.depth) {
-                error = format("{}: --depth {}: that is the {} channel of {}, not a depth",
-                               filename, options.depth, k == 3 ? "alpha" : "colour", part.label);
+                error = format("{}: {}: that is the {} channel of {}, not a depth", filename,
+                               mention("depth", options.depth), k == 3 ? "alpha" : "colour",
+                               part.label);
                 return false;
             }
         if (part.spec.deep && c.has_color() && !c.has_alpha()) {
@@ -180,8 +183,8 @@ bool join_flat_render(const std::string& filename, const ReadOptions& options,
     if (!layout.depth_file.empty()) {
         // A beauty part, its depth in another file.
         if (color_only.size() != 1 || parts[color_only[0]].spec.deep) {
-            error = format("{}: --depth FILE gives one flat render its depth, and this file "
-                           "{}", filename,
+            error = format("{}: {} gives one flat render its depth, and this file {}",
+                           filename, mention("depth", "FILE"),
                            color_only.empty()                ? "has no R,G,B channels"
                            : parts[color_only[0]].spec.deep ? "is deep"
                                                              : "has several colour parts");
@@ -197,7 +200,7 @@ bool join_flat_render(const std::string& filename, const ReadOptions& options,
             layout.data_window  = parts[color_only[0]].spec.roi();
         } else if (color_only.size() > 1 && depth_only.size() == 1) {
             error = format("{}: several colour parts share one depth part: choose a view "
-                           "with --view", filename);
+                           "with {}", filename, mention("view"));
             return false;
         } else {
             const Part& first = color_only.empty() ? parts.front() : parts[color_only.front()];
@@ -206,7 +209,8 @@ bool join_flat_render(const std::string& filename, const ReadOptions& options,
             const bool no_depth = first.channels.has_color();
             error = format("{}: {} has no {} channel (channels: {}){}", filename, first.label,
                            missing, Strutil::join(first.spec.channelnames, ","),
-                           no_depth ? ": give its depth with --depth FILE or --depth CHANNEL"
+                           no_depth ? format(": give its depth with {} or {}",
+                                             mention("depth", "FILE"), mention("depth", "CHANNEL"))
                                     : "");
             return false;
         }
@@ -299,11 +303,12 @@ bool read_depth_file(const std::string& filename, const ImageSpec& render,
     if (channel < 0 && spec.nchannels == 1)
         channel = 0;
     if (spec.deep || channel < 0) {
-        error = format("{}: {}: --depth takes a flat image with a Z channel or one channel",
+        error = format("{}: {}: {} takes a flat image with a Z channel or one channel",
                        filename,
                        spec.deep ? "is a deep image"
                                  : format("has no Z channel (channels: {})",
-                                          Strutil::join(spec.channelnames, ",")));
+                                          Strutil::join(spec.channelnames, ",")),
+                       mention("depth"));
         return false;
     }
     if (!same_display_window(spec, render, filename, error))
@@ -489,9 +494,8 @@ bool check_inputs(const std::vector<std::string>& filenames, const ReadOptions& 
         return false;
     }
     if (filenames.size() > 1 && Filesystem::is_regular(options.depth)) {
-        error = format("--depth {}: a depth file gives one flat render its depth, not {} "
-                       "inputs",
-                       options.depth, filenames.size());
+        error = format("{}: a depth file gives one flat render its depth, not {} inputs",
+                       mention("depth", options.depth), filenames.size());
         return false;
     }
     return true;

@@ -8,6 +8,7 @@
 #include <OpenImageIO/sysutil.h>
 
 #include <defocus/shot/option_value.h>
+#include <defocus/shot/setting_words.h>
 
 namespace defocus {
 
@@ -75,13 +76,13 @@ std::string MemoryLimit::exceeded(const std::string& what, double bytes) const
 {
     if (m_spent > 0.0)
         return OIIO::Strutil::fmt::format(
-            "{} needs {}, more than the {} the memory limit of {} (--memory-limit) leaves "
-            "beside the frame's other inputs",
+            "{} needs {}, more than the {} the memory limit of {} ({}) leaves beside the "
+            "frame's other inputs",
             what, readable(bytes), readable(std::max(0.0, double(this->bytes()) - m_spent)),
-            readable(double(this->bytes())));
-    return OIIO::Strutil::fmt::format("{} needs {}, more than the memory limit of {} "
-                                      "(--memory-limit)",
-                                      what, readable(bytes), readable(double(this->bytes())));
+            readable(double(this->bytes())), mention("memory-limit"));
+    return OIIO::Strutil::fmt::format("{} needs {}, more than the memory limit of {} ({})", what,
+                                      readable(bytes), readable(double(this->bytes())),
+                                      mention("memory-limit"));
 }
 
 }  // namespace defocus

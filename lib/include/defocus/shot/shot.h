@@ -87,26 +87,60 @@ enum class ShotValueKind {
     Switch,     ///< "on" or "off" (true or false is read too)
 };
 
-/// One setting of a shot: its option name (the defocus command's long
-/// option without dashes, also the name of a plugin hint "dof:NAME"), and
-/// where it sits in a .dof file.
+/// Where a setting shows in a tool's --help.
+enum class OptionGroup {
+    Sequences,    ///< which frames
+    Camera,       ///< focus, lens and filmback
+    Aperture,     ///< the bokeh's shape and how it is spread
+    Scene,        ///< what in the input is read, and how it is cut into layers
+    InputColor,   ///< the input's colour space
+    OutputColor,  ///< the output's colour space
+    Output,       ///< what is written
+};
+
+/// A command-line switch that sets a setting to one value, such as --crop
+/// for window "display".
+struct SettingSwitch {
+    const char* flag;
+    const char* value;
+    const char* help;
+};
+
+/// One setting of a shot, as every front end names and documents it. Its
+/// name is the defocus command's long option without dashes, the Python
+/// keyword with '_' for '-', and the plugin hint "dof:NAME".
 struct ShotSetting {
     const char* name;
     const char* section;  ///< the .dof object holding it
     const char* key;      ///< its key there
     ShotValueKind kind;
+    OptionGroup group;
+    /// The command line's option as ArgParse takes it, "--focus DIST" or
+    /// "-d TYPE"; nullptr when the setting is given only by switches or
+    /// not on the command line.
+    const char* option;
+    const char* help;
+    std::vector<SettingSwitch> switches = {};
 };
 
-/// Every setting of a shot except its inputs, in .dof order.
+/// Every setting of a shot except its inputs, in .dof order: the one table
+/// the command line, .dof files, Python and the plugin all read.
 const std::vector<ShotSetting>& shot_settings();
+
+/// The setting called `name`, or nullptr.
+const ShotSetting* find_shot_setting(const std::string& name);
 
 /// Sets the setting `name` from text as the command line writes it, e.g.
 /// ("focus", "1:1.25,24:3"), ("aperture", "polygon"), ("crop", "true").
 /// Setting one of focus and focus-at clears the other. False, with `error`
-/// naming the option (as `label`, by default "--NAME") and the problem, for
-/// an unknown name or a bad value.
+/// naming the setting (as `label`, by default a mention of it) and the
+/// problem, for an unknown name or a bad value.
 bool set_shot_setting(Shot& shot, const std::string& name, const std::string& value,
                       std::string& error, const std::string& label = "");
+
+/// How messages name the setting: by the label it was given with
+/// ("--fstop", "camera.fstop"), else by a mention (see setting_words.h).
+std::string setting_label(const Shot& shot, const std::string& name);
 
 /// The text set_shot_setting() reads back to the same value ("" when
 /// unset).
