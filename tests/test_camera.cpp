@@ -137,3 +137,39 @@ TEST_CASE("a split diopter focuses beyond its line at its own distance")
         CHECK(c == Approx(0.5 * (plain_near.diameter(z, 100, 270) + plain_far.diameter(z, 100, 270))));
     }
 }
+
+TEST_CASE("an in-focus range stays sharp, and the blur beyond starts at its ends")
+{
+    Camera cam;
+    cam.focal_length_mm = 85;
+    cam.fstop = 1.4;
+    cam.focus_distance = 4.0;
+    cam.in_focus_range = 2.0;  // sharp from 3 to 5
+    const ROI display(0, 960, 0, 540);
+    const CircleOfConfusion coc(cam, display);
+    for (const double z : { 3.0, 3.5, 4.0, 4.99, 5.0 })
+        CHECK(coc.diameter(z, 10, 10) == 0.0);
+    // In front, the blur of a lens focused at the near end; behind, at the
+    // far end.
+    Camera at_near = cam, at_far = cam;
+    at_near.in_focus_range = at_far.in_focus_range = 0.0;
+    at_near.focus_distance = 3.0;
+    at_far.focus_distance  = 5.0;
+    const CircleOfConfusion near(at_near, display), far(at_far, display);
+    for (const double z : { 0.5, 1.0, 2.9 }) {
+        CHECK(coc.diameter(z, 10, 10) == Approx(near.diameter(z, 10, 10)));
+        CHECK(coc.depth_at(coc.diameter(z, 10, 10), 10, 10) == Approx(z));
+    }
+    for (const double z : { 5.1, 12.0, 1e4 }) {
+        CHECK(coc.diameter(z, 10, 10) == Approx(far.diameter(z, 10, 10)));
+        CHECK(coc.depth_at(coc.diameter(z, 10, 10), 10, 10) == Approx(z));
+    }
+    // A range reaching the camera keeps everything in front sharp.
+    cam.in_focus_range = 10.0;
+    CHECK(CircleOfConfusion(cam, display).diameter(0.01, 10, 10) == 0.0);
+    CHECK(CircleOfConfusion(cam, display).diameter(20.0, 10, 10) > 0.0);
+    cam.in_focus_range = -1.0;
+    std::string error;
+    CHECK_FALSE(check_camera(cam, display, error));
+    CHECK(error == "the in-focus range must be a finite depth >= 0");
+}

@@ -163,3 +163,15 @@ TEST_CASE("the cat's eye clips bokeh towards the edges and keeps the light")
     CHECK(cut.getchannel(120 - 9, 68, 0, 0)
           == Approx(plain.getchannel(120 - 9, 68, 0, 0)).epsilon(0.05));
 }
+
+TEST_CASE("an in-focus range renders the depths it spans sharp")
+{
+    // The example's layers lie from 1 m to 60 m: a range over all of them
+    // leaves the image as sharp as a lens that draws no blur.
+    const ImageBuf ranged = rendered(example_scene(), { { "focus", "30" }, { "in-focus-range", "100" } });
+    const ImageBuf no_blur = rendered(example_scene(), { { "focus", "30" }, { "max-blur", "0" } });
+    const ImageBuf plain = rendered(example_scene(), { { "focus", "30" } });
+    CHECK(ImageBufAlgo::compare(ranged, no_blur, 0.0f, 0.0f).maxerror < 1e-6);
+    CHECK(ImageBufAlgo::compare(ranged, plain, 0.0f, 0.0f).maxerror > 0.05);
+    CHECK(ranged.spec().get_float_attribute("defocus:inFocusRange") == 100.0f);
+}

@@ -12,11 +12,12 @@ std::string frame_report(const FrameResult& frame, const Shot& shot, const std::
 {
     const Camera& c = frame.camera;
     std::string r;
-    r += format("  camera: {:.4g} mm f/{:.3g} focus {:.4g} sensor {:.4g} mm, {} lens, {} aperture, "
-                "max blur {:.4g} px\n",
-                c.focal_length_mm, c.fstop, c.focus_distance, c.sensor_width_mm,
-                lens_model_name(c.lens), aperture_shape_name(shot.spread.aperture.shape),
-                c.max_blur_px);
+    r += format("  camera: {:.4g} mm f/{:.3g} focus {:.4g}{} sensor {:.4g} mm, {} lens, {} "
+                "aperture, max blur {:.4g} px\n",
+                c.focal_length_mm, c.fstop, c.focus_distance,
+                c.in_focus_range > 0.0 ? format(" (sharp over {:.4g})", c.in_focus_range) : "",
+                c.sensor_width_mm, lens_model_name(c.lens),
+                aperture_shape_name(shot.spread.aperture.shape), c.max_blur_px);
     const CameraOrigins& o = frame.camera_origins;
     r += format("  camera values from: focal {}, f-number {}, focus {}, sensor {}\n",
                 o.focal_length, o.fstop, o.focus, o.sensor_width);

@@ -421,7 +421,8 @@ bool largest_grown_window(ROI& window, const ImageSpec& scene, const Camera& cam
     Camera plain = camera;
     plain.tilt_deg[0] = plain.tilt_deg[1] = 0.0;
     plain.split = SplitDiopter();
-    plain.cateye = 0.0;  // clipped bokeh lies within the unclipped
+    plain.cateye = 0.0;          // clipped bokeh lies within the unclipped
+    plain.in_focus_range = 0.0;  // a range only takes blur away
     const CircleOfConfusion coc(plain, scene.roi_full());
     const float depth = float(coc.depth_at(-4.0 * camera.max_blur_px - 4.0, 0, 0));
     window = data;

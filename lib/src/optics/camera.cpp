@@ -74,6 +74,13 @@ CircleOfConfusion::CircleOfConfusion(const Camera& camera, const OIIO::ROI& disp
     m_tilt_x = -k * p.tan_v / p.focal_px;
     m_tilt_y = k * p.tan_h / p.focal_px;
 
+    if (camera.in_focus_range > 0.0) {
+        const double near = camera.focus_distance - 0.5 * camera.in_focus_range;
+        const double far  = camera.focus_distance + 0.5 * camera.in_focus_range;
+        m_sharp_near = near > 0.0 ? 1.0 / near - 1.0 / camera.focus_distance : INFINITY;
+        m_sharp_far  = 1.0 / camera.focus_distance - 1.0 / far;
+    }
+
     // A diopter adds optical power, the same over its part of the frame:
     // the power that moves the focus from the focus distance to its own.
     const SplitDiopter& split = camera.split;
@@ -90,7 +97,8 @@ CircleOfConfusion::CircleOfConfusion(const Camera& camera, const OIIO::ROI& disp
 
 double CircleOfConfusion::depth_at(double c, int x, int y) const
 {
-    const double inv_z = inverse_focus(x, y) - c / m_scale;
+    const double d     = c / m_scale + (c < 0.0 ? -m_sharp_near : c > 0.0 ? m_sharp_far : 0.0);
+    const double inv_z = inverse_focus(x, y) - d;
     return inv_z > 0.0 ? 1.0 / inv_z : INFINITY;
 }
 
@@ -121,6 +129,8 @@ void record_camera(OIIO::ImageSpec& spec, const Camera& c)
         spec.attribute("defocus:focusTilt",
                        OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, OIIO::TypeDesc::VEC2), tilt);
     }
+    if (c.in_focus_range != 0.0)
+        spec.attribute("defocus:inFocusRange", float(c.in_focus_range));
     if (c.axial_ca != 0.0)
         spec.attribute("defocus:axialCA", float(c.axial_ca));
     if (c.lateral_ca != 0.0)
@@ -161,6 +171,8 @@ bool check_camera(const Camera& c, const OIIO::ROI& display, std::string& error)
         return fail(OIIO::Strutil::fmt::format(
             "the focus tilt {},{} turns the plane of focus edge-on to the camera at the "
             "focus point", c.tilt_deg[0], c.tilt_deg[1]));
+    if (!(c.in_focus_range >= 0.0) || !std::isfinite(c.in_focus_range))
+        return fail("the in-focus range must be a finite depth >= 0");
     if (c.split.distance > 0.0 && c.split.x0 == c.split.x1 && c.split.y0 == c.split.y1)
         return fail("the split diopter's line needs two different points");
     return true;

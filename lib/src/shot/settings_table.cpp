@@ -198,6 +198,12 @@ std::vector<SettingRule> focus_rules()
                  "--focus-at takes the median over (2R+1)x(2R+1) pixels: 0 = the pixel "
                  "alone, larger for noisy depth (default: 2, 5x5)" },
                [](auto& s) -> auto& { return s.focus_at_radius; }, 0, 50),
+        number({ "in-focus-range", "camera", "in_focus_range", K::Number, G::Camera,
+                 "--in-focus-range METRES",
+                 "A depth range around the focus distance that stays sharp, as Nuke "
+                 "ZDefocus's depth of field: within METRES/2 of the focus nothing blurs, and "
+                 "beyond, the blur grows from the range's ends (default: 0)" },
+               [](auto& s) -> auto& { return s.camera.in_focus_range; }, 0, 1e30),
         keyframes({ "focus-tilt", "camera", "focus_tilt", K::Point, G::Camera,
                     "--focus-tilt DEG,DEG",
                     "Tilt the plane of focus (Scheimpflug, the tilt-shift look) about the "

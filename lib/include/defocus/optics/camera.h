@@ -36,6 +36,10 @@ struct CameraBody {
     double lateral_ca      = 0.0;
     /// Optical vignetting, the cat's eye bokeh (see CatEye): 0 = none.
     double cateye          = 0.0;
+    /// The depth range around the focus distance that stays sharp, as
+    /// Nuke ZDefocus's "depth of field": depths within half of it of the
+    /// focus have no blur, and beyond it the blur grows from its ends.
+    double in_focus_range  = 0.0;
 };
 
 /// Which colour's circle of confusion. Under axial chromatic aberration
@@ -137,7 +141,10 @@ private:
         //   c = f^2 / (N s) * W * (1/z_f - 1/z).
         // Potmesil & Chakravarty: f^2 |z - z_f| / (N z (z_f - f)) * W/s,
         // the same expression times z_f / (z_f - f), folded into m_scale.
-        return m_scale * (inverse_focus(x, y) - inv_z);
+        // An in-focus range takes its span of 1/z_f - 1/z out, so the blur
+        // starts at its ends; with none, this is the plain difference.
+        const double d = inverse_focus(x, y) - inv_z;
+        return m_scale * (d - std::clamp(d, -m_sharp_near, m_sharp_far));
     }
 
     double m_scale;  ///< pixels per unit of |1/z_f - 1/z| (thin lens)
@@ -147,6 +154,10 @@ private:
     /// A diopter adds m_split_power to 1/z_f beyond the line
     /// n . (x, y) = m_split_offset (n a unit normal, pointing beyond).
     double m_split_power = 0.0, m_split_nx = 0.0, m_split_ny = 0.0, m_split_offset = 0.0;
+    /// The in-focus range's span of 1/z in front of the focus (to its
+    /// near end; infinite when that end is at or behind the camera) and
+    /// behind it (to its far end).
+    double m_sharp_near = 0.0, m_sharp_far = 0.0;
     double m_max_diameter;
     double m_axial_ca;
 };
