@@ -21,9 +21,20 @@ namespace {
 struct RowDepth {
     int64_t pixels = 0;
     double zmin = INFINITY, zmax = -INFINITY;
-    /// CoC range: where the lens focuses varies over the frame
     double cmin = INFINITY, cmax = -INFINITY;
     double weight = 0, weighted_inverse = 0;
+
+    void add_coc(const CircleOfConfusion& coc, double z, int x, int y)
+    {
+        const double c = coc.diameter(z, x, y);
+        cmin = std::min(cmin, c);
+        cmax = std::max(cmax, c);
+        if (coc.per_channel()) {  // red and blue reach further on one side
+            const double rb = coc.diameter(z, x, y, CocChannel::RedBlue);
+            cmin = std::min(cmin, rb);
+            cmax = std::max(cmax, rb);
+        }
+    }
 };
 
 }  // namespace
@@ -46,14 +57,10 @@ LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc, int
             ++r.pixels;
             r.zmin = std::min(r.zmin, z);
             r.zmax = std::max(r.zmax, z);
-            const double c = coc.diameter(z, roi.xbegin + x, y);
-            r.cmin = std::min(r.cmin, c);
-            r.cmax = std::max(r.cmax, c);
-            if (coc.per_channel()) {  // red and blue reach further on one side
-                const double rb = coc.diameter(z, roi.xbegin + x, y, CocChannel::RedBlue);
-                r.cmin = std::min(r.cmin, rb);
-                r.cmax = std::max(r.cmax, rb);
-            }
+            // The CoC per pixel is the spread's to compute; here only
+            // where the depth alone does not say it.
+            if (coc.varies_over_frame())
+                r.add_coc(coc, z, roi.xbegin + x, y);
             r.weight += a;
             r.weighted_inverse += a * (std::isinf(z) ? 0.0 : 1.0 / z);
         }
@@ -67,6 +74,10 @@ LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc, int
         total.cmax = std::max(total.cmax, r.cmax);
         total.weight += r.weight;
         total.weighted_inverse += r.weighted_inverse;
+    }
+    if (!coc.varies_over_frame() && total.pixels) {
+        total.add_coc(coc, total.zmin, roi.xbegin, roi.ybegin);
+        total.add_coc(coc, total.zmax, roi.xbegin, roi.ybegin);
     }
     LayerReport rep;
     rep.mean_inverse_depth = total.weight > 0 ? total.weighted_inverse / total.weight : 0.0;

@@ -114,6 +114,15 @@ public:
     /// aberration).
     bool per_channel() const { return m_axial_ca != 0.0; }
 
+    /// True when the CoC of a depth depends on where in the frame it is
+    /// seen (a tilted plane, a diopter). Otherwise it depends on the depth
+    /// alone, and never decreases with it, so a range of depths has the
+    /// range of CoCs of its ends.
+    bool varies_over_frame() const
+    {
+        return m_tilt_x != 0.0 || m_tilt_y != 0.0 || m_split_power != 0.0;
+    }
+
     /// The depth at pixel (x, y) whose unclamped signed CoC diameter is `c`
     /// (+inf when c is the CoC of infinity, or beyond it).
     double depth_at(double c, int x, int y) const;
