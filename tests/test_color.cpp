@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 
+#include <OpenColorIO/OpenColorIO.h>
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/imagebufalgo.h>
@@ -12,6 +13,7 @@
 #include <defocus/color/color.h>
 #include <defocus/color/color_plan.h>
 #include <defocus/color/primaries.h>
+#include <defocus/frame_report.h>
 #include <defocus/render_frame.h>
 
 #include "test_support.h"
@@ -19,6 +21,8 @@
 using namespace defocus;
 using namespace defocus_test;
 using OIIO::ImageBuf;
+namespace OCIO = OCIO_NAMESPACE;
+using OIIO::ImageSpec;
 using OIIO::ROI;
 
 namespace {
@@ -259,4 +263,141 @@ TEST_CASE("colour spaces and configs that cannot be used are one-line errors")
         CHECK_FALSE(render_with(example_scene(), all, result, error));
         CHECK(one_line_error(error, mentions));
     }
+}
+
+namespace {
+
+/// A 20x20 RGBA+Z render in `dir` that names its colour space only by its
+/// chromaticities, as renderers write them: orange at 2 m on the left, blue
+/// at 6 m on the right.
+std::string chromaticities_scene(const std::string& dir, const float* chromaticities)
+{
+    ImageSpec spec(20, 20, 5, OIIO::TypeFloat);
+    spec.channelnames = { "R", "G", "B", "A", "Z" };
+    spec.alpha_channel = 3;
+    spec.z_channel = 4;
+    spec.attribute("chromaticities", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 8), chromaticities);
+    ImageBuf image(spec);
+    OIIO::ImageBufAlgo::fill(image, { 0.9f, 0.3f, 0.1f, 1.0f, 2.0f });
+    OIIO::ImageBufAlgo::fill(image, { 0.1f, 0.4f, 0.8f, 1.0f, 6.0f }, ROI(10, 20, 0, 20));
+    const std::string path = dir + "/tagged.exr";
+    REQUIRE(image.write(path));
+    return path;
+}
+
+/// The chromaticities a header names, rounded to 1e-3 (empty: none).
+std::vector<float> named_chromaticities(const ImageSpec& spec)
+{
+    const OIIO::ParamValue* p = spec.find_attribute("chromaticities");
+    if (!p)
+        return {};
+    std::vector<float> values(8);
+    std::copy_n(static_cast<const float*>(p->data()), 8, values.begin());
+    for (float& v : values)
+        v = std::round(v * 1000.0f) / 1000.0f;
+    return values;
+}
+
+}  // namespace
+
+TEST_CASE("a result names its space, and an input's named space is read back")
+{
+    const std::string dir = scratch_dir("color_names");
+    const float ap1[8] = { 0.713f, 0.293f, 0.165f, 0.830f, 0.128f, 0.044f, 0.32168f, 0.33767f };
+    const std::string scene = chromaticities_scene(dir, ap1);
+    const Settings camera = { { "focal", "50" }, { "fstop", "1.8" }, { "focus", "4" } };
+    auto with = [&](Settings more) {
+        more.insert(more.begin(), camera.begin(), camera.end());
+        return more;
+    };
+    FrameResult result;
+    std::string error;
+
+    // Read as ACEScg, from its chromaticities; the result says so.
+    REQUIRE(render_with(scene, camera, result, error));
+    CHECK_THAT(frame_report(result, shot_with({ scene }, camera), "once.exr"),
+               Catch::Contains("input 'ACEScg' (from the file's chromaticities: ACES AP1)"));
+    CHECK(named_chromaticities(result.image.spec())
+          == std::vector<float> { 0.713f, 0.293f, 0.165f, 0.83f, 0.128f, 0.044f, 0.322f, 0.338f });
+    CHECK(result.image.spec().get_string_attribute("colorInteropID") == "lin_ap1_scene");
+
+    // Converted pixels never keep the input's chromaticities.
+    REQUIRE(render_with(scene, with({ { "tocolorspace", "lin_rec709" } }), result, error));
+    CHECK(named_chromaticities(result.image.spec())
+          == std::vector<float> { 0.64f, 0.33f, 0.3f, 0.6f, 0.15f, 0.06f, 0.313f, 0.329f });
+    CHECK(result.image.spec().get_string_attribute("colorInteropID") == "lin_rec709_scene");
+    // A focus map is false colour: it names no space.
+    REQUIRE(render_with(scene, with({ { "output", "focusmap" } }), result, error));
+    CHECK(named_chromaticities(result.image.spec()).empty());
+    CHECK(result.image.spec().get_string_attribute("colorInteropID").empty());
+
+    // Each result, read back and defocused again with no colour setting,
+    // is taken in the space it was written in: the same pixels as naming
+    // that space.
+    for (const char* space : { "ACEScg", "lin_rec709" }) {
+        INFO(space);
+        const std::string written = dir + "/written_" + space + ".exr";
+        REQUIRE(render_with(scene, with({ { "tocolorspace", space } }), result, error));
+        REQUIRE(result.image.write(written));
+        const Settings again = with({ { "depth", scene }, { "tocolorspace", "srgb_tx" } });
+        Settings named = again;
+        named.push_back({ "iscolorspace", space });
+        const auto diff = OIIO::ImageBufAlgo::compare(rendered(written, again),
+                                                      rendered(written, named), 0.0f, 0.0f);
+        CHECK(diff.maxerror == 0.0);
+    }
+}
+
+TEST_CASE("a preview is the display window through a display's view, over black unless alpha "
+          "is kept")
+{
+    const Settings camera = { { "focal", "50" }, { "fstop", "1.8" }, { "focus", "4" } };
+    FrameResult result;
+    std::string error;
+    REQUIRE(render_with(example_scene(), camera, result, error));
+    ImageBuf preview;
+    REQUIRE(preview_image(result, "", "", false, preview, error));
+    CHECK(preview.roi() == ROI(0, 320, 0, 180, 0, 1, 0, 3));
+    // OIIO tags the EXR input with its generic "Linear", taken as linear
+    // Rec.709: the preview is OCIO's sRGB display, ACES 1.0 SDR video view,
+    // of that.
+    OCIO::ConstConfigRcPtr config = OCIO::Config::CreateFromFile(SHIPPED_OCIO_CONFIG);
+    OCIO::ConstCPUProcessorRcPtr to_display =
+        config->getProcessor("Linear Rec.709 (sRGB)", "sRGB", "ACES 1.0 - SDR Video",
+                             OCIO::TRANSFORM_DIR_FORWARD)
+            ->getDefaultCPUProcessor();
+    int compared = 0;
+    for (int y = 5; y < 180; y += 17)
+        for (int x = 5; x < 320; x += 23) {
+            float linear[4], shown[3];
+            result.image.getpixel(x, y, linear);
+            preview.getpixel(x, y, shown);
+            if (linear[3] < 0.999f)
+                continue;
+            to_display->applyRGB(linear);
+            for (int c = 0; c < 3; ++c)
+                CHECK(shown[c] == Approx(std::clamp(linear[c], 0.0f, 1.0f)).margin(1e-4));
+            ++compared;
+        }
+    CHECK(compared > 50);
+
+    // A half-transparent layer in focus: over black the preview shows its
+    // premultiplied colour, whatever a viewer puts behind it.
+    const std::string half = scratch_dir("color_preview") + "/half.exr";
+    write_uniform_image(half, { "R", "G", "B", "A", "Z" }, { 0.09f, 0.09f, 0.09f, 0.5f, 4.0f });
+    Settings linear = camera;
+    linear.push_back({ "iscolorspace", "lin_rec709" });
+    REQUIRE(render_with(half, linear, result, error));
+    ImageBuf kept;
+    REQUIRE(preview_image(result, "", "Raw", false, preview, error));
+    REQUIRE(preview_image(result, "", "Raw", true, kept, error));
+    CHECK(preview.nchannels() == 3);
+    CHECK(kept.nchannels() == 4);
+    CHECK(preview.getchannel(8, 8, 0, 0) == Approx(0.09f).margin(1e-5));  // Raw: as they are
+    CHECK(kept.getchannel(8, 8, 0, 3) == Approx(0.5f).margin(1e-5));
+
+    CHECK_FALSE(preview_image(result, "Projector", "", false, preview, error));
+    CHECK(one_line_error(error, "displays: sRGB"));
+    CHECK_FALSE(preview_image(result, "", "Film", false, preview, error));
+    CHECK(one_line_error(error, "views: ACES 1.0 - SDR Video, Raw"));
 }

@@ -10,6 +10,7 @@
 #include <defocus/frame_report.h>
 #include <defocus/io/shot_file.h>
 #include <defocus/render_frame.h>
+#include <defocus/version.h>
 
 #include "test_support.h"
 
@@ -267,4 +268,31 @@ TEST_CASE("the camera a render recorded in its header is used frame by frame, se
     CHECK(result.camera.focal_length_mm == Camera().focal_length_mm);
     CHECK_FALSE(render_with(pull, off, result, error, 2));
     CHECK(one_line_error(error, "or --focus-at X,Y is required"));
+}
+
+TEST_CASE("a result keeps the software that made its input, and adds a line to its history")
+{
+    const std::string dir = scratch_dir("render_provenance");
+    ImageBuf image(read_image(two_depth_scene(dir)));
+    image.specmod().attribute("Software", "Blender 3.4");
+    image.specmod().attribute("Exif:ImageHistory", "rendered");
+    const std::string input = dir + "/rendered.exr";
+    REQUIRE(image.write(input));
+    const std::string ours = "defocus " + std::string(version());
+    FrameResult once, twice;
+    std::string error;
+    REQUIRE(render_with(input, { { "fstop", "2.8" }, { "focus", "3" } }, once, error));
+    CHECK(once.image.spec().get_string_attribute("Software") == "Blender 3.4; " + ours);
+    CHECK(once.image.spec().get_string_attribute("Exif:ImageHistory")
+          == "rendered\n" + ours + ": " + input + " --focus 3 --fstop 2.8");
+    // Defocused again: one more line, the software named once.
+    REQUIRE(once.image.write(dir + "/once.exr"));
+    REQUIRE(render_with(dir + "/once.exr", { { "depth", input }, { "focus", "2" } }, twice,
+                        error));
+    CHECK(twice.image.spec().get_string_attribute("Software") == "Blender 3.4; " + ours);
+    const std::vector<std::string> lines =
+        Strutil::splits(twice.image.spec().get_string_attribute("Exif:ImageHistory"), "\n");
+    REQUIRE(lines.size() == 3);
+    CHECK_THAT(lines[2], Catch::StartsWith(ours + ": " + dir + "/once.exr"));
+    CHECK_THAT(lines[2], Catch::EndsWith("--depth " + input + " --focus 2"));
 }
