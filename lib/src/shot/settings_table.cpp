@@ -1,6 +1,7 @@
 #include "settings_table.h"
 
 #include <type_traits>
+#include <utility>
 
 #include <OpenImageIO/strutil.h>
 
@@ -57,6 +58,28 @@ SettingRule choice(ShotSetting s, Member member, bool (*parse)(const std::string
                  return false;
              },
              [=](const Shot& shot) { return std::string(name(member(shot))); } };
+}
+
+/// One of two values, each written as its name: `first` or `second`.
+template<typename Member, typename Value>
+SettingRule either(ShotSetting s, Member member, const char* what,
+                   std::pair<const char*, Value> first, std::pair<const char*, Value> second)
+{
+    return { s,
+             [=](Shot& shot, const std::string& label, const std::string& value,
+                 std::string& error) {
+                 for (const auto& [name, meaning] : { first, second })
+                     if (value == name) {
+                         member(shot) = meaning;
+                         return true;
+                     }
+                 error = format("{}: unknown {} '{}' (choose {} or {})", label, what, value,
+                                first.first, second.first);
+                 return false;
+             },
+             [=](const Shot& shot) {
+                 return std::string(member(shot) == first.second ? first.first : second.first);
+             } };
 }
 
 /// Keyframes of `arity` numbers; setting them clears `other` (focus and
@@ -299,17 +322,6 @@ bool parse_aperture(Shot& shot, const std::string& label, const std::string& val
     return false;
 }
 
-bool parse_spread(Shot& shot, const std::string& label, const std::string& value,
-                  std::string& error)
-{
-    if (value == "bounded" || value == "exact") {
-        shot.spread.exact_shape = value == "exact";
-        return true;
-    }
-    error = label + ": unknown method '" + value + "' (choose bounded or exact)";
-    return false;
-}
-
 /// The bokeh's shape.
 std::vector<SettingRule> aperture_rules()
 {
@@ -348,14 +360,12 @@ std::vector<SettingRule> aperture_rules()
 std::vector<SettingRule> spread_rules()
 {
     return {
-        { { "spread", "aperture", "spread", K::Text, G::Aperture, "--spread METHOD",
-            "Disc, polygon and mask: bounded (default: constant time, large "
-            "footprints merged in blocks of at most r/4 pixels, highlights exact) or "
-            "exact (every pixel on its own: time grows with the blur)" },
-          parse_spread,
-          [](const Shot& shot) {
-              return std::string(shot.spread.exact_shape ? "exact" : "bounded");
-          } },
+        either({ "spread", "aperture", "spread", K::Text, G::Aperture, "--spread METHOD",
+                 "Disc, polygon and mask: bounded (default: constant time, large "
+                 "footprints merged in blocks of at most r/4 pixels, highlights exact) or "
+                 "exact (every pixel on its own: time grows with the blur)" },
+               [](auto& s) -> auto& { return s.spread.exact_shape; }, "method",
+               std::pair { "bounded", false }, std::pair { "exact", true }),
         text({ "psf-image", "aperture", "psf_image", K::Path, G::Aperture, "--psf-image FILE",
                "The hybrid method: pixels whose bokeh is visible (bright highlights) are "
                "spread with this PSF image, scaled to their CoC; all others with the "
@@ -389,17 +399,6 @@ std::vector<SettingRule> color_rules()
     };
 }
 
-bool parse_output_kind(Shot& shot, const std::string& label, const std::string& value,
-                       std::string& error)
-{
-    if (value == "image" || value == "focusmap") {
-        shot.output = value == "image" ? OutputKind::Image : OutputKind::FocusMap;
-        return true;
-    }
-    error = label + ": unknown kind '" + value + "' (choose image or focusmap)";
-    return false;
-}
-
 bool parse_pixel_type(Shot& shot, const std::string& label, const std::string& value,
                       std::string& error)
 {
@@ -415,14 +414,13 @@ bool parse_pixel_type(Shot& shot, const std::string& label, const std::string& v
 std::vector<SettingRule> output_rules()
 {
     return {
-        { { "output", "output", "kind", K::Text, G::Output, "--output KIND",
-            "image: the defocused image (default); focusmap: where the focus falls, "
-            "green in focus, red in front, blue behind, brighter with more blur, "
-            "whitened where the blur reaches --max-blur" },
-          parse_output_kind,
-          [](const Shot& shot) {
-              return std::string(shot.output == OutputKind::Image ? "image" : "focusmap");
-          } },
+        either({ "output", "output", "kind", K::Text, G::Output, "--output KIND",
+                 "image: the defocused image (default); focusmap: where the focus falls, "
+                 "green in focus, red in front, blue behind, brighter with more blur, "
+                 "whitened where the blur reaches --max-blur" },
+               [](auto& s) -> auto& { return s.output; }, "kind",
+               std::pair { "image", OutputKind::Image },
+               std::pair { "focusmap", OutputKind::FocusMap }),
         { { "pixel-type", "output", "type", K::Text, G::Output, "-d TYPE",
             "Output pixel type: half or float (default: the input's)" },
           parse_pixel_type,
