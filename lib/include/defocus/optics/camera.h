@@ -153,7 +153,7 @@ private:
         // An in-focus range takes its span of 1/z_f - 1/z out, so the blur
         // starts at its ends; with none, this is the plain difference.
         const double d = inverse_focus(x, y) - inv_z;
-        return m_scale * (d - std::clamp(d, -m_sharp_near, m_sharp_far));
+        return m_scale * (d - std::min(std::max(d, -m_sharp_near), m_sharp_far));
     }
 
     double m_scale;  ///< pixels per unit of |1/z_f - 1/z| (thin lens)
