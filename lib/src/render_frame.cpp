@@ -6,6 +6,7 @@
 
 #include <defocus/color/primaries.h>
 #include <defocus/composite/confidence.h>
+#include <defocus/composite/holdout.h>
 #include <defocus/focus/focus_at.h>
 #include <defocus/focus/focus_map.h>
 #include <defocus/io/frames.h>
@@ -262,6 +263,33 @@ double spread_bytes(const LayeredScene& layered)
     return bytes + result_bytes(double(all.npixels()));
 }
 
+/// The shot's holdout at `frame`, front to back (none when the shot names
+/// none), over the scene's display window.
+bool read_holdout(const Shot& shot, int frame, const ImageSpec& scene, DeepImage& holdout,
+                  std::string& error)
+{
+    holdout = DeepImage();
+    if (shot.holdout.empty())
+        return true;
+    ReadOptions options;
+    options.depth_scale  = shot.read.depth_scale;
+    options.memory_limit = shot.read.memory_limit;
+    Scene read;
+    if (!read_scene({ frame_path(shot.holdout, frame) }, options, read, error))
+        return false;
+    const ImageSpec& h = read.spec;
+    if (h.full_x != scene.full_x || h.full_y != scene.full_y || h.full_width != scene.full_width
+        || h.full_height != scene.full_height) {
+        error = format("{}: the holdout's display window {}x{} is not the input's {}x{}",
+                       read.source, h.full_width, h.full_height, scene.full_width,
+                       scene.full_height);
+        return false;
+    }
+    sanitize(read);
+    holdout = holdout_image(read);
+    return true;
+}
+
 /// The confidence AOV of `image`, defocused from `layered` as the shot
 /// says: the scene's rebuilt part spread and composited the same way.
 bool confidence_aov(ImageBuf& confidence, const ImageBuf& image, const LayeredScene& layered,
@@ -321,6 +349,8 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
                                    : "the data window does not cover the blur's reach",
                                mention("edge", "black"));
         SpreadTimings timings;
+        if (!read_holdout(shot, frame, layered.spec, layered.holdout, error))
+            return false;
         if (!defocus_layers(image, layered, out.camera, shot.spread, images, shot.window,
                             &out.layers, &timings, nthreads)) {
             error = image.geterror();

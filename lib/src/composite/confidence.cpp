@@ -18,6 +18,7 @@ bool rebuilt_part(const LayeredScene& scene, LayeredScene& part, int nthreads)
     part.source = scene.source;
     part.spec = scene.spec;
     part.luma = scene.luma;
+    part.holdout = scene.holdout;  // the rebuilt light is held out as the image is
     part.reports = scene.reports;
     bool any = false;
     for (const Layer& layer : scene.layers) {

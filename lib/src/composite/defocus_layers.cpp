@@ -10,6 +10,7 @@
 #include <OpenImageIO/parallel.h>
 #include <OpenImageIO/timer.h>
 
+#include <defocus/composite/holdout.h>
 #include <defocus/layers/edges.h>
 
 #include "spread/spread_engine.h"
@@ -273,6 +274,17 @@ ROI magnified_reach(const ROI& window, const ROI& grown, const Imath::V2d& centr
     return roi_intersection(reach, roi_union(grown, window));
 }
 
+/// The depth that stands for layer `i` of `scene` against a holdout: the
+/// depth of its alpha-weighted mean inverse depth, which orders the layers;
+/// 0 past the front-most layer.
+double layer_depth(const LayeredScene& scene, size_t i)
+{
+    if (i >= scene.reports.size())
+        return 0.0;
+    const double inverse = scene.reports[i].mean_inverse_depth;
+    return inverse > 0.0 ? 1.0 / inverse : INFINITY;
+}
+
 /// Composites one pass of a layer into the frame over `window`: as the
 /// engine spreads it (stored, `onto_black`, for the back-most layer), or
 /// from its spread image; a magnified pass from an image of its spread over
@@ -294,6 +306,29 @@ void composite_pass(ImageBuf& frame, LayerPass& p, bool onto_black, const ImageS
         p.spread.engine->run(window, over, nthreads);
     } else if (p.spread.apart.initialized()) {
         composite_image(frame, p.spread.apart, p.channels, nthreads);
+    }
+}
+
+/// Composites the layers' passes into the frame over `window`, back to
+/// front, each layer's spreads freed once composited, and cuts what is
+/// composited by the holdout in front of each layer up to the next.
+void composite_layers(ImageBuf& frame, const LayeredScene& scene,
+                      std::vector<LayerSpreads>& layers, const LayerPass* back, const ROI& window,
+                      const ROI& reach, double lateral_ca, const Imath::V2d& centre, int nthreads)
+{
+    bool composited = false;
+    for (size_t i = 0; i < scene.layers.size(); ++i) {
+        // A layer's passes write different channels of the frame, so their
+        // order does not matter.
+        for (LayerPass& p : layers[i].passes)
+            composite_pass(frame, p, &p == back, scene.spec, window, reach, lateral_ca, centre,
+                           nthreads);
+        // Until the back-most layer lands, the frame is not set.
+        composited |= !layers[i].passes.empty();
+        if (composited)
+            hold_out(frame, scene.holdout, layer_depth(scene, i + 1), layer_depth(scene, i),
+                     window, nthreads);
+        layers[i] = LayerSpreads();
     }
 }
 
@@ -360,16 +395,10 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
         frame.swap(dst);
     reset_zeroed_except(frame, frame_spec, back ? back->spread.engine->extent() : ROI(), nthreads);
     const ROI reach = magnified_reach(window, grown, centre, camera.lateral_ca);
-    for (size_t i = 0; i < scene.layers.size(); ++i) {
-        if (report)
-            report->push_back(depths[i]);
-        // A layer's passes write different channels of the frame, so their
-        // order does not matter.
-        for (LayerPass& p : layers[i].passes)
-            composite_pass(frame, p, &p == back, scene.spec, window, reach, camera.lateral_ca,
-                           centre, nthreads);
-        layers[i] = LayerSpreads();
-    }
+    composite_layers(frame, scene, layers, back, window, reach, camera.lateral_ca, centre,
+                     nthreads);
+    if (report)
+        report->insert(report->end(), depths.begin(), depths.end());
     timings.spread += spread_timer();
     dst = std::move(frame);
     return true;

@@ -158,6 +158,12 @@ std::vector<SettingRule> scene_rules()
                  "Metres per depth unit of the input's Z, e.g. 0.01 for centimetres "
                  "(default: 1; --focus stays in metres)" },
                [](auto& s) -> auto& { return s.read.depth_scale; }, 1e-9, 1e9),
+        text({ "holdout", "scene", "holdout", K::Path, G::Scene, "--holdout FILE",
+               "Hold the shot out by the other elements in this deep EXR (or flat RGBA+Z "
+               "render; a frame pattern for sequences): where they stand in front, the "
+               "defocused result is cut, per output pixel, by their transmittance, so that "
+               "it merges with them later; they are neither defocused nor written" },
+             [](auto& s) -> auto& { return s.holdout; }),
         // One limit, held by both stages that allocate what files ask for.
         { { "memory-limit", "scene", "memory_limit", K::Text, G::Scene,
             "--memory-limit SIZE",

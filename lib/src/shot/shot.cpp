@@ -112,8 +112,9 @@ bool check_shot(const Shot& shot, std::string& error)
 std::vector<std::string> shot_files(const Shot& shot)
 {
     std::vector<std::string> files = shot.inputs;
-    for (const std::string* file : { &shot.read.depth, &shot.spread.aperture.mask_file,
-                                     &shot.spread.psf_image, &shot.color_config })
+    for (const std::string* file : { &shot.read.depth, &shot.holdout,
+                                     &shot.spread.aperture.mask_file, &shot.spread.psf_image,
+                                     &shot.color_config })
         if (!file->empty())
             files.push_back(*file);
     return files;

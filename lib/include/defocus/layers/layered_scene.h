@@ -41,6 +41,9 @@ struct LayeredScene {
     /// (the working space of the colour plan), by which highlights are
     /// found.
     Imath::V3d luma = luma_weights(nullptr);
+    /// What cuts the layers where it stands in front of them, front to back
+    /// in each pixel (see composite/holdout.h); no samples: nothing.
+    DeepImage holdout;
 };
 
 /// Crops a layer (colour, depth and rebuilt) to the pixels that carry

@@ -32,6 +32,10 @@ struct Shot {
     MissingFrames missing_frames = MissingFrames::Error;
     ReadOptions read;
     LayeringOptions layering;
+    /// A deep image (or flat RGBA+Z render) of the shot's other elements,
+    /// which cuts this one where they stand in front of it: a file or frame
+    /// pattern ("" = none).
+    std::string holdout;
 
     /// Focus distance, or the pixel (X,Y in the display window) whose
     /// depth is the focus distance: exactly one is set.

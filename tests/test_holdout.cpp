@@ -1,0 +1,123 @@
+// Holdouts: the shot's other elements, as a deep image, cut the defocused
+// element where they stand in front of it, per output pixel.
+#include <catch2/catch.hpp>
+
+#include <OpenImageIO/deepdata.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/imageio.h>
+
+#include <defocus/composite/holdout.h>
+
+#include "test_support.h"
+
+using namespace defocus;
+using namespace defocus_test;
+using namespace OIIO;
+
+namespace {
+
+constexpr int width = 200, height = 100;
+
+/// A striped wall at 5 m over the right half, nothing on the left.
+std::string wall(const std::string& dir)
+{
+    ImageSpec spec(width, height, 5, TypeFloat);
+    spec.channelnames = { "R", "G", "B", "A", "Z" };
+    spec.alpha_channel = 3;
+    spec.z_channel = 4;
+    ImageBuf image(spec);
+    ImageBufAlgo::fill(image, { 0.0f, 0.0f, 0.0f, 0.0f, 1e9f });
+    for (int x = width / 2; x < width; x += 20)
+        ImageBufAlgo::fill(image, { 1.0f, 0.8f, 0.6f, 1.0f, 5.0f }, ROI(x, x + 10, 0, height));
+    for (int x = width / 2 + 10; x < width; x += 20)
+        ImageBufAlgo::fill(image, { 0.1f, 0.2f, 0.3f, 1.0f, 5.0f }, ROI(x, x + 10, 0, height));
+    const std::string path = dir + "/wall.exr";
+    REQUIRE(image.write(path));
+    return path;
+}
+
+/// A deep card at `depth` over the left half, of alpha `alpha`: one sample
+/// a pixel there, none on the right.
+std::string card(const std::string& dir, float depth, float alpha)
+{
+    ImageSpec spec(width, height, 6, TypeFloat);
+    spec.channelnames = { "R", "G", "B", "A", "Z", "ZBack" };
+    spec.deep = true;
+    DeepData data(spec);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width / 2; ++x) {
+            const int64_t p = int64_t(y) * width + x;
+            data.set_samples(p, 1);
+            const float values[6] = { 0.3f * alpha, 0.3f * alpha, 0.3f * alpha, alpha, depth,
+                                      depth };
+            for (int c = 0; c < 6; ++c)
+                data.set_deep_value(p, c, 0, values[c]);
+        }
+    const std::string path = dir + "/card_" + std::to_string(depth) + "_"
+                             + std::to_string(alpha) + ".exr";
+    auto out = ImageOutput::create(path);
+    REQUIRE(out->open(path, spec));
+    REQUIRE(out->write_deep_image(data));
+    REQUIRE(out->close());
+    return path;
+}
+
+/// The largest difference between `a` scaled by `scale` and `b` over the
+/// columns [x0, x1).
+float worst(const ImageBuf& a, float scale, const ImageBuf& b, int x0, int x1)
+{
+    float most = 0.0f;
+    for (int y = 0; y < height; ++y)
+        for (int x = x0; x < x1; ++x)
+            for (int c = 0; c < 4; ++c)
+                most = std::max(most, std::abs(scale * a.getchannel(x, y, 0, c)
+                                               - b.getchannel(x, y, 0, c)));
+    return most;
+}
+
+}  // namespace
+
+TEST_CASE("a deep card in front holds out the blurred wall behind it, its spread blur too")
+{
+    const std::string dir = scratch_dir("holdout_card");
+    const std::string scene = wall(dir);
+    // The wall at 5 m blurs to a CoC of about 60 px across: a radius of 30.
+    const Settings camera = { { "focal", "50" }, { "fstop", "0.417" }, { "focus", "0.5" },
+                              { "edge", "black" } };
+    const ImageBuf plain = rendered(scene, camera);
+    const int radius = 31;
+    // The blur spreads the wall's light over the card's half.
+    CHECK(worst(plain, 0.0f, plain, width / 2 - radius + 5, width / 2) > 0.05f);
+
+    for (const float alpha : { 1.0f, 0.5f }) {
+        INFO("alpha " << alpha);
+        Settings held = camera;
+        held.push_back({ "holdout", card(dir, 2.0f, alpha) });
+        const ImageBuf out = rendered(scene, held);
+        // Behind the card, what reaches the output is cut by its alpha:
+        // nothing of an opaque card, half of a half-transparent one.
+        CHECK(worst(plain, 1.0f - alpha, out, 0, width / 2) < 1e-4f);
+        // More than the blur's radius from it, nothing changes.
+        CHECK(worst(plain, 1.0f, out, width / 2 + radius, width) == 0.0f);
+    }
+    // A card behind the wall cuts nothing of it.
+    Settings behind = camera;
+    behind.push_back({ "holdout", card(dir, 8.0f, 1.0f) });
+    CHECK(worst(plain, 1.0f, rendered(scene, behind), 0, width) == 0.0f);
+}
+
+TEST_CASE("a holdout's volume samples are cut where the depth range splits them")
+{
+    DeepImage holdout;
+    holdout.roi = ROI(0, 1, 0, 1);
+    holdout.offsets = { 0, 2 };
+    // A point sample at 1 m, alpha 0.5; a volume from 2 to 4 m, alpha 0.75.
+    holdout.samples = { { 0, 0, 0, 0.5f, 1.0f, 1.0f }, { 0, 0, 0, 0.75f, 2.0f, 4.0f } };
+    CHECK(holdout_transmittance(holdout, 0, 0, 0.0, 1.0) == 1.0);  // up to, not at, 1 m
+    CHECK(holdout_transmittance(holdout, 0, 0, 0.0, 1.5) == 0.5);
+    // Half of the volume passes sqrt(0.25) of the light; both halves, 0.25.
+    CHECK(holdout_transmittance(holdout, 0, 0, 1.5, 3.0) == Approx(0.5));
+    CHECK(holdout_transmittance(holdout, 0, 0, 3.0, 10.0) == Approx(0.5));
+    CHECK(holdout_transmittance(holdout, 0, 0, 0.0, 10.0) == Approx(0.5 * 0.25));
+    CHECK(holdout_transmittance(holdout, 5, 5, 0.0, 10.0) == 1.0);  // outside its window
+}
