@@ -15,6 +15,8 @@
 #include <OpenImageIO/imagecache.h>
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/io/shot_file.h>
+
 #include "test_support.h"
 
 using namespace defocus_test;
@@ -102,18 +104,35 @@ TEST_CASE("oiiotool opens a .dof as the image the defocus command renders from i
     require_identical(hinted, cli_render(dof, "--focus 1.25 --fstop 2"));
 }
 
-TEST_CASE("the confidence AOV reaches oiiotool through the plugin as through the command")
+TEST_CASE("AOVs and a holdout reach oiiotool through the plugin as through the command")
 {
     const std::string dof = scene_dof();
-    const std::string out = scratch_dir("plugin_aov") + "/a.exr";
-    std::string log;
-    INFO(log);
-    REQUIRE(run(with_plugin + OIIOTOOL_BIN + " --iconfig dof:aov confidence " + dof + " -o " + out,
-                log) == 0);
-    const ImageSpec spec = read_spec(out);
-    REQUIRE(spec.nchannels == 5);
-    CHECK(spec.channelnames[4] == "confidence");
-    require_identical(out, cli_render(dof, "--aov confidence"));
+    // The scene held out by itself: each layer cut by what stands in front.
+    defocus::Shot shot;
+    std::string error;
+    REQUIRE(defocus::load_shot(dof, shot, error));
+    const std::string scene = shot.inputs.at(0);
+    const std::string dir = scratch_dir("plugin_aov");
+    const std::pair<std::string, std::string> cases[] = {
+        { "dof:aov confidence", "--aov confidence" },
+        { "dof:aov coc", "--aov coc" },
+        { "dof:holdout " + scene, "--holdout " + scene },
+    };
+    int count = 0;
+    for (const auto& [hint, option] : cases) {
+        INFO(option);
+        const std::string out = format("{}/{}.exr", dir, ++count);
+        std::string log;
+        INFO(log);
+        REQUIRE(run(with_plugin + OIIOTOOL_BIN + " --iconfig " + hint + " " + dof + " -o " + out,
+                    log) == 0);
+        const ImageSpec spec = read_spec(out);
+        if (Strutil::contains(hint, "aov")) {
+            REQUIRE(spec.nchannels == 5);
+            CHECK(spec.channelnames[4] == Strutil::splits(hint, " ")[1]);
+        }
+        require_identical(out, cli_render(dof, option));
+    }
 }
 
 TEST_CASE("oiiotool renders each frame of a sequence scene: shot.#.dof, or --iconfig dof:frame")

@@ -5,6 +5,7 @@
 #include <OpenImageIO/timer.h>
 
 #include <defocus/color/primaries.h>
+#include <defocus/composite/coc_aov.h>
 #include <defocus/composite/confidence.h>
 #include <defocus/composite/holdout.h>
 #include <defocus/focus/focus_at.h>
@@ -311,6 +312,23 @@ bool confidence_aov(ImageBuf& confidence, const ImageBuf& image, const LayeredSc
     return true;
 }
 
+/// The shot's extra channel for `image`, defocused from `layered`: left
+/// uninitialised when it asks for none.
+bool aov_channel(ImageBuf& aov, const ImageBuf& image, const LayeredScene& layered,
+                 const Shot& shot, const Camera& camera, const ApertureImages& images,
+                 std::string& error, int nthreads)
+{
+    if (shot.aov == Aov::Confidence)
+        return confidence_aov(aov, image, layered, shot, camera, images, error, nthreads);
+    if (shot.aov == Aov::Coc
+        && !coc_aov(aov, layered, camera, shot.spread, images, shot.window, image.roi(),
+                    nthreads)) {
+        error = aov.geterror();
+        return false;
+    }
+    return true;
+}
+
 /// A frame from its prepared layers to the image to write. Errors do not
 /// name the source: the caller does.
 bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
@@ -358,19 +376,17 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
         }
         out.timings.emplace_back("spread and composite", timings.spread);
         timer.lap();
-        ImageBuf confidence;
-        if (shot.aov == Aov::Confidence) {
-            if (!confidence_aov(confidence, image, layered, shot, out.camera, images, error,
-                                nthreads))
-                return false;
-            lap("confidence");
-        }
+        ImageBuf aov;
+        if (!aov_channel(aov, image, layered, shot, out.camera, images, error, nthreads))
+            return false;
+        if (aov.initialized())
+            lap(aov_name(shot.aov));
         if (color.config
             && !color.config->convert(image, color.working, color.output, error, nthreads))
             return false;
-        if (confidence.initialized()) {
+        if (aov.initialized()) {
             ImageBuf both;
-            if (!ImageBufAlgo::channel_append(both, image, confidence, {}, nthreads)) {
+            if (!ImageBufAlgo::channel_append(both, image, aov, {}, nthreads)) {
                 error = both.geterror();
                 return false;
             }
@@ -430,9 +446,9 @@ bool frame_spec(const Shot& shot, int frame, const ShotAssets& assets, ImageSpec
         return false;
     }
     spec = result_spec(input, window, output_pixel_type(shot, input));
-    if (shot.output == OutputKind::Image && shot.aov == Aov::Confidence) {
+    if (shot.output == OutputKind::Image && shot.aov != Aov::None) {
         spec.nchannels += 1;
-        spec.channelnames.push_back("confidence");
+        spec.channelnames.push_back(aov_name(shot.aov));
     }
     describe_output(spec, input, shot, camera, color, frame);
     // Focusing at a pixel measures the focus from the pixels.

@@ -389,6 +389,34 @@ def test_the_confidence_aov_marks_rebuilt_light_as_the_command_does(example, tmp
     assert np.array_equal(ours, theirs)
 
 
+def test_a_holdout_and_the_coc_aov_as_the_command_and_a_dof_give_them(example, tmp_path):
+    # A flat card at 2 m over the left half of the example's display window:
+    # the holdout, one sample a pixel.
+    spec = oiio.ImageSpec(1280, 720, 5, oiio.FLOAT)
+    spec.channelnames = ("R", "G", "B", "A", "Z")
+    card = np.zeros((720, 1280, 5), np.float32)
+    card[:, :640] = (0.2, 0.2, 0.2, 1.0, 2.0)
+    out = oiio.ImageOutput.create(str(tmp_path / "card.exr"))
+    assert out.open(str(tmp_path / "card.exr"), spec)
+    out.write_image(card)
+    out.close()
+    shot = defocus.Shot(inputs=[example], holdout=tmp_path / "card.exr", aov="coc", **CAMERA)
+    ours = defocus.render(shot)
+    plain = defocus.render(defocus.Shot(inputs=[example], **CAMERA))
+    assert ours.shape[2] == 5
+    # Cut behind the card (all but the leaves at 1 m, in front of it), and
+    # only there; the CoC channel is the wall's and the leaves'.
+    assert not np.array_equal(ours[..., :4], plain)
+    assert np.array_equal(ours[:, 900:, :4], plain[:, 900:])
+    assert ours[..., 4].min() < 0 < ours[..., 4].max()
+    assert cli(example, "-o", tmp_path / "cli.exr", "--holdout", tmp_path / "card.exr",
+               "--aov", "coc", "-d", "float", *CAMERA_ARGS) == (0, "")
+    theirs, _ = pixels(tmp_path / "cli.exr")
+    assert np.array_equal(ours, theirs)
+    shot.save(tmp_path / "shot.dof")
+    assert np.array_equal(defocus.render(tmp_path / "shot.dof"), theirs)
+
+
 @pytest.mark.parametrize("bad, message", [
     (lambda l: [(l[0][0].astype(np.float64), l[0][1])], r"rgba: dtype float64; expected float32"),
     (lambda l: [(l[0][0][..., :3], l[0][1])], r"rgba: shape \(64, 96, 3\); expected"),

@@ -44,12 +44,16 @@ bool parse_output_window(const std::string& name, OutputWindow& window)
 
 bool parse_aov(const std::string& name, Aov& aov)
 {
-    return parse_name(name, { Aov::None, Aov::Confidence }, aov_name, aov);
+    return parse_name(name, { Aov::None, Aov::Confidence, Aov::Coc }, aov_name, aov);
 }
 
 const char* aov_name(Aov aov)
 {
-    return aov == Aov::Confidence ? "confidence" : "none";
+    switch (aov) {
+    case Aov::Confidence: return "confidence";
+    case Aov::Coc: return "coc";
+    default: return "none";
+    }
 }
 
 const char* output_window_name(OutputWindow window)

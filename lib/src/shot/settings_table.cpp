@@ -443,9 +443,11 @@ std::vector<SettingRule> output_rules()
                  "pixel's light that came from surfaces the input hides (behind nearer "
                  "objects of a flat render or deep image) and defocus rebuilt: 0 where all "
                  "of it was seen, as everywhere for layered input; where it is high, look "
-                 "closely (default: none)" },
+                 "closely; coc, named 'coc', the signed CoC diameter in pixels (negative in "
+                 "front of the focus) of the front-most layer that reaches each pixel, to "
+                 "drive other blurs from (default: none)" },
                [](auto& s) -> auto& { return s.aov; }, parse_aov, aov_name, "AOV",
-               "none or confidence"),
+               "none, confidence or coc"),
     };
 }
 

@@ -95,6 +95,9 @@ enum class Aov {
     /// "confidence": the fraction of each pixel's light that came from
     /// rebuilt surfaces (Layer::rebuilt), 0 where all of it was seen.
     Confidence,
+    /// "coc": the signed CoC diameter of the front-most layer that reaches
+    /// each pixel (see coc_aov), to drive other blurs from.
+    Coc,
 };
 bool parse_aov(const std::string& name, Aov& aov);
 const char* aov_name(Aov aov);

@@ -1,5 +1,6 @@
-// Holdouts: the shot's other elements, as a deep image, cut the defocused
-// element where they stand in front of it, per output pixel.
+// Deep compositing: holdouts (the shot's other elements, as a deep image,
+// cut the defocused element where they stand in front of it, per output
+// pixel), and the CoC AOV.
 #include <catch2/catch.hpp>
 
 #include <OpenImageIO/deepdata.h>
@@ -7,6 +8,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include <defocus/composite/holdout.h>
+#include <defocus/optics/camera.h>
 
 #include "test_support.h"
 
@@ -120,4 +122,46 @@ TEST_CASE("a holdout's volume samples are cut where the depth range splits them"
     CHECK(holdout_transmittance(holdout, 0, 0, 3.0, 10.0) == Approx(0.5));
     CHECK(holdout_transmittance(holdout, 0, 0, 0.0, 10.0) == Approx(0.5 * 0.25));
     CHECK(holdout_transmittance(holdout, 5, 5, 0.0, 10.0) == 1.0);  // outside its window
+}
+
+TEST_CASE("the CoC AOV is the signed CoC of the front-most layer that reaches each pixel")
+{
+    // A bar at 1 m in front of a wall at 10 m, focus at 3 m.
+    const std::string dir = scratch_dir("coc_aov");
+    ImageSpec spec(120, 60, 5, TypeFloat);
+    spec.channelnames = { "R", "G", "B", "A", "Z" };
+    spec.alpha_channel = 3;
+    spec.z_channel = 4;
+    ImageBuf image(spec);
+    ImageBufAlgo::fill(image, { 0.2f, 0.3f, 0.4f, 1.0f, 10.0f });
+    ImageBufAlgo::fill(image, { 0.9f, 0.9f, 0.9f, 1.0f, 1.0f }, ROI(50, 70, 0, 60));
+    const std::string scene = dir + "/bar.exr";
+    REQUIRE(image.write(scene));
+    const Settings settings = { { "focal", "50" }, { "fstop", "0.5" }, { "focus", "3" },
+                                { "aov", "coc" } };
+    const ImageBuf out = rendered(scene, settings);
+    REQUIRE(out.nchannels() == 5);
+    CHECK(out.spec().channelnames[4] == "coc");
+
+    Camera camera;
+    camera.focal_length_mm = 50;
+    camera.fstop = 0.5;
+    camera.focus_distance = 3;
+    const CircleOfConfusion coc(camera, ROI(0, 120, 0, 60));
+    const double near = coc.diameter(1.0, 0, 0), far = coc.diameter(10.0, 0, 0);
+    REQUIRE(near < -10.0);  // a radius of more than 5 px
+    REQUIRE(far > 2.0);
+    auto aov = [&](int x) { return out.getchannel(x, 30, 0, 4); };
+    CHECK(aov(60) == Approx(near).epsilon(1e-4));
+    CHECK(aov(10) == Approx(far).epsilon(1e-4));   // the bar's blur is far away
+    CHECK(aov(110) == Approx(far).epsilon(1e-4));
+    // Beside the bar, where its blur reaches over the wall: the bar's.
+    CHECK(aov(48) == Approx(near).epsilon(1e-4));
+    CHECK(aov(71) == Approx(near).epsilon(1e-4));
+    // The colour is the same as without the AOV.
+    Settings plain = settings;
+    plain.pop_back();
+    const ImageBuf colour = rendered(scene, plain);
+    CHECK(ImageBufAlgo::compare(ImageBufAlgo::channels(out, 4, {}), colour, 0.0f, 0.0f).maxerror
+          == 0.0);
 }
