@@ -52,6 +52,15 @@ std::vector<std::string> option_names(const ArgParse& ap)
     return names;
 }
 
+/// Where the help starts on an option's line of --help ("    --focus DIST
+/// Focus ..."); npos on other lines.
+size_t help_column(const std::string& line)
+{
+    static const std::regex option_line("^( +-\\S+(?: [^ ]+)* {2,})");
+    std::smatch m;
+    return std::regex_search(line, m, option_line) ? size_t(m[1].length()) : std::string::npos;
+}
+
 /// `line` cut into lines of at most `width` characters, the later ones
 /// indented to where its text starts: after the option for an option's
 /// line, else its own indent. No later line starts with '-', which would
@@ -60,11 +69,8 @@ std::string wrap_help_line(const std::string& line, size_t width)
 {
     if (line.size() <= width)
         return line + "\n";
-    static const std::regex option_line("^( +-\\S+(?: [^ ]+)* {2,})");
-    std::smatch m;
-    const size_t indent = std::regex_search(line, m, option_line)
-                              ? size_t(m[1].length())
-                              : line.find_first_not_of(' ');
+    const size_t column = help_column(line);
+    const size_t indent = column != std::string::npos ? column : line.find_first_not_of(' ');
     if (indent == std::string::npos || indent + 20 > width)
         return line + "\n";
     const std::vector<std::string> words = OIIO::Strutil::splits(line.substr(indent), " ");
@@ -103,6 +109,25 @@ const char* option_group_heading(OptionGroup group)
     case OptionGroup::Scene: return "Scene:";
     default: return "";
     }
+}
+
+/// The lines of `help` with each option's help on its option's line.
+/// OIIO 2.4's ArgParse wraps help at the width it reads from stdout, which
+/// it reads unset when stdout is not a terminal: sometimes it wraps, at a
+/// width of its own, indenting the rest a little past the help's column.
+std::vector<std::string> unwrapped_help(const std::string& help)
+{
+    std::vector<std::string> lines;
+    std::stringstream in(help);
+    for (std::string line; std::getline(in, line);) {
+        const size_t indent = line.find_first_not_of(' ');
+        const size_t column = lines.empty() ? std::string::npos : help_column(lines.back());
+        if (column != std::string::npos && indent != std::string::npos && indent >= column)
+            lines.back() += " " + line.substr(indent);
+        else
+            lines.push_back(line);
+    }
+    return lines;
 }
 
 }  // namespace
@@ -144,8 +169,7 @@ void add_help_option(ArgParse& ap)
 {
     ap.arg("--help").help("Print help message").action([&ap](cspan<const char*>) {
         const size_t width = size_t(std::max(terminal_columns(), 60) - 1);
-        std::stringstream help(help_text(ap));
-        for (std::string line; std::getline(help, line);)
+        for (const std::string& line : unwrapped_help(help_text(ap)))
             OIIO::Strutil::print("{}", wrap_help_line(line, width));
         ap.abort();
     });
