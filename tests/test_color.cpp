@@ -272,10 +272,7 @@ namespace {
 /// at 6 m on the right.
 std::string chromaticities_scene(const std::string& dir, const float* chromaticities)
 {
-    ImageSpec spec(20, 20, 5, OIIO::TypeFloat);
-    spec.channelnames = { "R", "G", "B", "A", "Z" };
-    spec.alpha_channel = 3;
-    spec.z_channel = 4;
+    ImageSpec spec = rgbaz_spec(20, 20);
     spec.attribute("chromaticities", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 8), chromaticities);
     ImageBuf image(spec);
     OIIO::ImageBufAlgo::fill(image, { 0.9f, 0.3f, 0.1f, 1.0f, 2.0f });

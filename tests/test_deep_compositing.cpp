@@ -23,11 +23,7 @@ constexpr int width = 200, height = 100;
 /// A striped wall at 5 m over the right half, nothing on the left.
 std::string wall(const std::string& dir)
 {
-    ImageSpec spec(width, height, 5, TypeFloat);
-    spec.channelnames = { "R", "G", "B", "A", "Z" };
-    spec.alpha_channel = 3;
-    spec.z_channel = 4;
-    ImageBuf image(spec);
+    ImageBuf image(rgbaz_spec(width, height));
     ImageBufAlgo::fill(image, { 0.0f, 0.0f, 0.0f, 0.0f, 1e9f });
     for (int x = width / 2; x < width; x += 20)
         ImageBufAlgo::fill(image, { 1.0f, 0.8f, 0.6f, 1.0f, 5.0f }, ROI(x, x + 10, 0, height));
@@ -128,11 +124,7 @@ TEST_CASE("the CoC AOV is the signed CoC of the front-most layer that reaches ea
 {
     // A bar at 1 m in front of a wall at 10 m, focus at 3 m.
     const std::string dir = scratch_dir("coc_aov");
-    ImageSpec spec(120, 60, 5, TypeFloat);
-    spec.channelnames = { "R", "G", "B", "A", "Z" };
-    spec.alpha_channel = 3;
-    spec.z_channel = 4;
-    ImageBuf image(spec);
+    ImageBuf image(rgbaz_spec(120, 60));
     ImageBufAlgo::fill(image, { 0.2f, 0.3f, 0.4f, 1.0f, 10.0f });
     ImageBufAlgo::fill(image, { 0.9f, 0.9f, 0.9f, 1.0f, 1.0f }, ROI(50, 70, 0, 60));
     const std::string scene = dir + "/bar.exr";

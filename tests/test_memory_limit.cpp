@@ -91,10 +91,7 @@ TEST_CASE("a memory limit is a size such as 12G")
 TEST_CASE("a deep pixel of two million samples renders, or is refused by the memory limit")
 {
     const std::string dir = scratch_dir("memory_limit_deep_samples");
-    ImageSpec spec(2, 1, 5, TypeFloat);
-    spec.channelnames = { "R", "G", "B", "A", "Z" };
-    spec.alpha_channel = 3;
-    spec.z_channel = 4;
+    ImageSpec spec = rgbaz_spec(2, 1);
     spec.deep = true;
     spec.attribute("compression", "zips");
     ImageBuf image(spec);

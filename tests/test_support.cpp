@@ -211,11 +211,18 @@ int run(const std::string& command, std::string& output)
     return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
+ImageSpec rgbaz_spec(int width, int height)
+{
+    ImageSpec spec(width, height, 5, TypeFloat);
+    spec.channelnames = { "R", "G", "B", "A", "Z" };
+    spec.alpha_channel = 3;
+    spec.z_channel = 4;
+    return spec;
+}
+
 std::string two_depth_scene(const std::string& dir)
 {
-    ImageSpec spec(20, 20, 5, TypeFloat);
-    spec.channelnames = { "R", "G", "B", "A", "Z" };
-    ImageBuf image(spec);
+    ImageBuf image(rgbaz_spec(20, 20));
     ImageBufAlgo::fill(image, { 0.5f, 0.5f, 0.5f, 1.0f, 2.0f });
     ImageBufAlgo::fill(image, { 0.2f, 0.4f, 0.8f, 1.0f, 6.0f }, ROI(10, 20, 0, 20));
     const std::string path = dir + "/two_depths.exr";

@@ -86,6 +86,9 @@ int run(const std::string& command, std::string& output);
 /// { "focal", "50" }.
 using Settings = std::vector<std::pair<std::string, std::string>>;
 
+/// The spec of a flat render: float R, G, B, A and Z.
+OIIO::ImageSpec rgbaz_spec(int width, int height);
+
 /// A 20x20 RGBA+Z render in `dir`: grey at 2 m on the left half, blue at
 /// 6 m on the right; its path.
 std::string two_depth_scene(const std::string& dir);

@@ -326,8 +326,9 @@ def render(shot: _ShotArg, frame: Optional[int] = None, crop: bool = False) -> n
 
     Returns float32 pixels, height x width x 4 (premultiplied R,G,B,A in the
     output colour space; a fifth channel with aov="confidence", the share of
-    each pixel's light from rebuilt hidden surfaces) over the result's data
-    window, or with crop=True
+    each pixel's light from rebuilt hidden surfaces, or with aov="coc", the
+    signed CoC in pixels of the front-most layer reaching it) over the
+    result's data window, or with crop=True
     over the display window (black outside the data). frame=None renders
     the shot's first frame. The pixels are those defocus writes, before
     conversion to the output's pixel type (e.g. half).
