@@ -4,10 +4,12 @@
 #include <catch2/catch.hpp>
 
 #include <OpenImageIO/deepdata.h>
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 
 #include <defocus/composite/holdout.h>
+#include <defocus/io/frames.h>
 #include <defocus/optics/camera.h>
 
 #include "test_support.h"
@@ -102,6 +104,28 @@ TEST_CASE("a deep card in front holds out the blurred wall behind it, its spread
     Settings behind = camera;
     behind.push_back({ "holdout", card(dir, 8.0f, 1.0f) });
     CHECK(worst(plain, 1.0f, rendered(scene, behind), 0, width) == 0.0f);
+}
+
+TEST_CASE("a holdout sequence is one of the shot's: a missing frame of it is missing, or held")
+{
+    const std::string dir = scratch_dir("holdout_sequence");
+    const std::string scene = wall(dir);
+    REQUIRE(Filesystem::copy(card(dir, 2.0f, 1.0f), dir + "/card.0001.exr"));
+    const Settings settings = { { "focal", "50" }, { "fstop", "0.417" }, { "focus", "0.5" },
+                                { "frames", "1-2" }, { "holdout", dir + "/card.#.exr" } };
+    Shot shot = shot_with({ scene }, settings);
+    std::vector<int> frames;
+    std::string error;
+    CHECK_FALSE(shot_frames(shot, frames, error));
+    CHECK_THAT(error, Catch::Contains("card.0002.exr: no such file"));
+    // Held: frame 2 is cut by frame 1's holdout.
+    Settings held = settings;
+    held.push_back({ "missing-frames", "hold" });
+    REQUIRE(shot_frames(shot_with({ scene }, held), frames, error));
+    CHECK(frames == std::vector<int> { 1, 2 });
+    const ImageBuf first = rendered(scene, held, 1), second = rendered(scene, held, 2);
+    CHECK(ImageBufAlgo::compare(first, second, 0.0f, 0.0f).maxerror == 0.0);
+    CHECK(worst(first, 0.0f, first, 0, width / 2) == 0.0f);  // cut: nothing behind the card
 }
 
 TEST_CASE("a holdout's volume samples are cut where the depth range splits them")

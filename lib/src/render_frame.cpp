@@ -276,7 +276,8 @@ bool read_holdout(const Shot& shot, int frame, const ImageSpec& scene, DeepImage
     options.depth_scale  = shot.read.depth_scale;
     options.memory_limit = shot.read.memory_limit;
     Scene read;
-    if (!read_scene({ frame_path(shot.holdout, frame) }, options, read, error))
+    if (!read_scene({ frame_path(shot.holdout, source_frame(shot, frame)) }, options, read,
+                    error))
         return false;
     const ImageSpec& h = read.spec;
     if (h.full_x != scene.full_x || h.full_y != scene.full_y || h.full_width != scene.full_width

@@ -381,8 +381,9 @@ std::vector<std::string> sequence_files(const Shot& shot)
     for (const std::string& file : shot.inputs)
         if (is_frame_pattern(file))
             patterns.push_back(file);
-    if (is_frame_pattern(shot.read.depth))
-        patterns.push_back(shot.read.depth);
+    for (const std::string* file : { &shot.read.depth, &shot.holdout })
+        if (is_frame_pattern(*file))
+            patterns.push_back(*file);
     return patterns;
 }
 

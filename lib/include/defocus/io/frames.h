@@ -26,8 +26,8 @@ std::vector<std::string> frame_inputs(const Shot& shot, int frame);
 /// frame's source_frame().
 ReadOptions frame_read_options(const Shot& shot, int frame);
 
-/// The frame patterns a shot reads: its inputs and depth file that are
-/// patterns.
+/// The frame patterns a shot reads: its inputs, depth file and holdout
+/// that are patterns.
 std::vector<std::string> sequence_files(const Shot& shot);
 
 /// The frame whose input files `frame` reads: itself, unless they are
