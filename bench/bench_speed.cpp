@@ -10,7 +10,8 @@
 // the read stage against a plain OpenEXR decode; whole frames of the garden
 // scene and the 4K example (`defocus` as a process) and their peak memory;
 // the 4K example flattened into one RGBA+Z image: its slice stage, and its
-// whole frame against the layered one's;
+// whole frame against the layered one's; the 4K example written deep
+// against its flat output;
 // reading large scene files (a million keyframes, ten thousand inputs, a
 // frame list of huge steps, a million frames checked on disk).
 #include <sys/resource.h>
@@ -444,6 +445,9 @@ int main(int argc, const char* argv[])
             f.push_back({ name, format("{} {} -o {}/4k.exr {} --compression none -q",
                                        DEFOCUS_BIN, arg_quote(file), arg_quote(scratch),
                                        example_camera) });
+        f.push_back({ "4K deep out", format("{} {} -o {}/4k.exr {} --compression none --deep -q",
+                                            DEFOCUS_BIN, arg_quote(scene4k), arg_quote(scratch),
+                                            example_camera) });
         return f;
     }();
     for (const auto& [name, command] : frames)
@@ -606,6 +610,10 @@ int main(int argc, const char* argv[])
                 median["frame 4K flat"] / median["frame 4K example"], median["slice 4K flat"]);
     std::printf("  4K frame's layers as float RGBA: %.0f MB (target: peak at most twice that)\n",
                 4.0 * 4096 * 2160 * 16 * 1e-6);
+    std::printf("  4K example written deep (--deep): %.2fx the time and %.2fx the peak memory "
+                "of its flat output\n",
+                median["frame 4K deep out"] / median["frame 4K example"],
+                peak["4K deep out"] / peak["4K example"]);
     std::printf("\nlens effects, whole frames of %s (%s)\n",
                 have_garden ? "the garden" : "a 1280x720 example scene", effects_camera.c_str());
     const double plain_disc = median["effect plain disc"];

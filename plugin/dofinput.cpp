@@ -4,10 +4,13 @@
 // render_frame, as the defocus command's render service does (run_shot.h),
 // and later reads reuse it.
 
+#include <algorithm>
+#include <cstring>
 #include <map>
 #include <mutex>
 #include <vector>
 
+#include <OpenImageIO/deepdata.h>
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
@@ -54,8 +57,11 @@ public:
     }
     bool read_native_scanlines(int subimage, int miplevel, int ybegin, int yend, int z,
                                void* data) override;
+    bool read_native_deep_scanlines(int subimage, int miplevel, int ybegin, int yend, int z,
+                                    int chbegin, int chend, DeepData& deepdata) override;
 
 private:
+    bool check_rows(int subimage, int miplevel, int ybegin, int yend);
     bool apply_hints(const ImageSpec& config, bool& frame_given, std::string& error);
     bool render(std::string& error);
     bool render_once();
@@ -67,7 +73,9 @@ private:
     std::mutex m_render_mutex;
     bool m_rendered = false;
     std::string m_render_error;
-    ImageBuf m_pixels;  ///< the frame, in the spec's window and pixel type
+    /// The frame, in the spec's window and pixel type (deep, for a deep
+    /// result).
+    ImageBuf m_pixels;
     std::vector<defocus::FileStamp> m_inputs;  ///< the files the frame reads, as open() found them
 };
 
@@ -87,6 +95,60 @@ void warn_if_reopened(const std::string& name, int frame)
                        "with --iconfig dof:frame {{FRAME_NUMBER}}\n",
                        name, frame,
                        name.substr(0, name.size() - 4) + ".#" + name.substr(name.size() - 4));
+}
+
+/// Copies the deep pixels of `src` into `dst` (deep, in a window that
+/// holds src's): the pixels src does not cover keep no samples.
+void copy_deep_pixels(ImageBuf& dst, const ImageBuf& src)
+{
+    const ROI roi = roi_intersection(dst.roi(), src.roi());
+    DeepData& to = *dst.deepdata();
+    const DeepData& from = *src.deepdata();
+    // Sized first: DeepData moves every later pixel's samples each time
+    // one pixel grows.
+    std::vector<unsigned int> counts(static_cast<size_t>(to.pixels()), 0);
+    for (int y = roi.ybegin; y < roi.yend; ++y)
+        for (int x = roi.xbegin; x < roi.xend; ++x)
+            counts[size_t(dst.pixelindex(x, y, 0))] = from.samples(src.pixelindex(x, y, 0));
+    to.set_all_samples(counts);
+    for (int y = roi.ybegin; y < roi.yend; ++y)
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const int64_t p = dst.pixelindex(x, y, 0);
+            if (counts[size_t(p)] > 0)
+                std::memcpy(to.data_ptr(p, 0, 0), from.data_ptr(src.pixelindex(x, y, 0), 0, 0),
+                            counts[size_t(p)] * from.samplesize());
+        }
+}
+
+/// Rows [ybegin, yend) of channels [chbegin, chend) of `image` (a frame of
+/// `spec`'s window), as a reader hands deep rows to its host.
+void deep_rows(const DeepData& image, const ImageSpec& spec, int ybegin, int yend, int chbegin,
+               int chend, DeepData& rows)
+{
+    std::vector<TypeDesc> types;
+    std::vector<std::string> names;
+    for (int c = chbegin; c < chend; ++c) {
+        types.push_back(spec.channelformat(c));
+        names.push_back(spec.channelnames[c]);
+    }
+    const int64_t first = int64_t(ybegin - spec.y) * spec.width;
+    const int64_t npixels = int64_t(yend - ybegin) * spec.width;
+    rows.init(npixels, chend - chbegin, types, names);
+    std::vector<unsigned int> counts(static_cast<size_t>(npixels));
+    for (int64_t p = 0; p < npixels; ++p)
+        counts[size_t(p)] = unsigned(image.samples(first + p));
+    rows.set_all_samples(counts);
+    const bool whole = chbegin == 0 && chend == image.channels();
+    for (int64_t p = 0; p < npixels; ++p) {
+        if (whole && counts[size_t(p)] > 0) {
+            std::memcpy(rows.data_ptr(p, 0, 0), image.data_ptr(first + p, 0, 0),
+                        counts[size_t(p)] * image.samplesize());
+            continue;
+        }
+        for (int s = 0; s < int(counts[size_t(p)]) && !whole; ++s)
+            for (int c = chbegin; c < chend; ++c)
+                rows.set_deep_value(p, c - chbegin, s, image.deep_value(first + p, c, s));
+    }
 }
 
 bool DofInput::valid_file(const std::string& filename) const
@@ -209,6 +271,10 @@ bool DofInput::render(std::string& error)
         // spec's window is larger (a grown window is the largest the blur
         // could make), the rest is zero.
         m_pixels.reset(m_spec);
+        if (m_spec.deep) {
+            copy_deep_pixels(m_pixels, frame.image);
+            return true;
+        }
         if (m_pixels.copy_pixels(frame.image))
             return true;
         error = m_pixels.geterror();
@@ -234,8 +300,7 @@ bool DofInput::render_once()
     return true;
 }
 
-bool DofInput::read_native_scanlines(int subimage, int miplevel, int ybegin, int yend,
-                                     int /*z*/, void* data)
+bool DofInput::check_rows(int subimage, int miplevel, int ybegin, int yend)
 {
     if (subimage != 0 || miplevel != 0) {
         errorfmt("{}: a .dof scene has one image", m_filename);
@@ -246,10 +311,35 @@ bool DofInput::read_native_scanlines(int subimage, int miplevel, int ybegin, int
                  yend - 1, m_spec.y, m_spec.y + m_spec.height - 1);
         return false;
     }
-    if (!render_once())
+    return render_once();
+}
+
+bool DofInput::read_native_scanlines(int subimage, int miplevel, int ybegin, int yend,
+                                     int /*z*/, void* data)
+{
+    if (!check_rows(subimage, miplevel, ybegin, yend))
         return false;
+    if (m_spec.deep) {
+        errorfmt("{}: the scene's result is deep: read it as deep data", m_filename);
+        return false;
+    }
     const ROI rows(m_spec.x, m_spec.x + m_spec.width, ybegin, yend, 0, 1, 0, m_spec.nchannels);
     return m_pixels.get_pixels(rows, m_spec.format, data);
+}
+
+bool DofInput::read_native_deep_scanlines(int subimage, int miplevel, int ybegin, int yend,
+                                          int /*z*/, int chbegin, int chend, DeepData& deepdata)
+{
+    if (!check_rows(subimage, miplevel, ybegin, yend))
+        return false;
+    if (!m_spec.deep) {
+        errorfmt("{}: the scene's result is not deep", m_filename);
+        return false;
+    }
+    chend = std::clamp(chend, 0, m_spec.nchannels);
+    chbegin = std::clamp(chbegin, 0, chend);
+    deep_rows(*m_pixels.deepdata(), m_spec, ybegin, yend, chbegin, chend, deepdata);
+    return true;
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include "arrays.h"
 
+#include "python_errors.h"
+
 namespace defocus_python {
 
 using namespace defocus;
@@ -40,6 +42,8 @@ ImageBuf buffer(const py::array_t<float, py::array::c_style>& pixels,
 py::tuple image_result(const ImageBuf& image, bool crop)
 {
     const ImageSpec& spec = image.spec();
+    check(!spec.deep, "deep=True makes a deep image, which no array holds: write it with "
+                      "render_to_file() or render_sequence()");
     ROI roi = image.roi();
     if (crop)
         roi = ROI(spec.full_x, spec.full_x + spec.full_width, spec.full_y,

@@ -182,6 +182,17 @@ TEST_CASE("every bad input ends in a one-line error and no output")
           "unknown png compression 'piz'" },
         { example_scene() + " -o " + out + camera + " --preview " + dir + "/./out.exr",
           "-o and --preview name the same file" },
+        // What a deep result cannot hold.
+        { example_scene() + " -o " + dir + "/out.tif" + camera + " --deep",
+          "out.tif: a deep result is written as OpenEXR (.exr), not tiff" },
+        { example_scene() + " -o " + out + camera + " --deep --compression piz",
+          "out.exr: deep OpenEXR takes no compression 'piz'" },
+        { example_scene() + " -o " + out + camera + " --deep --aov coc",
+          "--aov cannot be written with --deep" },
+        { example_scene() + " -o " + out + camera + " --deep --lateral-ca 0.01",
+          "--lateral-ca cannot be written with --deep" },
+        { example_scene() + " -o " + out + camera + " --deep --output focusmap",
+          "--deep writes the defocused image, not --output focusmap" },
         // Conflicting or unused options.
         { example_scene() + " -o " + out + camera + " --crop --grow",
           "--crop and --grow contradict each other" },

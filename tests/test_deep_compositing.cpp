@@ -22,16 +22,17 @@ namespace {
 
 constexpr int width = 200, height = 100;
 
-/// A striped wall at 5 m over the right half, nothing on the left.
-std::string wall(const std::string& dir)
+/// A striped wall at 5 m from column `left` on, nothing left of it (by
+/// default, over the right half).
+std::string wall(const std::string& dir, int left = width / 2)
 {
     ImageBuf image(rgbaz_spec(width, height));
     ImageBufAlgo::fill(image, { 0.0f, 0.0f, 0.0f, 0.0f, 1e9f });
-    for (int x = width / 2; x < width; x += 20)
+    for (int x = left; x < width; x += 20)
         ImageBufAlgo::fill(image, { 1.0f, 0.8f, 0.6f, 1.0f, 5.0f }, ROI(x, x + 10, 0, height));
-    for (int x = width / 2 + 10; x < width; x += 20)
+    for (int x = left + 10; x < width; x += 20)
         ImageBufAlgo::fill(image, { 0.1f, 0.2f, 0.3f, 1.0f, 5.0f }, ROI(x, x + 10, 0, height));
-    const std::string path = dir + "/wall.exr";
+    const std::string path = dir + "/wall" + std::to_string(left) + ".exr";
     REQUIRE(image.write(path));
     return path;
 }
@@ -180,4 +181,123 @@ TEST_CASE("the CoC AOV is the signed CoC of the front-most layer that reaches ea
     const ImageBuf colour = rendered(scene, plain);
     CHECK(ImageBufAlgo::compare(ImageBufAlgo::channels(out, 4, {}), colour, 0.0f, 0.0f).maxerror
           == 0.0);
+}
+
+namespace {
+
+/// Whether every pixel's samples of a deep result run front to back
+/// without overlapping (Z <= ZBack <= the next Z), with finite values and
+/// alpha within [0, 1].
+bool sorted_and_disjoint(const ImageBuf& deep)
+{
+    const DeepData& data = *deep.deepdata();
+    const int z = deep.spec().channelindex("Z"), zback = deep.spec().channelindex("ZBack");
+    for (int64_t p = 0; p < data.pixels(); ++p) {
+        float back = 0.0f;
+        for (int s = 0; s < data.samples(p); ++s) {
+            for (int c = 0; c < data.channels(); ++c)
+                if (!std::isfinite(data.deep_value(p, c, s)))
+                    return false;
+            const float a = data.deep_value(p, 3, s);
+            if (a < 0.0f || a > 1.0f || data.deep_value(p, z, s) < back
+                || data.deep_value(p, zback, s) < data.deep_value(p, z, s))
+                return false;
+            back = data.deep_value(p, zback, s);
+        }
+    }
+    return true;
+}
+
+/// The largest difference between two flat images over their union.
+float largest_difference(const ImageBuf& a, const ImageBuf& b)
+{
+    return float(ImageBufAlgo::compare(a, b, 0.0f, 0.0f).maxerror);
+}
+
+/// The RGBA of a deep result flattened.
+ImageBuf flattened(const ImageBuf& deep)
+{
+    return ImageBufAlgo::channels(ImageBufAlgo::flatten(deep), 4, {});
+}
+
+}  // namespace
+
+TEST_CASE("a deep result's samples are sorted and disjoint, and flatten to the flat result")
+{
+    // A bar at 1 m and a half-transparent square at 2 m in front of a
+    // striped wall at 5 m, focus at 3 m: three depth layers, each blurred.
+    const std::string dir = scratch_dir("deep_output");
+    ImageBuf image(rgbaz_spec(width, height));
+    ImageBufAlgo::fill(image, { 0.2f, 0.3f, 0.4f, 1.0f, 5.0f });
+    for (int x = 0; x < width; x += 20)
+        ImageBufAlgo::fill(image, { 2.0f, 1.6f, 1.2f, 1.0f, 5.0f }, ROI(x, x + 10, 0, height));
+    ImageBufAlgo::fill(image, { 0.5f, 0.1f, 0.1f, 0.5f, 2.0f }, ROI(120, 170, 20, 70));
+    ImageBufAlgo::fill(image, { 0.9f, 0.9f, 0.9f, 1.0f, 1.0f }, ROI(60, 80, 0, height));
+    const std::string scene = dir + "/bars.exr";
+    REQUIRE(image.write(scene));
+    const Settings camera = { { "focal", "50" }, { "fstop", "1" }, { "focus", "3" },
+                              { "pixel-type", "float" } };
+    const std::vector<Settings> variants = {
+        {}, { { "window", "grown" } }, { { "aperture", "polygon" }, { "blades", "6" } },
+        { { "cateye", "0.5" } }, { { "layers", "2" } },
+    };
+    for (const Settings& variant : variants) {
+        Settings flat = camera;
+        flat.insert(flat.end(), variant.begin(), variant.end());
+        INFO(flat.back().first << " " << flat.back().second);
+        Settings deep = flat;
+        deep.push_back({ "deep", "on" });
+        const ImageBuf out = rendered(scene, deep);
+        REQUIRE(out.deep());
+        CHECK(out.spec().channelnames
+              == std::vector<std::string> { "R", "G", "B", "A", "Z", "ZBack" });
+        CHECK(sorted_and_disjoint(out));
+        const ImageBuf expected = rendered(scene, flat);
+        ROI window = out.roi();
+        window.chend = 4;
+        CHECK(window == expected.roi());
+        CHECK(largest_difference(flattened(out), expected) < 1e-5f);
+    }
+}
+
+TEST_CASE("merged deep results of two elements are the two elements defocused together")
+{
+    // A deep card at 2 m over the left half and a striped wall at 5 m
+    // behind all of it, each defocused alone into a deep result, then
+    // merged: the same as the two merged first (nothing culled) and
+    // defocused as one deep input, whose layers are the same two.
+    const std::string dir = scratch_dir("deep_merge");
+    ImageBuf wall_flat(wall(dir, 0));
+    REQUIRE(wall_flat.read());
+    // With ZBack, as the card has it.
+    const ImageBuf wall_rgbazz = ImageBufAlgo::channels(
+        wall_flat, 6, { 0, 1, 2, 3, 4, 4 }, {}, { "R", "G", "B", "A", "Z", "ZBack" });
+    ImageBuf wall_deep;
+    REQUIRE(ImageBufAlgo::deepen(wall_deep, wall_rgbazz));
+    const std::string wall_file = dir + "/wall_deep.exr";
+    REQUIRE(wall_deep.write(wall_file));
+    const std::string card_file = card(dir, 2.0f, 1.0f);
+    ImageBuf card_deep(card_file);
+    REQUIRE(card_deep.read());
+    ImageBuf both;
+    REQUIRE(ImageBufAlgo::deep_merge(both, card_deep, wall_deep, false));
+    const std::string both_file = dir + "/both.exr";
+    REQUIRE(both.write(both_file));
+
+    // Focus between them: the card's CoC is -18.5 px, the wall's 14, so
+    // that the deep input is cut into the same two layers. (Focused
+    // beyond both, their CoCs differ by less than a layer holds, and one
+    // layer would spread them together.)
+    const Settings camera = { { "focal", "100" }, { "fstop", "0.5" }, { "focus", "3" },
+                              { "pixel-type", "float" }, { "window", "display" } };
+    Settings deep = camera;
+    deep.push_back({ "deep", "on" });
+    const ImageBuf card_out = rendered(card_file, deep), wall_out = rendered(wall_file, deep);
+    ImageBuf merged;
+    REQUIRE(ImageBufAlgo::deep_merge(merged, card_out, wall_out));
+    CHECK(sorted_and_disjoint(merged));
+    const ImageBuf together = rendered(both_file, camera);
+    // The card's blur reaches over the wall, and the wall's behind the card.
+    CHECK(largest_difference(flattened(merged), together) < 1e-5f);
+    CHECK(largest_difference(flattened(card_out), together) > 0.1f);
 }

@@ -104,7 +104,8 @@ TEST_CASE("oiiotool opens a .dof as the image the defocus command renders from i
     require_identical(hinted, cli_render(dof, "--focus 1.25 --fstop 2"));
 }
 
-TEST_CASE("AOVs and a holdout reach oiiotool through the plugin as through the command")
+TEST_CASE("AOVs, a holdout and a deep result reach oiiotool through the plugin as through the "
+          "command")
 {
     const std::string dof = scene_dof();
     // The scene held out by itself: each layer cut by what stands in front.
@@ -117,6 +118,7 @@ TEST_CASE("AOVs and a holdout reach oiiotool through the plugin as through the c
         { "dof:aov confidence", "--aov confidence" },
         { "dof:aov coc", "--aov coc" },
         { "dof:holdout " + scene, "--holdout " + scene },
+        { "dof:deep on", "--deep" },
     };
     int count = 0;
     for (const auto& [hint, option] : cases) {
@@ -131,6 +133,7 @@ TEST_CASE("AOVs and a holdout reach oiiotool through the plugin as through the c
             REQUIRE(spec.nchannels == 5);
             CHECK(spec.channelnames[4] == Strutil::splits(hint, " ")[1]);
         }
+        CHECK(spec.deep == Strutil::contains(hint, "deep"));
         require_identical(out, cli_render(dof, option));
     }
 }

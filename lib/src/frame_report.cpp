@@ -71,14 +71,19 @@ bool preview_image(const FrameResult& frame, const std::string& display, const s
     const ColorManagement& c = *frame.color.config;
     const std::string shown_on = display.empty() ? c.default_display() : display;
     const std::string seen_as = view.empty() ? c.default_view(shown_on) : view;
-    const ImageSpec& spec = frame.image.spec();
+    // A deep result is shown as it flattens.
+    const ImageBuf flat = frame.image.deep() ? ImageBufAlgo::flatten(frame.image) : ImageBuf();
+    const ImageBuf& image = frame.image.deep() ? flat : frame.image;
+    const ImageSpec& spec = image.spec();
     ImageBuf framed;
-    ImageBufAlgo::crop(framed, frame.image,
+    ImageBufAlgo::crop(framed, image,
                        ROI(spec.full_x, spec.full_x + spec.full_width, spec.full_y,
                            spec.full_y + spec.full_height, 0, 1, 0, spec.nchannels));
     // Premultiplied colour over black is the colour itself, without alpha.
     if (!keep_alpha && spec.nchannels > 3)
         framed = ImageBufAlgo::channels(framed, 3, { 0, 1, 2 });
+    else if (frame.image.deep())  // without its depths
+        framed = ImageBufAlgo::channels(framed, 4, { 0, 1, 2, 3 });
     return c.display(preview, framed, frame.color.output, shown_on, seen_as, error);
 }
 

@@ -7,10 +7,12 @@
 #include <defocus/color/primaries.h>
 #include <defocus/composite/coc_aov.h>
 #include <defocus/composite/confidence.h>
+#include <defocus/composite/deep_result.h>
 #include <defocus/composite/holdout.h>
 #include <defocus/focus/focus_at.h>
 #include <defocus/focus/focus_map.h>
 #include <defocus/io/frames.h>
+#include <defocus/io/image_output.h>
 #include <defocus/io/scene_io.h>
 #include <defocus/layers/edges.h>
 #include <defocus/layers/layering.h>
@@ -34,6 +36,13 @@ TypeDesc output_pixel_type(const Shot& shot, const ImageSpec& input)
     return r >= 0 ? input.channelformat(r) : input.format;
 }
 
+/// The type of a deep result's colour and alpha: half or float, as
+/// output_pixel_type() says.
+TypeDesc deep_color_type(const Shot& shot, const ImageSpec& input)
+{
+    return output_pixel_type(shot, input) == TypeHalf ? TypeHalf : TypeFloat;
+}
+
 /// One line of an image's history for this render: the version, the files
 /// the frame reads and the settings given, as defocus's options.
 std::string history_line(const Shot& shot, int frame)
@@ -48,6 +57,16 @@ std::string history_line(const Shot& shot, int frame)
                                                                             : "'" + value + "'");
         }
     return line;
+}
+
+/// The compression a deep result is written with: the shot's, else the
+/// input's where OpenEXR's deep files take it, else zips.
+std::string deep_compression(const Shot& shot, const ImageSpec& input)
+{
+    if (!shot.compression.empty())
+        return shot.compression;
+    const std::string inherited = input.get_string_attribute("compression");
+    return deep_compressions().count(inherited) ? inherited : "zips";
 }
 
 /// The metadata of a result: the input's (less what describes one part),
@@ -65,7 +84,9 @@ void describe_output(ImageSpec& spec, const ImageSpec& input, const Shot& shot,
         spec.attribute("oiio:ColorSpace", color.output);
         record_color_space(spec, *color.config, color.output);
     }
-    if (!shot.compression.empty())
+    if (shot.deep)
+        spec.attribute("compression", deep_compression(shot, input));
+    else if (!shot.compression.empty())
         spec.attribute("compression", shot.compression);
     record_camera(spec, camera);
     const Aperture& aperture = shot.spread.aperture;
@@ -330,6 +351,28 @@ bool aov_channel(ImageBuf& aov, const ImageBuf& image, const LayeredScene& layer
     return true;
 }
 
+/// finish_frame() of a deep result, from the spread on (see defocus_deep).
+bool deep_frame(const Shot& shot, int frame, const ApertureImages& images,
+                LayeredScene& layered, FrameResult& out, std::string& error, int nthreads)
+{
+    Timer timer;
+    SpreadTimings timings;
+    DeepImage deep;
+    if (!defocus_deep(deep, layered, out.camera, shot.spread, images, shot.window, error,
+                      &out.layers, &timings, nthreads))
+        return false;
+    out.timings.emplace_back("spread and composite", timings.spread);
+    timer.lap();
+    const ColorPlan& color = out.color;
+    if (color.config && !color.config->convert(deep, color.working, color.output, error, nthreads))
+        return false;
+    out.pixel_type = deep_color_type(shot, layered.spec);
+    out.image = deep_buffer(deep, layered.spec, out.pixel_type);
+    out.timings.emplace_back("colour out", timer.lap());
+    describe_output(out.image.specmod(), layered.spec, shot, out.camera, color, frame);
+    return true;
+}
+
 /// A frame from its prepared layers to the image to write. Errors do not
 /// name the source: the caller does.
 bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
@@ -367,6 +410,8 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
                                    ? mention("edge", "extend")
                                    : "the data window does not cover the blur's reach",
                                mention("edge", "black"));
+        if (shot.deep)
+            return deep_frame(shot, frame, images, layered, out, error, nthreads);
         SpreadTimings timings;
         if (!read_holdout(shot, frame, layered.spec, layered.holdout, error))
             return false;
@@ -446,7 +491,8 @@ bool frame_spec(const Shot& shot, int frame, const ShotAssets& assets, ImageSpec
                            format("a {}x{} result", window.width(), window.height()), bytes));
         return false;
     }
-    spec = result_spec(input, window, output_pixel_type(shot, input));
+    spec = shot.deep ? deep_result_spec(input, window, deep_color_type(shot, input))
+                     : result_spec(input, window, output_pixel_type(shot, input));
     if (shot.output == OutputKind::Image && shot.aov != Aov::None) {
         spec.nchannels += 1;
         spec.channelnames.push_back(aov_name(shot.aov));

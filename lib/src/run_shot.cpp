@@ -40,7 +40,7 @@ bool check_outputs(const Shot& shot, const RunRequest& request, const RunPlan& p
                    std::string& error)
 {
     for (size_t i = 0; i < plan.outputs.size(); ++i) {
-        if (!check_output(plan.outputs[i], shot.compression, error))
+        if (!check_output(plan.outputs[i], shot.compression, error, shot.deep))
             return false;
         for (size_t s = 0; s < request.sides.size(); ++s) {
             const std::vector<std::string>& files = plan.side_files[s];

@@ -417,6 +417,26 @@ def test_a_holdout_and_the_coc_aov_as_the_command_and_a_dof_give_them(example, t
     assert np.array_equal(defocus.render(tmp_path / "shot.dof"), theirs)
 
 
+def test_a_deep_result_is_written_as_the_command_and_a_dof_write_it(example, tmp_path):
+    shot = defocus.Shot(inputs=[example], deep=True, pixel_type="float", **CAMERA)
+    with pytest.raises(defocus.Error, match="deep=True makes a deep image"):
+        defocus.render(shot)
+    defocus.render_to_file(shot, tmp_path / "py.exr")
+    assert cli(example, "-o", tmp_path / "cli.exr", "--deep", "-d", "float",
+               *CAMERA_ARGS) == (0, "")
+    shot.save(tmp_path / "shot.dof")
+    defocus.render_to_file(tmp_path / "shot.dof", tmp_path / "dof.exr")
+    ours = oiio.ImageBuf(str(tmp_path / "py.exr"))
+    assert ours.deep and ours.spec().channelnames == ("R", "G", "B", "A", "Z", "ZBack")
+    for other in ("cli.exr", "dof.exr"):
+        theirs = oiio.ImageBuf(str(tmp_path / other))
+        assert oiio.ImageBufAlgo.compare(ours, theirs, 0, 0).maxerror == 0
+    # Flattened, it is the flat result.
+    flat = defocus.render(defocus.Shot(inputs=[example], pixel_type="float", **CAMERA))
+    flattened = oiio.ImageBufAlgo.flatten(ours).get_pixels(oiio.FLOAT)[..., :4]
+    assert np.abs(flattened - flat).max() < 1e-5
+
+
 @pytest.mark.parametrize("bad, message", [
     (lambda l: [(l[0][0].astype(np.float64), l[0][1])], r"rgba: dtype float64; expected float32"),
     (lambda l: [(l[0][0][..., :3], l[0][1])], r"rgba: shape \(64, 96, 3\); expected"),

@@ -242,18 +242,25 @@ struct LayerSpreads {
     std::vector<LayerPass> passes;
 };
 
-/// The back-most layer's pass, when it is spread in one pass in the
-/// engine: it lands on a black frame, so it is stored rather than
-/// composited, and only the frame beyond its reach is cleared first. Null
+/// A layer's pass that can land on a black frame: stored rather than
+/// composited, so that only the frame beyond its reach is cleared first.
+/// That is its only pass, when the engine spreads it unmagnified; null
 /// otherwise.
+const LayerPass* storable_pass(const LayerSpreads& layer)
+{
+    return layer.passes.size() == 1 && layer.passes[0].spread.engine
+                   && !layer.passes[0].channels.magnified
+               ? &layer.passes[0]
+               : nullptr;
+}
+
+/// The back-most layer's pass that lands on the black frame (see
+/// storable_pass), or null.
 const LayerPass* pass_onto_black(const std::vector<LayerSpreads>& layers)
 {
     for (const LayerSpreads& l : layers)
         if (!l.passes.empty())
-            return l.passes.size() == 1 && l.passes[0].spread.engine
-                           && !l.passes[0].channels.magnified
-                       ? &l.passes[0]
-                       : nullptr;
+            return storable_pass(l);
     return nullptr;
 }
 
@@ -332,10 +339,36 @@ void composite_layers(ImageBuf& frame, const LayeredScene& scene,
     }
 }
 
+/// Composites each layer's passes onto a black frame of its own over
+/// `window`, back to front, and hands it to `sink`, each layer's spreads
+/// freed once composited.
+bool composite_apart(const LayeredScene& scene, std::vector<LayerSpreads>& layers,
+                     const ImageSpec& frame_spec, const ROI& window, const ROI& reach,
+                     double lateral_ca, const Imath::V2d& centre, const LayerSink& sink,
+                     int nthreads)
+{
+    ImageBuf frame;
+    for (size_t i = 0; i < scene.layers.size(); ++i) {
+        if (layers[i].passes.empty())
+            continue;
+        const LayerPass* alone = storable_pass(layers[i]);
+        reset_zeroed_except(frame, frame_spec, alone ? alone->spread.engine->extent() : ROI(),
+                            nthreads);
+        for (LayerPass& p : layers[i].passes)
+            composite_pass(frame, p, &p == alone, scene.spec, window, reach, lateral_ca, centre,
+                           nthreads);
+        layers[i] = LayerSpreads();
+        if (!sink(i, frame))
+            return false;
+    }
+    return true;
+}
+
+/// defocus_layers(), or with `apart` spread_layers_apart().
 bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
                           const SpreadOptions& spread, const ApertureImages& images,
                           OutputWindow output_window, std::vector<LayerReport>* report,
-                          SpreadTimings& timings, int nthreads)
+                          SpreadTimings& timings, const LayerSink* apart, int nthreads)
 {
     Timer spread_timer;
     const CircleOfConfusion coc(camera, scene.spec.roi_full());
@@ -386,19 +419,25 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
                                                           : scene.spec.roi();
     window.chbegin = 0;
     window.chend = 4;
+    const ImageSpec frame_spec = result_spec(scene.spec, window, TypeFloat);
+    const ROI reach = magnified_reach(window, grown, centre, camera.lateral_ca);
+    if (report)
+        report->insert(report->end(), depths.begin(), depths.end());
+    if (apart) {
+        const bool done = composite_apart(scene, layers, frame_spec, window, reach,
+                                          camera.lateral_ca, centre, *apart, nthreads);
+        timings.spread += spread_timer();
+        return done;
+    }
     const LayerPass* back = pass_onto_black(layers);
     // dst's pixels, when it has them in the frame's layout, are reused
     // (swapped, not moved: dst stays valid for an error).
-    const ImageSpec frame_spec = result_spec(scene.spec, window, TypeFloat);
     ImageBuf frame;
     if (holds_pixels_like(dst, frame_spec))
         frame.swap(dst);
     reset_zeroed_except(frame, frame_spec, back ? back->spread.engine->extent() : ROI(), nthreads);
-    const ROI reach = magnified_reach(window, grown, centre, camera.lateral_ca);
     composite_layers(frame, scene, layers, back, window, reach, camera.lateral_ca, centre,
                      nthreads);
-    if (report)
-        report->insert(report->end(), depths.begin(), depths.end());
     timings.spread += spread_timer();
     dst = std::move(frame);
     return true;
@@ -419,21 +458,50 @@ ImageSpec result_spec(const ImageSpec& scene, const ROI& window, TypeDesc format
     return spec;
 }
 
-bool defocus_layers(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
+namespace {
+
+/// spread_and_composite(), with running out of memory reported in `dst`.
+bool spread_guarded(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
                     const SpreadOptions& spread, const ApertureImages& images,
                     OutputWindow window, std::vector<LayerReport>* report,
-                    SpreadTimings* timings, int nthreads)
+                    SpreadTimings* timings, const LayerSink* apart, int nthreads)
 {
     SpreadTimings unused;
     // Errors are reported, never thrown through the API; running out of
     // memory on a huge blur is the one exception the filters can raise.
     try {
         return spread_and_composite(dst, scene, camera, spread, images, window, report,
-                             timings ? *timings : unused, nthreads);
+                                    timings ? *timings : unused, apart, nthreads);
     } catch (const std::bad_alloc&) {
         dst.errorfmt("out of memory (the layers and the blur are too large)");
         return false;
     }
+}
+
+}  // namespace
+
+bool defocus_layers(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
+                    const SpreadOptions& spread, const ApertureImages& images,
+                    OutputWindow window, std::vector<LayerReport>* report,
+                    SpreadTimings* timings, int nthreads)
+{
+    return spread_guarded(dst, scene, camera, spread, images, window, report, timings, nullptr,
+                          nthreads);
+}
+
+bool spread_layers_apart(const LayeredScene& scene, const Camera& camera,
+                         const SpreadOptions& spread, const ApertureImages& images,
+                         OutputWindow window, const LayerSink& sink, std::string& error,
+                         std::vector<LayerReport>* report, SpreadTimings* timings,
+                         int nthreads)
+{
+    ImageBuf errors;
+    if (spread_guarded(errors, scene, camera, spread, images, window, report, timings, &sink,
+                       nthreads))
+        return true;
+    if (errors.has_error())
+        error = errors.geterror();
+    return false;
 }
 
 bool largest_grown_window(ROI& window, const ImageSpec& scene, const Camera& camera,

@@ -147,8 +147,14 @@ bool written_with_settings(const std::string& filename, const std::string& hash,
     return true;
 }
 
+const std::set<std::string>& deep_compressions()
+{
+    static const std::set<std::string> names = { "none", "rle", "zips", "zip" };
+    return names;
+}
+
 bool check_output(const std::string& filename, const std::string& compression,
-                  std::string& error)
+                  std::string& error, bool deep)
 {
     auto fail = [&](const std::string& why) {
         error = Strutil::fmt::format("{}: {}", filename, why);
@@ -169,10 +175,16 @@ bool check_output(const std::string& filename, const std::string& compression,
         return fail(ext.empty() ? "no extension to tell the image format (e.g. .exr)"
                                 : Strutil::fmt::format("no image format writes {} files", ext));
     }
+    const std::string format = out->format_name();
+    if (deep && !out->supports("deepdata"))
+        return fail(Strutil::fmt::format("a deep result is written as OpenEXR (.exr), not {}",
+                                         format));
     if (compression.empty())
         return true;
-    const std::string format = out->format_name();
     const std::string name = Strutil::lower(compression.substr(0, compression.find(':')));
+    if (deep && !deep_compressions().count(name))
+        return fail(Strutil::fmt::format("deep OpenEXR takes no compression '{}' (known: {})",
+                                         compression, Strutil::join(deep_compressions(), ", ")));
     const auto known = compressions().find(format);
     if (known == compressions().end())
         return fail(Strutil::fmt::format("{} files take no compression ('{}' given)", format,
@@ -281,7 +293,7 @@ bool write_image_atomic(const ImageBuf& image, const std::string& filename,
                         std::string& error)
 {
     ImageSpec spec = image.spec();
-    if (type != TypeUnknown) {
+    if (type != TypeUnknown && !spec.deep) {
         spec.set_format(type);
         spec.channelformats.clear();
     }
@@ -290,7 +302,7 @@ bool write_image_atomic(const ImageBuf& image, const std::string& filename,
     return write_atomic(filename, [&](ImageOutput& out, const std::string& tmp) {
         if (out.supports("displaywindow")) {
             ImageBuf half;
-            if (spec.format == TypeHalf && convert_to_half(image, half))
+            if (spec.format == TypeHalf && !spec.deep && convert_to_half(image, half))
                 return out.open(tmp, spec) && half.write(&out);
             return out.open(tmp, spec) && image.write(&out);
         }

@@ -448,6 +448,15 @@ std::vector<SettingRule> output_rules()
                  "drive other blurs from (default: none)" },
                [](auto& s) -> auto& { return s.aov; }, parse_aov, aov_name, "AOV",
                "none, confidence or coc"),
+        choice({ "deep", "output", "deep", K::Switch, G::Output, nullptr,
+                 "A deep OpenEXR result: each layer's defocused RGBA a sample at the "
+                 "layer's depths (Z, ZBack), to merge with other elements",
+                 { { "--deep", "on",
+                     "Write a deep OpenEXR: each layer's defocused R,G,B,A is one sample "
+                     "per pixel over the layer's depths (Z, ZBack), so that the result can "
+                     "be merged with other elements; flattening it gives the flat result" } } },
+               [](auto& s) -> auto& { return s.deep; }, parse_switch, switch_name, "switch",
+               "on or off"),
     };
 }
 

@@ -81,6 +81,33 @@ std::string shot_setting(const Shot& shot, const std::string& name)
     return rule ? rule->get(shot) : std::string();
 }
 
+namespace {
+
+/// Why a deep result cannot hold what `shot` asks for ("" when it can): a
+/// deep sample has one alpha and no other channel than colour and depth.
+std::string deep_refusal(const Shot& shot)
+{
+    const std::string deep = setting_label(shot, "deep");
+    if (shot.output == OutputKind::FocusMap)
+        return format("{} writes the defocused image, not {}", deep,
+                      mention("output", "focusmap"));
+    if (shot.aov != Aov::None)
+        return format("{} cannot be written with {}: a deep sample holds colour and depth only",
+                      setting_label(shot, "aov"), deep);
+    if (!shot.holdout.empty())
+        return format("{} cannot be written with {}: merge the deep result with the holdout "
+                      "instead",
+                      setting_label(shot, "holdout"), deep);
+    for (const char* name : { "axial-ca", "lateral-ca" })
+        if (shot_setting(shot, name) != shot_setting(Shot(), name))
+            return format("{} cannot be written with {}: each colour is occluded by its own "
+                          "spread there, and a deep sample has one alpha",
+                          setting_label(shot, name), deep);
+    return "";
+}
+
+}  // namespace
+
 bool check_shot(const Shot& shot, std::string& error)
 {
     auto fail = [&](std::string why) {
@@ -98,6 +125,8 @@ bool check_shot(const Shot& shot, std::string& error)
     if (shot.output == OutputKind::FocusMap && shot.aov != Aov::None)
         return fail(format("{} applies to the defocused image, not to {}",
                            setting_label(shot, "aov"), mention("output", "focusmap")));
+    if (shot.deep && !deep_refusal(shot).empty())
+        return fail(deep_refusal(shot));
     // Settings that shape only a polygon would do nothing to other apertures.
     if (aperture.shape != ApertureShape::Polygon)
         for (const char* polygon_only : { "blades", "roundness", "rotation" })

@@ -2,6 +2,7 @@
 // per-pixel CoC, composite back to front with "over" on the spread alpha.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -46,6 +47,25 @@ bool defocus_layers(OIIO::ImageBuf& dst, const LayeredScene& scene, const Camera
                     OutputWindow window = OutputWindow::Input,
                     std::vector<LayerReport>* report = nullptr,
                     SpreadTimings* timings = nullptr, int nthreads = 0);
+
+/// Receives one layer's spread, composited alone onto black: its index in
+/// the scene and float RGBA over the result's window. False stops the
+/// spreading, with the receiver's own error.
+using LayerSink = std::function<bool(size_t layer, const OIIO::ImageBuf& spread)>;
+
+/// defocus_layers() with each layer composited onto black alone and handed
+/// to `sink`, back to front, rather than over the others: every layer's
+/// window is the one defocus_layers() gives, and compositing the layers
+/// with "over" in that order gives its image, except for the scene's
+/// holdout, which is not applied, and chromatic aberration, whose colours
+/// each have their own alpha. Layers without pixels are left out.
+/// False with `error` where spreading fails (the sink's own errors are its
+/// own to keep).
+bool spread_layers_apart(const LayeredScene& scene, const Camera& camera,
+                         const SpreadOptions& spread, const ApertureImages& images,
+                         OutputWindow window, const LayerSink& sink, std::string& error,
+                         std::vector<LayerReport>* report = nullptr,
+                         SpreadTimings* timings = nullptr, int nthreads = 0);
 
 /// The largest window defocus_layers() gives with OutputWindow::Grown for
 /// layers within the data window of `scene` (a scene's spec), extended

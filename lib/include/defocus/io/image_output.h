@@ -2,6 +2,7 @@
 #pragma once
 
 #include <functional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -32,9 +33,14 @@ void remove_temporaries_on_interrupt(const char* program);
 /// Whether `filename` can be written as an image, checked before any work
 /// is done: its folder exists and is writable, a format writes its
 /// extension, and `compression` ("" for the default) is one that format
-/// knows. Otherwise `error` names the file and the problem.
+/// knows; for a `deep` image, the format is OpenEXR and the compression one
+/// of deep_compressions(). Otherwise `error` names the file and the
+/// problem.
 bool check_output(const std::string& filename, const std::string& compression,
-                  std::string& error);
+                  std::string& error, bool deep = false);
+
+/// The compressions OpenEXR writes deep images with.
+const std::set<std::string>& deep_compressions();
 
 /// Whether the files a run writes leave every file it reads alone: false
 /// when one of `written` is one of `read`, by file identity (device and
@@ -62,6 +68,7 @@ bool write_text_atomic(const std::string& filename, const std::string& text,
 /// `type` (TypeUnknown: the image's own pixel type) with `compression`
 /// ("" for the image's own or the format's default), atomically. A format
 /// without a display window (PNG, JPEG) gets the display window's pixels.
+/// A deep image keeps its own channel types.
 bool write_image_atomic(const OIIO::ImageBuf& image, const std::string& filename,
                         OIIO::TypeDesc type, const std::string& compression,
                         std::string& error);

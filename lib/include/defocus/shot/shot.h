@@ -73,6 +73,8 @@ struct Shot {
     std::string compression;                        ///< "" = the input's
     OutputWindow window = OutputWindow::Input;
     Aov aov = Aov::None;
+    /// A deep result: each layer's defocused RGBA a sample at its depth.
+    bool deep = false;
     EdgeMode edge = EdgeMode::Auto;  ///< beyond the data window, when the blur reaches it
 
     /// The settings given by set_shot_setting(), each with where (its
