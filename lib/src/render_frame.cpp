@@ -367,7 +367,7 @@ bool deep_frame(const Shot& shot, int frame, const ApertureImages& images,
     if (color.config && !color.config->convert(deep, color.working, color.output, error, nthreads))
         return false;
     out.pixel_type = deep_color_type(shot, layered.spec);
-    out.image = deep_buffer(deep, layered.spec, out.pixel_type);
+    out.image = deep_buffer(deep, layered.spec, out.pixel_type, nthreads);
     out.timings.emplace_back("colour out", timer.lap());
     describe_output(out.image.specmod(), layered.spec, shot, out.camera, color, frame);
     return true;

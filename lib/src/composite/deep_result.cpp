@@ -70,7 +70,7 @@ ROI unlit_window(const ImageSpec& scene, OutputWindow window)
 /// `reports`, cut where it would reach into the layer in front. Each
 /// spread is freed once its samples are placed.
 DeepImage deep_samples(std::vector<SparseSpread>& spreads, const ROI& roi,
-                       const std::vector<LayerReport>& reports)
+                       const std::vector<LayerReport>& reports, int nthreads)
 {
     DeepImage deep;
     deep.roi = roi;
@@ -91,10 +91,14 @@ DeepImage deep_samples(std::vector<SparseSpread>& spreads, const ROI& roi,
         const float z = std::max(float(report.depth_min), in_front);
         const float zback = std::max(float(report.depth_max), z);
         in_front = zback;
-        for (size_t i = 0; i < s->pixels.size(); ++i) {
-            const float* c = &s->rgba[4 * i];
-            deep.samples[next[s->pixels[i]]++] = { c[0], c[1], c[2], c[3], z, zback };
-        }
+        // A layer has one sample a pixel: its pixels' slots are its own.
+        parallel_for_chunked(int64_t(0), int64_t(s->pixels.size()), 0,
+                             [&](int64_t begin, int64_t end) {
+            for (int64_t i = begin; i < end; ++i) {
+                const float* c = &s->rgba[4 * size_t(i)];
+                deep.samples[next[s->pixels[size_t(i)]]++] = { c[0], c[1], c[2], c[3], z, zback };
+            }
+        }, paropt(nthreads));
         *s = SparseSpread();
     }
     return deep;
@@ -125,7 +129,7 @@ bool defocus_deep(DeepImage& dst, const LayeredScene& scene, const Camera& camer
     if (!spread_layers_apart(scene, camera, spread, images, window, keep, error, report, timings,
                              nthreads))
         return false;
-    dst = deep_samples(spreads, roi, scene.reports);
+    dst = deep_samples(spreads, roi, scene.reports, nthreads);
     return true;
 }
 
@@ -146,7 +150,8 @@ ImageSpec deep_result_spec(const ImageSpec& scene, const ROI& window, TypeDesc c
     return spec;
 }
 
-ImageBuf deep_buffer(const DeepImage& image, const ImageSpec& scene, TypeDesc color_type)
+ImageBuf deep_buffer(const DeepImage& image, const ImageSpec& scene, TypeDesc color_type,
+                     int nthreads)
 {
     ImageBuf buffer(deep_result_spec(scene, image.roi, color_type));
     DeepData& deep = *buffer.deepdata();
@@ -155,23 +160,37 @@ ImageBuf deep_buffer(const DeepImage& image, const ImageSpec& scene, TypeDesc co
     for (int64_t p = 0; p < npixels; ++p)
         counts[size_t(p)] = unsigned(image.offsets[p + 1] - image.offsets[p]);
     deep.set_all_samples(counts);
+    // A sample's channels lie at fixed offsets within its record, and a
+    // pixel's records follow each other.
+    const size_t record = deep.samplesize();
+    ptrdiff_t offset[6] = {};
+    const auto lit = std::find_if(counts.begin(), counts.end(), [](unsigned n) { return n > 0; });
+    if (lit != counts.end()) {
+        const int64_t p = lit - counts.begin();
+        for (int c = 0; c < 6; ++c)
+            offset[c] = static_cast<char*>(deep.data_ptr(p, c, 0))
+                        - static_cast<char*>(deep.data_ptr(p, 0, 0));
+    }
     const bool half_colour = color_type == TypeHalf;
-    parallel_for(int64_t(0), npixels, [&](int64_t p) {
-        for (uint64_t i = image.offsets[p]; i < image.offsets[p + 1]; ++i) {
-            const DeepSample& s = image.samples[i];
-            const int sample = int(i - image.offsets[p]);
-            const float colour[4] = { s.r, s.g, s.b, s.a };
-            for (int c = 0; c < 4; ++c) {
-                void* at = deep.data_ptr(p, c, sample);
-                if (half_colour)
-                    *static_cast<half*>(at) = half(colour[c]);
-                else
-                    *static_cast<float*>(at) = colour[c];
+    parallel_for_chunked(int64_t(0), npixels, 0, [&](int64_t begin, int64_t end) {
+        for (int64_t p = begin; p < end; ++p) {
+            if (counts[size_t(p)] == 0)
+                continue;
+            char* at = static_cast<char*>(deep.data_ptr(p, 0, 0));
+            for (uint64_t i = image.offsets[p]; i < image.offsets[p + 1]; ++i, at += record) {
+                const DeepSample& s = image.samples[i];
+                const float colour[4] = { s.r, s.g, s.b, s.a };
+                for (int c = 0; c < 4; ++c) {
+                    if (half_colour)
+                        *reinterpret_cast<half*>(at + offset[c]) = half(colour[c]);
+                    else
+                        *reinterpret_cast<float*>(at + offset[c]) = colour[c];
+                }
+                *reinterpret_cast<float*>(at + offset[4]) = s.z;
+                *reinterpret_cast<float*>(at + offset[5]) = s.zback;
             }
-            *static_cast<float*>(deep.data_ptr(p, 4, sample)) = s.z;
-            *static_cast<float*>(deep.data_ptr(p, 5, sample)) = s.zback;
         }
-    });
+    }, paropt(nthreads));
     return buffer;
 }
 

@@ -42,6 +42,6 @@ OIIO::ImageSpec deep_result_spec(const OIIO::ImageSpec& scene, const OIIO::ROI& 
 /// `image` as OpenImageIO's deep ImageBuf over its data window, to write
 /// or to hand to a host, with the spec deep_result_spec() gives.
 OIIO::ImageBuf deep_buffer(const DeepImage& image, const OIIO::ImageSpec& scene,
-                           OIIO::TypeDesc color_type);
+                           OIIO::TypeDesc color_type, int nthreads = 0);
 
 }  // namespace defocus
