@@ -54,12 +54,15 @@ bool coc_radius(ImageBuf& dst, const ImageBuf& depth,
 
 namespace {
 
-/// The channels one spread of a layer composites. Under chromatic
-/// aberration a layer is spread twice, green with its CoC and red and blue
-/// with theirs (CocChannel, axial), each pass composited on its own spread
-/// alpha, so that each colour is occluded as its own blur says; the
-/// frame's alpha is green's. A magnified pass (lateral) is kept whole and
-/// composited magnified, red and blue each by their own factor.
+/// The channels one spread of a layer composites as they are (`colour`,
+/// `alpha`), and whether it also composites red and blue magnified. Under
+/// axial chromatic aberration a layer is spread twice, green with its CoC
+/// and red and blue with theirs (CocChannel), each pass composited on its
+/// own spread alpha, so that each colour is occluded as its own blur says;
+/// the frame's alpha is green's. A magnified pass (lateral) is also kept
+/// whole, and its red and blue composited magnified, each by its own
+/// factor; without axial aberration, that is the one pass, its green and
+/// alpha composited as they are.
 struct ChannelPass {
     CocChannel coc;
     bool colour[3];
@@ -73,11 +76,14 @@ constexpr ChannelPass green_and_alpha { CocChannel::Green, { false, true, false 
 /// The passes a camera spreads each layer in.
 std::vector<ChannelPass> channel_passes(const Camera& camera)
 {
-    if (camera.axial_ca == 0.0 && camera.lateral_ca == 0.0)
-        return { all_channels };
-    const ChannelPass red_and_blue { camera.axial_ca != 0.0 ? CocChannel::RedBlue
-                                                            : CocChannel::Green,
-                                     { true, false, true }, false, camera.lateral_ca != 0.0 };
+    const bool lateral = camera.lateral_ca != 0.0;
+    if (camera.axial_ca == 0.0) {
+        ChannelPass one = lateral ? green_and_alpha : all_channels;
+        one.magnified = lateral;
+        return { one };
+    }
+    const ChannelPass red_and_blue { CocChannel::RedBlue,
+                                     { !lateral, false, !lateral }, false, lateral };
     return { green_and_alpha, red_and_blue };
 }
 
@@ -157,6 +163,70 @@ private:
     ImageBuf& m_image;
 };
 
+/// Keeps spread rows as an image, as Keep does, and composites what lies
+/// in the frame's window over it, as Over does, in the channels a pass
+/// composites as they are.
+class KeepAndOver final : public RowSink {
+public:
+    KeepAndOver(ImageBuf& image, ImageBuf& frame, const ChannelPass& pass)
+        : m_keep(image), m_over(frame, pass, false), m_window(frame.roi())
+    {
+    }
+    void row(int y, int x_begin, int x_end, const double* rgba) override
+    {
+        m_keep.row(y, x_begin, x_end, rgba);
+        const int begin = std::max(x_begin, m_window.xbegin),
+                  end = std::min(x_end, m_window.xend);
+        if (y >= m_window.ybegin && y < m_window.yend && begin < end)
+            m_over.row(y, begin, end, rgba + size_t(begin - x_begin) * 4);
+    }
+
+private:
+    Keep m_keep;
+    Over m_over;
+    const ROI m_window;
+};
+
+/// Magnification by m about o along one axis of the frame, for each output
+/// pixel i of a range: where it comes from (the source pixel below that
+/// and the fraction past it), and the source pixels whose light lands
+/// within a pixel of it, with the weight each lands with there. The same
+/// for every row (or column), so taken once.
+class MagnifiedAxis {
+public:
+    struct Pixel {
+        int from;
+        double fraction;
+        int first_source, sources;
+        size_t weights;  ///< where its sources' weights start
+    };
+
+    MagnifiedAxis(int begin, int end, double m, double o) : m_begin(begin)
+    {
+        // Pixel indices, centres at i + 1/2: where source pixel i lands,
+        // and where output pixel i comes from.
+        auto lands = [&](double i) { return o + (i + 0.5 - o) * m - 0.5; };
+        auto comes = [&](double i) { return o + (i + 0.5 - o) / m - 0.5; };
+        for (int i = begin; i < end; ++i) {
+            const double from = comes(i);
+            Pixel p { int(std::floor(from)), 0.0, int(std::ceil(comes(i - 1))), 0,
+                      m_weights.size() };
+            p.fraction = from - p.from;
+            p.sources = std::max(0, int(std::floor(comes(i + 1))) - p.first_source + 1);
+            for (int k = 0; k < p.sources; ++k)
+                m_weights.push_back(1.0 - std::abs(lands(p.first_source + k) - i));
+            m_pixels.push_back(p);
+        }
+    }
+    const Pixel& operator[](int i) const { return m_pixels[size_t(i - m_begin)]; }
+    double weight(const Pixel& p, int k) const { return m_weights[p.weights + size_t(k)]; }
+
+private:
+    int m_begin;
+    std::vector<Pixel> m_pixels;
+    std::vector<double> m_weights;
+};
+
 /// Composites colour channel `c` of a layer's spread (RGBA) over the frame
 /// magnified by `m` about `centre` (lateral chromatic aberration): the
 /// light of each spread pixel lands m times as far from the centre, split
@@ -171,38 +241,39 @@ void composite_magnified(ImageBuf& frame, const ImageBuf& spread, int c, double 
     Over over(frame, pass, false);
     const ROI out = frame.roi(), in = spread.roi();
     const FloatPixels pixels(spread, in);
-    auto at = [&](int x, int y, int ch) {
-        return x < in.xbegin || y < in.ybegin || x >= in.xend || y >= in.yend
-                   ? 0.0 : double(pixels(x, y)[ch]);
+    // Rows of the spread by index, null outside it, where everything is 0.
+    auto row_at = [&](int y) {
+        return y < in.ybegin || y >= in.yend ? nullptr : pixels(in.xbegin, y);
     };
-    // Pixel indices, centres at i + 1/2: where source pixel i lands, and
-    // where output pixel i comes from, along one axis.
-    auto lands = [&](double i, double o) { return o + (i + 0.5 - o) * m - 0.5; };
-    auto comes = [&](double i, double o) { return o + (i + 0.5 - o) / m - 0.5; };
+    const int stride = pixels.nchannels();
+    auto at = [&](const float* r, int x, int ch) {
+        return r && x >= in.xbegin && x < in.xend ? double(r[(x - in.xbegin) * stride + ch])
+                                                  : 0.0;
+    };
+    const MagnifiedAxis columns(out.xbegin, out.xend, m, centre.x),
+                        rows(out.ybegin, out.yend, m, centre.y);
     parallel_for(out.ybegin, out.yend, [&](int y) {
         std::vector<double> row(size_t(out.width()) * 4, 0.0);
-        const double sy = comes(y, centre.y);
-        const int y0 = int(std::floor(sy));
-        const double fy = sy - y0;
-        // The source rows whose light lands within a pixel of row y.
-        const int py_first = int(std::ceil(comes(y - 1, centre.y))),
-                  py_last = int(std::floor(comes(y + 1, centre.y)));
+        const MagnifiedAxis::Pixel& ry = rows[y];
+        const float *r0 = row_at(ry.from), *r1 = row_at(ry.from + 1);
+        std::vector<const float*> sources;
+        for (int ky = 0; ky < ry.sources; ++ky)
+            sources.push_back(row_at(ry.first_source + ky));
+        const double fy = ry.fraction;
         for (int x = out.xbegin; x < out.xend; ++x) {
-            const double sx = comes(x, centre.x);
-            const int x0 = int(std::floor(sx));
-            const double fx = sx - x0;
+            const MagnifiedAxis::Pixel& rx = columns[x];
+            const int x0 = rx.from;
+            const double fx = rx.fraction;
             double* p = &row[size_t(x - out.xbegin) * 4];
-            p[3] = (1 - fy) * ((1 - fx) * at(x0, y0, 3) + fx * at(x0 + 1, y0, 3))
-                   + fy * ((1 - fx) * at(x0, y0 + 1, 3) + fx * at(x0 + 1, y0 + 1, 3));
-            const int px_first = int(std::ceil(comes(x - 1, centre.x))),
-                      px_last = int(std::floor(comes(x + 1, centre.x)));
+            p[3] = (1 - fy) * ((1 - fx) * at(r0, x0, 3) + fx * at(r0, x0 + 1, 3))
+                   + fy * ((1 - fx) * at(r1, x0, 3) + fx * at(r1, x0 + 1, 3));
             double light = 0.0;
-            for (int py = py_first; py <= py_last; ++py) {
-                const double wy = 1.0 - std::abs(lands(py, centre.y) - y);
-                for (int px = px_first; px <= px_last && wy > 0.0; ++px) {
-                    const double wx = 1.0 - std::abs(lands(px, centre.x) - x);
+            for (int ky = 0; ky < ry.sources; ++ky) {
+                const double wy = rows.weight(ry, ky);
+                for (int kx = 0; kx < rx.sources && wy > 0.0; ++kx) {
+                    const double wx = columns.weight(rx, kx);
                     if (wx > 0.0)
-                        light += wx * wy * at(px, py, c);
+                        light += wx * wy * at(sources[size_t(ky)], rx.first_source + kx, c);
                 }
             }
             p[c] = light;
@@ -301,10 +372,16 @@ void composite_pass(ImageBuf& frame, LayerPass& p, bool onto_black, const ImageS
                     const Imath::V2d& centre, int nthreads)
 {
     if (p.channels.magnified) {
+        const ChannelPass& c = p.channels;
+        const bool direct = c.alpha || c.colour[0] || c.colour[1] || c.colour[2];
         if (p.spread.engine) {
             reset_zeroed(p.spread.apart, result_spec(scene, reach, TypeFloat), nthreads);
             Keep keep(p.spread.apart);
-            p.spread.engine->run(reach, keep, nthreads);
+            KeepAndOver keep_and_over(p.spread.apart, frame, c);
+            p.spread.engine->run(reach, direct ? static_cast<RowSink&>(keep_and_over) : keep,
+                                 nthreads);
+        } else if (direct) {
+            composite_image(frame, p.spread.apart, c, nthreads);
         }
         composite_magnified(frame, p.spread.apart, 0, 1.0 + lateral_ca, centre, nthreads);
         composite_magnified(frame, p.spread.apart, 2, 1.0 - lateral_ca, centre, nthreads);
