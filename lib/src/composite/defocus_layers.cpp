@@ -5,6 +5,7 @@
 #include <memory>
 #include <new>
 #include <type_traits>
+#include <utility>
 
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/parallel.h>
@@ -218,6 +219,14 @@ public:
             m_pixels.push_back(p);
         }
     }
+    /// The output pixels that the light and the coverage of source pixels
+    /// [begin, end) can reach, with a pixel to spare.
+    static std::pair<int, int> reached(int begin, int end, double m, double o)
+    {
+        auto lands = [&](double i) { return o + (i + 0.5 - o) * m - 0.5; };
+        return { int(std::floor(lands(begin))) - 2, int(std::ceil(lands(end))) + 2 };
+    }
+
     const Pixel& operator[](int i) const { return m_pixels[size_t(i - m_begin)]; }
     double weight(const Pixel& p, int k) const { return m_weights[p.weights + size_t(k)]; }
 
@@ -239,7 +248,13 @@ void composite_magnified(ImageBuf& frame, const ImageBuf& spread, int c, double 
     ChannelPass pass { CocChannel::Green, { false, false, false }, false };
     pass.colour[c] = true;
     Over over(frame, pass, false);
-    const ROI out = frame.roi(), in = spread.roi();
+    const ROI in = spread.roi();
+    // Beyond the spread's reach, "over" of nothing leaves the frame as it is.
+    const auto [x_begin, x_end] = MagnifiedAxis::reached(in.xbegin, in.xend, m, centre.x);
+    const auto [y_begin, y_end] = MagnifiedAxis::reached(in.ybegin, in.yend, m, centre.y);
+    const ROI out = roi_intersection(frame.roi(), ROI(x_begin, x_end, y_begin, y_end, 0, 1, 0, 4));
+    if (out.npixels() <= 0)
+        return;
     const FloatPixels pixels(spread, in);
     // Rows of the spread by index, null outside it, where everything is 0.
     auto row_at = [&](int y) {
@@ -259,24 +274,43 @@ void composite_magnified(ImageBuf& frame, const ImageBuf& spread, int c, double 
         std::vector<const float*> sources;
         for (int ky = 0; ky < ry.sources; ++ky)
             sources.push_back(row_at(ry.first_source + ky));
+        const bool rows_inside =
+            r0 && r1 && std::find(sources.begin(), sources.end(), nullptr) == sources.end();
         const double fy = ry.fraction;
-        for (int x = out.xbegin; x < out.xend; ++x) {
+        // `checked`: some of the pixel's sources may lie outside the spread.
+        auto magnify = [&](int x, auto checked) {
+            auto value = [&](const float* r, int sx, int ch) {
+                if constexpr (decltype(checked)::value)
+                    return at(r, sx, ch);
+                else
+                    return double(r[(sx - in.xbegin) * stride + ch]);
+            };
             const MagnifiedAxis::Pixel& rx = columns[x];
             const int x0 = rx.from;
             const double fx = rx.fraction;
             double* p = &row[size_t(x - out.xbegin) * 4];
-            p[3] = (1 - fy) * ((1 - fx) * at(r0, x0, 3) + fx * at(r0, x0 + 1, 3))
-                   + fy * ((1 - fx) * at(r1, x0, 3) + fx * at(r1, x0 + 1, 3));
+            p[3] = (1 - fy) * ((1 - fx) * value(r0, x0, 3) + fx * value(r0, x0 + 1, 3))
+                   + fy * ((1 - fx) * value(r1, x0, 3) + fx * value(r1, x0 + 1, 3));
             double light = 0.0;
             for (int ky = 0; ky < ry.sources; ++ky) {
                 const double wy = rows.weight(ry, ky);
                 for (int kx = 0; kx < rx.sources && wy > 0.0; ++kx) {
                     const double wx = columns.weight(rx, kx);
                     if (wx > 0.0)
-                        light += wx * wy * at(sources[size_t(ky)], rx.first_source + kx, c);
+                        light += wx * wy * value(sources[size_t(ky)], rx.first_source + kx, c);
                 }
             }
             p[c] = light;
+        };
+        for (int x = out.xbegin; x < out.xend; ++x) {
+            const MagnifiedAxis::Pixel& rx = columns[x];
+            const bool inside = rows_inside && rx.from >= in.xbegin && rx.from + 1 < in.xend
+                                && rx.first_source >= in.xbegin
+                                && rx.first_source + rx.sources <= in.xend;
+            if (inside)
+                magnify(x, std::false_type());
+            else
+                magnify(x, std::true_type());
         }
         over.row(y, out.xbegin, out.xend, row.data());
     }, by_rows(nthreads));
@@ -375,10 +409,16 @@ void composite_pass(ImageBuf& frame, LayerPass& p, bool onto_black, const ImageS
         const ChannelPass& c = p.channels;
         const bool direct = c.alpha || c.colour[0] || c.colour[1] || c.colour[2];
         if (p.spread.engine) {
-            reset_zeroed(p.spread.apart, result_spec(scene, reach, TypeFloat), nthreads);
+            // Kept where it lights anything: the rest is nothing to composite.
+            ROI lit = roi_intersection(reach, p.spread.engine->extent());
+            lit.chbegin = 0;
+            lit.chend = 4;
+            if (lit.npixels() <= 0)
+                return;
+            reset_zeroed(p.spread.apart, result_spec(scene, lit, TypeFloat), nthreads);
             Keep keep(p.spread.apart);
             KeepAndOver keep_and_over(p.spread.apart, frame, c);
-            p.spread.engine->run(reach, direct ? static_cast<RowSink&>(keep_and_over) : keep,
+            p.spread.engine->run(lit, direct ? static_cast<RowSink&>(keep_and_over) : keep,
                                  nthreads);
         } else if (direct) {
             composite_image(frame, p.spread.apart, c, nthreads);
