@@ -295,4 +295,13 @@ TEST_CASE("a result keeps the software that made its input, and adds a line to i
     REQUIRE(lines.size() == 3);
     CHECK_THAT(lines[2], Catch::StartsWith(ours + ": " + dir + "/once.exr"));
     CHECK_THAT(lines[2], Catch::EndsWith("--depth " + input + " --focus 2"));
+    // Each setting as the command takes it: switches by their flag, a mask
+    // with its file.
+    const std::string mask = std::string(EXAMPLES_DIR) + "/psf/blades7.exr";
+    REQUIRE(render_with(input,
+                        { { "focus", "3" }, { "aperture", "mask:" + mask },
+                          { "window", "display" }, { "deep", "on" } },
+                        once, error));
+    CHECK_THAT(once.image.spec().get_string_attribute("Exif:ImageHistory"),
+               Catch::EndsWith(" --focus 3 --aperture mask:" + mask + " --deep --crop"));
 }

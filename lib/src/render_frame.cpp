@@ -44,18 +44,26 @@ TypeDesc deep_color_type(const Shot& shot, const ImageSpec& input)
 }
 
 /// One line of an image's history for this render: the version, the files
-/// the frame reads and the settings given, as defocus's options.
+/// the frame reads and the settings given, as the defocus command takes
+/// them ("--crop", "--aperture mask:FILE").
 std::string history_line(const Shot& shot, int frame)
 {
     std::string line = format("defocus {}: {}", version(),
                               Strutil::join(files_read(shot, { frame }), " "));
-    for (const ShotSetting& setting : shot_settings())
-        if (is_given(shot, setting.name)) {
-            const std::string value = shot_setting(shot, setting.name);
-            line += format(" --{} {}", setting.name,
-                           value.find_first_of(" \t") == std::string::npos ? value
-                                                                            : "'" + value + "'");
-        }
+    for (const ShotSetting& setting : shot_settings()) {
+        const std::string name = setting.name;
+        std::string value = shot_setting(shot, name);
+        // A switch's default, given, is the same as none (and has no flag);
+        // the mask's file is given with its shape, as mask:FILE.
+        if (!is_given(shot, name) || (!setting.option && value == shot_setting(Shot(), name))
+            || name == "aperture-mask")
+            continue;
+        if (name == "aperture" && shot.spread.aperture.shape == ApertureShape::Mask)
+            value += ":" + shot.spread.aperture.mask_file;
+        if (value.find_first_of(" \t") != std::string::npos)
+            value = "'" + value + "'";
+        line += " " + setting_words(name, value, SettingForm::CommandLine);
+    }
     return line;
 }
 
