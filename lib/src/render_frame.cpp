@@ -273,10 +273,14 @@ bool prepare_layers(Scene&& scene, const Shot& shot, int frame, const ShotAssets
 namespace {
 
 /// A bound on what spreading the layers holds at once: each layer grown by
-/// its blur's reach, the result and an accumulator over all of them.
+/// its blur's reach, the result and an accumulator over all of them, and
+/// the holdout.
 double spread_bytes(const LayeredScene& layered)
 {
-    double bytes = 0.0;
+    const DeepImage* holdout = layered.holdout.get();
+    double bytes = holdout ? double(holdout->samples.size() * sizeof(DeepSample)
+                                    + holdout->offsets.size() * sizeof(uint64_t))
+                           : 0.0;
     ROI all = layered.spec.roi();
     for (size_t i = 0; i < layered.layers.size(); ++i) {
         const LayerReport& r = layered.reports[i];
@@ -295,10 +299,10 @@ double spread_bytes(const LayeredScene& layered)
 
 /// The shot's holdout at `frame`, front to back (none when the shot names
 /// none), over the scene's display window.
-bool read_holdout(const Shot& shot, int frame, const ImageSpec& scene, DeepImage& holdout,
-                  std::string& error)
+bool read_holdout(const Shot& shot, int frame, const ImageSpec& scene,
+                  std::shared_ptr<const DeepImage>& holdout, std::string& error)
 {
-    holdout = DeepImage();
+    holdout.reset();
     if (shot.holdout.empty())
         return true;
     ReadOptions options;
@@ -317,7 +321,7 @@ bool read_holdout(const Shot& shot, int frame, const ImageSpec& scene, DeepImage
         return false;
     }
     sanitize(read);
-    holdout = holdout_image(read);
+    holdout = std::make_shared<const DeepImage>(holdout_image(read));
     return true;
 }
 
@@ -401,6 +405,8 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
         }
         lap("focus map");
     } else {
+        if (!read_holdout(shot, frame, layered.spec, layered.holdout, error))
+            return false;
         const double bytes = spread_bytes(layered);
         if (!shot.read.memory_limit.allows(bytes)) {
             error = shot.read.memory_limit.exceeded(
@@ -421,8 +427,6 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
         if (shot.deep)
             return deep_frame(shot, frame, images, layered, out, error, nthreads);
         SpreadTimings timings;
-        if (!read_holdout(shot, frame, layered.spec, layered.holdout, error))
-            return false;
         if (!defocus_layers(image, layered, out.camera, shot.spread, images, shot.window,
                             &out.layers, &timings, nthreads)) {
             error = image.geterror();

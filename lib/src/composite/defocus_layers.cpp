@@ -449,8 +449,8 @@ void composite_layers(ImageBuf& frame, const LayeredScene& scene,
                            nthreads);
         // Until the back-most layer lands, the frame is not set.
         composited |= !layers[i].passes.empty();
-        if (composited)
-            hold_out(frame, scene.holdout, layer_depth(scene, i + 1), layer_depth(scene, i),
+        if (composited && scene.holdout)
+            hold_out(frame, *scene.holdout, layer_depth(scene, i + 1), layer_depth(scene, i),
                      window, nthreads);
         layers[i] = LayerSpreads();
     }

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -42,8 +43,10 @@ struct LayeredScene {
     /// found.
     Imath::V3d luma = luma_weights(nullptr);
     /// What cuts the layers where it stands in front of them, front to back
-    /// in each pixel (see composite/holdout.h); no samples: nothing.
-    DeepImage holdout;
+    /// in each pixel (see composite/holdout.h); null or no samples:
+    /// nothing. Shared, not copied, by the scenes made from this one (the
+    /// rebuilt part of the confidence AOV).
+    std::shared_ptr<const DeepImage> holdout;
 };
 
 /// Crops a layer (colour, depth and rebuilt) to the pixels that carry
