@@ -55,14 +55,11 @@ SparseSpread sparse_spread(size_t layer, const ImageBuf& spread, int nthreads)
     return all;
 }
 
-/// The window a result without any spread layer has.
+/// The window defocus_layers() gives a scene without a layer to spread:
+/// nothing grows the display window.
 ROI unlit_window(const ImageSpec& scene, OutputWindow window)
 {
-    if (window == OutputWindow::Display)
-        return scene.roi_full();
-    if (window == OutputWindow::Grown)
-        return roi_union(scene.roi(), scene.roi_full());
-    return scene.roi();
+    return window == OutputWindow::Input ? scene.roi() : scene.roi_full();
 }
 
 /// The samples of `spreads` (back to front) as a deep image over `roi`,
