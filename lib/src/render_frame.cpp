@@ -369,17 +369,24 @@ bool deep_frame(const Shot& shot, int frame, const ApertureImages& images,
 {
     Timer timer;
     SpreadTimings timings;
-    DeepImage deep;
+    DeepResult deep;
     if (!defocus_deep(deep, layered, out.camera, shot.spread, images, shot.window, error,
                       &out.layers, &timings, nthreads))
         return false;
     out.timings.emplace_back("spread and composite", timings.spread);
     timer.lap();
     const ColorPlan& color = out.color;
-    if (color.config && !color.config->convert(deep, color.working, color.output, error, nthreads))
-        return false;
+    for (DeepLayer& layer : deep.layers) {
+        if (!color.config || layer.pixels.empty())
+            continue;
+        // A column of the layer's samples: rows are what is run in parallel.
+        ImageBuf samples(ImageSpec(1, int(layer.pixels.size()), 4, TypeFloat),
+                         layer.rgba.data());
+        if (!color.config->convert(samples, color.working, color.output, error, nthreads))
+            return false;
+    }
     out.pixel_type = deep_color_type(shot, layered.spec);
-    out.image = deep_buffer(deep, layered.spec, out.pixel_type, nthreads);
+    out.image = deep_buffer(std::move(deep), layered.spec, out.pixel_type, nthreads);
     out.timings.emplace_back("colour out", timer.lap());
     describe_output(out.image.specmod(), layered.spec, shot, out.camera, color, frame);
     return true;

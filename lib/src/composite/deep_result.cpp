@@ -16,22 +16,14 @@ using namespace OIIO;
 
 namespace {
 
-/// A layer's spread where it is not black: its pixels (indices within the
-/// window, row by row) and their premultiplied RGBA.
-struct SparseSpread {
-    size_t layer = 0;
-    std::vector<uint32_t> pixels;
-    std::vector<float> rgba;
-};
-
 /// The pixels of `spread` (float RGBA) that are not black, as a layer's
 /// deep samples are: a pixel it does not reach holds no sample.
-SparseSpread sparse_spread(size_t layer, const ImageBuf& spread, int nthreads)
+DeepLayer lit_pixels(const ImageBuf& spread, int nthreads)
 {
     const ROI roi = spread.roi();
-    std::vector<SparseSpread> rows(size_t(roi.height()));
+    std::vector<DeepLayer> rows(size_t(roi.height()));
     parallel_for(roi.ybegin, roi.yend, [&](int y) {
-        SparseSpread& row = rows[size_t(y - roi.ybegin)];
+        DeepLayer& row = rows[size_t(y - roi.ybegin)];
         const float* p = static_cast<const float*>(spread.pixeladdr(roi.xbegin, y));
         const uint32_t first = uint32_t(size_t(y - roi.ybegin) * size_t(roi.width()));
         for (int x = 0; x < roi.width(); ++x, p += 4)
@@ -40,17 +32,16 @@ SparseSpread sparse_spread(size_t layer, const ImageBuf& spread, int nthreads)
                 row.rgba.insert(row.rgba.end(), p, p + 4);
             }
     }, by_rows(nthreads));
-    SparseSpread all;
-    all.layer = layer;
+    DeepLayer all;
     size_t count = 0;
-    for (const SparseSpread& row : rows)
+    for (const DeepLayer& row : rows)
         count += row.pixels.size();
     all.pixels.reserve(count);
     all.rgba.reserve(4 * count);
-    for (SparseSpread& row : rows) {
+    for (DeepLayer& row : rows) {
         all.pixels.insert(all.pixels.end(), row.pixels.begin(), row.pixels.end());
         all.rgba.insert(all.rgba.end(), row.rgba.begin(), row.rgba.end());
-        row = SparseSpread();
+        row = DeepLayer();
     }
     return all;
 }
@@ -62,48 +53,9 @@ ROI unlit_window(const ImageSpec& scene, OutputWindow window)
     return window == OutputWindow::Input ? scene.roi() : scene.roi_full();
 }
 
-/// The samples of `spreads` (back to front) as a deep image over `roi`,
-/// front to back in each pixel, each layer over its depths from
-/// `reports`, cut where it would reach into the layer in front. Each
-/// spread is freed once its samples are placed.
-DeepImage deep_samples(std::vector<SparseSpread>& spreads, const ROI& roi,
-                       const std::vector<LayerReport>& reports, int nthreads)
-{
-    DeepImage deep;
-    deep.roi = roi;
-    deep.roi.chbegin = 0;
-    deep.roi.chend = 6;
-    const size_t npixels = size_t(roi.npixels());
-    std::vector<uint64_t> next(npixels + 1, 0);
-    for (const SparseSpread& s : spreads)
-        for (uint32_t p : s.pixels)
-            ++next[p + 1];
-    for (size_t p = 0; p < npixels; ++p)
-        next[p + 1] += next[p];
-    deep.offsets = next;
-    deep.samples.resize(next.back());
-    float in_front = 0.0f;  // the back of the depths of the layer in front
-    for (auto s = spreads.rbegin(); s != spreads.rend(); ++s) {
-        const LayerReport& report = reports[s->layer];
-        const float z = std::max(float(report.depth_min), in_front);
-        const float zback = std::max(float(report.depth_max), z);
-        in_front = zback;
-        // A layer has one sample a pixel: its pixels' slots are its own.
-        parallel_for_chunked(int64_t(0), int64_t(s->pixels.size()), 0,
-                             [&](int64_t begin, int64_t end) {
-            for (int64_t i = begin; i < end; ++i) {
-                const float* c = &s->rgba[4 * size_t(i)];
-                deep.samples[next[s->pixels[size_t(i)]]++] = { c[0], c[1], c[2], c[3], z, zback };
-            }
-        }, paropt(nthreads));
-        *s = SparseSpread();
-    }
-    return deep;
-}
-
 }  // namespace
 
-bool defocus_deep(DeepImage& dst, const LayeredScene& scene, const Camera& camera,
+bool defocus_deep(DeepResult& dst, const LayeredScene& scene, const Camera& camera,
                   const SpreadOptions& spread, const ApertureImages& images,
                   OutputWindow window, std::string& error, std::vector<LayerReport>* report,
                   SpreadTimings* timings, int nthreads)
@@ -112,21 +64,33 @@ bool defocus_deep(DeepImage& dst, const LayeredScene& scene, const Camera& camer
         error = "a deep result cannot hold chromatic aberration: each colour has its own alpha";
         return false;
     }
-    std::vector<SparseSpread> spreads;
-    ROI roi = unlit_window(scene.spec, window);
+    dst = DeepResult();
+    dst.window = unlit_window(scene.spec, window);
+    std::vector<size_t> indices;  // of the layers kept, in the scene
     const LayerSink keep = [&](size_t layer, const ImageBuf& frame) {
-        roi = frame.roi();
-        if (uint64_t(roi.npixels()) > std::numeric_limits<uint32_t>::max()) {
+        dst.window = frame.roi();
+        if (uint64_t(dst.window.npixels()) > std::numeric_limits<uint32_t>::max()) {
             error = "the result is too large for a deep image (over 4 billion pixels)";
             return false;
         }
-        spreads.push_back(sparse_spread(layer, frame, nthreads));
+        dst.layers.push_back(lit_pixels(frame, nthreads));
+        indices.push_back(layer);
         return true;
     };
     if (!spread_layers_apart(scene, camera, spread, images, window, keep, error, report, timings,
                              nthreads))
         return false;
-    dst = deep_samples(spreads, roi, scene.reports, nthreads);
+    // Back to front as spread; front to back as deep samples run.
+    std::reverse(dst.layers.begin(), dst.layers.end());
+    std::reverse(indices.begin(), indices.end());
+    float in_front = 0.0f;  // the back of the depths of the layer in front
+    for (size_t i = 0; i < dst.layers.size(); ++i) {
+        const LayerReport& depths = scene.reports[indices[i]];
+        DeepLayer& layer = dst.layers[i];
+        layer.z = std::max(float(depths.depth_min), in_front);
+        layer.zback = std::max(float(depths.depth_max), layer.z);
+        in_front = layer.zback;
+    }
     return true;
 }
 
@@ -147,15 +111,15 @@ ImageSpec deep_result_spec(const ImageSpec& scene, const ROI& window, TypeDesc c
     return spec;
 }
 
-ImageBuf deep_buffer(const DeepImage& image, const ImageSpec& scene, TypeDesc color_type,
+ImageBuf deep_buffer(DeepResult&& result, const ImageSpec& scene, TypeDesc color_type,
                      int nthreads)
 {
-    ImageBuf buffer(deep_result_spec(scene, image.roi, color_type));
+    ImageBuf buffer(deep_result_spec(scene, result.window, color_type));
     DeepData& deep = *buffer.deepdata();
-    const int64_t npixels = int64_t(image.offsets.size()) - 1;
-    std::vector<unsigned int> counts(size_t(std::max<int64_t>(npixels, 0)));
-    for (int64_t p = 0; p < npixels; ++p)
-        counts[size_t(p)] = unsigned(image.offsets[p + 1] - image.offsets[p]);
+    std::vector<unsigned int> counts(static_cast<size_t>(deep.pixels()), 0u);
+    for (const DeepLayer& layer : result.layers)
+        for (uint32_t p : layer.pixels)
+            ++counts[p];
     deep.set_all_samples(counts);
     // A sample's channels lie at fixed offsets within its record, and a
     // pixel's records follow each other.
@@ -169,25 +133,27 @@ ImageBuf deep_buffer(const DeepImage& image, const ImageSpec& scene, TypeDesc co
                         - static_cast<char*>(deep.data_ptr(p, 0, 0));
     }
     const bool half_colour = color_type == TypeHalf;
-    parallel_for_chunked(int64_t(0), npixels, 0, [&](int64_t begin, int64_t end) {
-        for (int64_t p = begin; p < end; ++p) {
-            if (counts[size_t(p)] == 0)
-                continue;
-            char* at = static_cast<char*>(deep.data_ptr(p, 0, 0));
-            for (uint64_t i = image.offsets[p]; i < image.offsets[p + 1]; ++i, at += record) {
-                const DeepSample& s = image.samples[i];
-                const float colour[4] = { s.r, s.g, s.b, s.a };
+    std::fill(counts.begin(), counts.end(), 0u);  // now: the samples placed
+    for (DeepLayer& layer : result.layers) {
+        // A layer has one sample a pixel: its pixels' records are its own.
+        parallel_for_chunked(int64_t(0), int64_t(layer.pixels.size()), 0,
+                             [&](int64_t begin, int64_t end) {
+            for (int64_t i = begin; i < end; ++i) {
+                const uint32_t p = layer.pixels[size_t(i)];
+                char* at = static_cast<char*>(deep.data_ptr(p, 0, 0)) + counts[p]++ * record;
+                const float* colour = &layer.rgba[4 * size_t(i)];
                 for (int c = 0; c < 4; ++c) {
                     if (half_colour)
                         *reinterpret_cast<half*>(at + offset[c]) = half(colour[c]);
                     else
                         *reinterpret_cast<float*>(at + offset[c]) = colour[c];
                 }
-                *reinterpret_cast<float*>(at + offset[4]) = s.z;
-                *reinterpret_cast<float*>(at + offset[5]) = s.zback;
+                *reinterpret_cast<float*>(at + offset[4]) = layer.z;
+                *reinterpret_cast<float*>(at + offset[5]) = layer.zback;
             }
-        }
-    }, paropt(nthreads));
+        }, paropt(nthreads));
+        layer = DeepLayer();
+    }
     return buffer;
 }
 

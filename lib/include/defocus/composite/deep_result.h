@@ -3,6 +3,7 @@
 // layer's depths.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -17,17 +18,33 @@
 
 namespace defocus {
 
-/// The defocused `scene` as a deep image over the window defocus_layers()
-/// gives. In each pixel, every layer whose spread reaches it is one sample:
+/// One layer of a deep result: the pixels its spread lights (indices within
+/// the result's window, row by row) with their premultiplied RGBA, as the
+/// layer composites alone onto black, and the depths its samples span.
+struct DeepLayer {
+    std::vector<uint32_t> pixels;
+    std::vector<float> rgba;  ///< 4 a pixel
+    float z = 0.0f, zback = 0.0f;
+};
+
+/// A defocused scene as deep samples, one in each pixel for each layer
+/// that reaches it.
+struct DeepResult {
+    OIIO::ROI window;  ///< the result's data window
+    std::vector<DeepLayer> layers;  ///< front to back
+};
+
+/// The defocused `scene` as deep samples over the window defocus_layers()
+/// gives. Every layer whose spread reaches a pixel is a sample there:
 /// premultiplied RGBA as the layer composites alone onto black, spanning
-/// the layer's depths (its report's depth_min to depth_max). Samples run
-/// front to back, each depth range cut where it would reach into the one
-/// in front, so that they are sorted and do not overlap. Flattened front
-/// to back ("over"), they give defocus_layers()'s image. The camera must
-/// have no chromatic aberration (each colour has its own alpha there), and
-/// the scene's holdout is not applied (merge the result with it instead).
+/// the layer's depths (its report's depth_min to depth_max), each range cut
+/// where it would reach into the one in front, so that the samples are
+/// sorted front to back and do not overlap. Flattened front to back
+/// ("over"), they give defocus_layers()'s image. The camera must have no
+/// chromatic aberration (each colour has its own alpha there), and the
+/// scene's holdout is not applied (merge the result with it instead).
 /// False with `error` where spreading fails.
-bool defocus_deep(DeepImage& dst, const LayeredScene& scene, const Camera& camera,
+bool defocus_deep(DeepResult& dst, const LayeredScene& scene, const Camera& camera,
                   const SpreadOptions& spread, const ApertureImages& images,
                   OutputWindow window, std::string& error,
                   std::vector<LayerReport>* report = nullptr, SpreadTimings* timings = nullptr,
@@ -39,9 +56,10 @@ bool defocus_deep(DeepImage& dst, const LayeredScene& scene, const Camera& camer
 OIIO::ImageSpec deep_result_spec(const OIIO::ImageSpec& scene, const OIIO::ROI& window,
                                  OIIO::TypeDesc color_type);
 
-/// `image` as OpenImageIO's deep ImageBuf over its data window, to write
-/// or to hand to a host, with the spec deep_result_spec() gives.
-OIIO::ImageBuf deep_buffer(const DeepImage& image, const OIIO::ImageSpec& scene,
+/// `result` as OpenImageIO's deep ImageBuf over its window, to write or to
+/// hand to a host, with the spec deep_result_spec() gives. Each layer is
+/// freed once its samples are placed.
+OIIO::ImageBuf deep_buffer(DeepResult&& result, const OIIO::ImageSpec& scene,
                            OIIO::TypeDesc color_type, int nthreads = 0);
 
 }  // namespace defocus
