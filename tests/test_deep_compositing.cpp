@@ -240,6 +240,8 @@ TEST_CASE("a deep result's samples are sorted and disjoint, and flatten to the f
     const std::vector<Settings> variants = {
         {}, { { "window", "grown" } }, { { "aperture", "polygon" }, { "blades", "6" } },
         { { "cateye", "0.5" } }, { { "layers", "2" } },
+        // Converted linearly, sample by sample, as the flat result is.
+        { { "tocolorspace", "ACES2065-1" } },
     };
     for (const Settings& variant : variants) {
         Settings flat = camera;
