@@ -11,7 +11,8 @@
 // scene and the 4K example (`defocus` as a process) and their peak memory;
 // the 4K example flattened into one RGBA+Z image: its slice stage, and its
 // whole frame against the layered one's; the 4K example written deep
-// against its flat output;
+// against its flat output; a 16-frame 4K sequence per frame against a
+// frame alone; the goals of speed round 2, each beside its bar;
 // reading large scene files (a million keyframes, ten thousand inputs, a
 // frame list of huge steps, a million frames checked on disk).
 #include <sys/resource.h>
@@ -284,6 +285,37 @@ std::string arg_quote(const std::string& s)
     return "'" + Strutil::replace(s, "'", "'\\''", true) + "'";
 }
 
+/// One goal's figure beside its bar: "met" when `figure` is at most `bar`
+/// (or, with `at_least`, at least it).
+void print_goal(const char* what, double figure, const char* unit, double bar,
+                bool at_least = false)
+{
+    const bool met = at_least ? figure >= bar : figure <= bar;
+    std::printf("  %-52s %7.2f%s (bar: %s %.2f%s) %s\n", what, figure, unit,
+                at_least ? "at least" : "at most", bar, unit, met ? "met" : "NOT MET");
+}
+
+/// The goals of speed round 2 (issue 41), each figure from this run.
+void print_round_two_goals(std::map<std::string, double>& median,
+                           std::map<std::string, double>& peak, double plain_disc)
+{
+    std::printf("\nspeed round 2 goals\n");
+    print_goal("4K example, zip output, whole process", median["frame 4K zip"], " s", 0.6);
+    const double layers_bytes = 4.0 * 4096 * 2160 * 16;
+    print_goal("  its peak memory / four 4K layers as float RGBA", peak["4K zip"] / layers_bytes,
+               "x", 1.5);
+    print_goal("  spread and composite / the memory floor",
+               median["spread and composite, 4 layers 4096x2160"] / median["floor"], "x", 2.0);
+    print_goal("16-frame 4K sequence: frame alone / frame in sequence",
+               median["frame 4K zip"] / median["sequence 4K, per frame"], "x", 1.6, true);
+    print_goal("--cateye 1 / the plain disc", median["effect --cateye 1"] / plain_disc, "x", 1.5);
+    for (const char* soft : { "tent", "smooth" })
+        print_goal(format("{} / disc per megapixel at radius 128", soft).c_str(),
+                   median[format("filter {} r128", soft)] / median["filter disc r128"], "x", 3.0);
+    print_goal("--lateral-ca / the plain disc", median["effect --lateral-ca 0.002"] / plain_disc,
+               "x", 1.2);
+}
+
 }  // namespace
 
 int main(int argc, const char* argv[])
@@ -448,6 +480,9 @@ int main(int argc, const char* argv[])
         f.push_back({ "4K deep out", format("{} {} -o {}/4k.exr {} --compression none --deep -q",
                                             DEFOCUS_BIN, arg_quote(scene4k), arg_quote(scratch),
                                             example_camera) });
+        // As most users write it: zip, OpenEXR's default and the example's.
+        f.push_back({ "4K zip", format("{} {} -o {}/4k.exr {} -q", DEFOCUS_BIN,
+                                       arg_quote(scene4k), arg_quote(scratch), example_camera) });
         return f;
     }();
     for (const auto& [name, command] : frames)
@@ -457,6 +492,20 @@ int main(int argc, const char* argv[])
             peak[name] = std::max(peak[name], bytes);
             return t;
         });
+    // A sequence of 16 frames of the 4K example, per frame, beside the
+    // frame run alone ("frame 4K zip"): what running frames side by side
+    // gains.
+    constexpr int sequence_length = 16;
+    for (int i = 1; i <= sequence_length; ++i)
+        Filesystem::copy(scene4k, format("{}/seq.{:04d}.exr", scratch, i));
+    add("sequence 4K, per frame", [&] {
+        double bytes = 0.0;
+        return launcher.run(format("{} {}/seq.#.exr --frames 1-{} -o {}/seq_out.#.exr {} -q",
+                                   DEFOCUS_BIN, arg_quote(scratch), sequence_length,
+                                   arg_quote(scratch), example_camera),
+                            bytes)
+               / sequence_length;
+    });
 
     // Lens effects, each a whole frame beside the plain disc's, on the
     // garden (or a 1280x720 example scene without it).
@@ -620,6 +669,7 @@ int main(int argc, const char* argv[])
     for (const auto& [name, flags] : effects)
         std::printf("  %-28s %8.3f s  %5.2fx the plain disc\n", name.c_str(),
                     median["effect " + name], median["effect " + name] / plain_disc);
+    print_round_two_goals(median, peak, plain_disc);
     std::printf("\nscene files, read and their frames listed (target: under 2 s each)\n");
     for (const auto& [name, text] : scene_files)
         std::printf("  %-24s %8.3f s\n", name.c_str(), median["scene file " + name]);
