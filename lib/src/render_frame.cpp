@@ -375,6 +375,18 @@ bool deep_frame(const Shot& shot, int frame, const ApertureImages& images,
         return false;
     out.timings.emplace_back("spread and composite", timings.spread);
     timer.lap();
+    // The deep image is the largest allocation of the frame: its size is
+    // known once the layers are spread, before it is made.
+    double samples = 0.0;
+    for (const DeepLayer& layer : deep.layers)
+        samples += double(layer.pixels.size());
+    const double bytes = samples * deep_sample_bytes(deep_color_type(shot, layered.spec))
+                         + double(deep.window.npixels()) * deep_pixel_bytes;
+    if (!shot.read.memory_limit.allows(bytes)) {
+        error = shot.read.memory_limit.exceeded(
+            format("a deep result of {:.0f} samples", samples), bytes);
+        return false;
+    }
     const ColorPlan& color = out.color;
     for (DeepLayer& layer : deep.layers) {
         if (!color.config || layer.pixels.empty())

@@ -56,6 +56,15 @@ bool defocus_deep(DeepResult& dst, const LayeredScene& scene, const Camera& came
 OIIO::ImageSpec deep_result_spec(const OIIO::ImageSpec& scene, const OIIO::ROI& window,
                                  OIIO::TypeDesc color_type);
 
+/// What deep_buffer() allocates per sample (colour and alpha of
+/// `color_type`, two float depths) and per pixel of the window (OpenImageIO
+/// keeps a count, a capacity and an offset).
+inline double deep_sample_bytes(OIIO::TypeDesc color_type)
+{
+    return 4.0 * double(color_type.size()) + 8.0;
+}
+constexpr double deep_pixel_bytes = 12.0;
+
 /// `result` as OpenImageIO's deep ImageBuf over its window, to write or to
 /// hand to a host, with the spec deep_result_spec() gives. Each layer is
 /// freed once its samples are placed.
