@@ -149,7 +149,8 @@ bool written_with_settings(const std::string& filename, const std::string& hash,
 
 const std::set<std::string>& deep_compressions()
 {
-    static const std::set<std::string> names = { "none", "rle", "zips", "zip" };
+    // OpenImageIO 2.4 writes a deep EXR with every other as zips.
+    static const std::set<std::string> names = { "none", "zips" };
     return names;
 }
 

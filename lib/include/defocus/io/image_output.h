@@ -39,7 +39,7 @@ void remove_temporaries_on_interrupt(const char* program);
 bool check_output(const std::string& filename, const std::string& compression,
                   std::string& error, bool deep = false);
 
-/// The compressions OpenEXR writes deep images with.
+/// The compressions deep EXR files are written with.
 const std::set<std::string>& deep_compressions();
 
 /// Whether the files a run writes leave every file it reads alone: false
