@@ -102,7 +102,7 @@ TEST_CASE("defocus renders a generated multi-part scene")
     CHECK(files.size() == 3);
 }
 
-TEST_CASE("--deep writes a deep EXR: half colour, float depths, a deep compression, known to "
+TEST_CASE("a deep result is written as a deep EXR: half colour, float depths, zips, known to "
           "--skip-existing")
 {
     const std::string dir = scratch_dir("cli_deep");

@@ -9,6 +9,7 @@
 #include <map>
 #include <thread>
 
+#include <OpenImageIO/deepdata.h>
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
@@ -506,6 +507,37 @@ TEST_CASE("the plugin reads no row outside the image, and no input changed since
     in = ImageInput::open(dir + "/shot.dof");
     REQUIRE(in);
     CHECK(in->spec().full_width == 128);
+}
+
+TEST_CASE("a deep result's rows and channels read through the plugin as the whole image has them")
+{
+    ImageSpec config;
+    config.attribute("dof:deep", "on");
+    auto in = ImageInput::open(scene_dof(), &config);
+    REQUIRE(in);
+    const ImageSpec spec = in->spec();
+    REQUIRE(spec.deep);
+    DeepData all, rows;
+    REQUIRE(in->read_native_deep_image(0, 0, all));
+    // Rows from the middle, alpha and Z only.
+    const int y0 = spec.y + spec.height / 2, y1 = y0 + 3;
+    REQUIRE(in->read_native_deep_scanlines(0, 0, y0, y1, 0, 3, 5, rows));
+    REQUIRE(rows.channels() == 2);
+    CHECK(rows.channelname(0) == "A");
+    CHECK(rows.channelname(1) == "Z");
+    int64_t samples = 0;
+    for (int64_t p = 0; p < rows.pixels(); ++p) {
+        const int64_t whole = int64_t(y0 - spec.y) * spec.width + p;
+        REQUIRE(rows.samples(p) == all.samples(whole));
+        samples += rows.samples(p);
+        for (int s = 0; s < rows.samples(p); ++s) {
+            CHECK(rows.deep_value(p, 0, s) == all.deep_value(whole, 3, s));
+            CHECK(rows.deep_value(p, 1, s) == all.deep_value(whole, 4, s));
+        }
+    }
+    CHECK(samples > rows.pixels());  // layers overlap there
+    // Rows outside the image are refused, not read.
+    CHECK_FALSE(in->read_native_deep_scanlines(0, 0, spec.y - 1, spec.y + 1, 0, 0, 6, rows));
 }
 
 int main(int argc, char* argv[])
