@@ -16,16 +16,18 @@ using namespace OIIO;
 
 namespace {
 
-/// The pixels of `spread` (float RGBA) that are not black, as a layer's
-/// deep samples are: a pixel it does not reach holds no sample.
-DeepLayer lit_pixels(const ImageBuf& spread, int nthreads)
+/// The pixels of `spread` (float RGBA, within `window`) that are not
+/// black, as a layer's deep samples are: a pixel it does not reach holds no
+/// sample. Pixels are indexed within `window`.
+DeepLayer lit_pixels(const ImageBuf& spread, const ROI& window, int nthreads)
 {
     const ROI roi = spread.roi();
     std::vector<DeepLayer> rows(size_t(roi.height()));
     parallel_for(roi.ybegin, roi.yend, [&](int y) {
         DeepLayer& row = rows[size_t(y - roi.ybegin)];
         const float* p = static_cast<const float*>(spread.pixeladdr(roi.xbegin, y));
-        const uint32_t first = uint32_t(size_t(y - roi.ybegin) * size_t(roi.width()));
+        const uint32_t first = uint32_t(size_t(y - window.ybegin) * size_t(window.width())
+                                        + size_t(roi.xbegin - window.xbegin));
         for (int x = 0; x < roi.width(); ++x, p += 4)
             if (p[0] != 0.0f || p[1] != 0.0f || p[2] != 0.0f || p[3] != 0.0f) {
                 row.pixels.push_back(first + uint32_t(x));
@@ -67,13 +69,13 @@ bool defocus_deep(DeepResult& dst, const LayeredScene& scene, const Camera& came
     dst = DeepResult();
     dst.window = unlit_window(scene.spec, window);
     std::vector<size_t> indices;  // of the layers kept, in the scene
-    const LayerSink keep = [&](size_t layer, const ImageBuf& frame) {
-        dst.window = frame.roi();
-        if (uint64_t(dst.window.npixels()) > std::numeric_limits<uint32_t>::max()) {
+    const LayerSink keep = [&](size_t layer, const ImageBuf& lit, const ROI& window) {
+        dst.window = window;
+        if (uint64_t(window.npixels()) > std::numeric_limits<uint32_t>::max()) {
             error = "the result is too large for a deep image (over 4 billion pixels)";
             return false;
         }
-        dst.layers.push_back(lit_pixels(frame, nthreads));
+        dst.layers.push_back(lit_pixels(lit, window, nthreads));
         indices.push_back(layer);
         return true;
     };

@@ -456,26 +456,36 @@ void composite_layers(ImageBuf& frame, const LayeredScene& scene,
     }
 }
 
-/// Composites each layer's passes onto a black frame of its own over
-/// `window`, back to front, and hands it to `sink`, each layer's spreads
-/// freed once composited.
+/// Composites each layer's passes onto a black frame of its own over the
+/// part of `window` it lights, back to front, and hands it to `sink`, each
+/// layer's spreads freed once composited.
 bool composite_apart(const LayeredScene& scene, std::vector<LayerSpreads>& layers,
-                     const ImageSpec& frame_spec, const ROI& window, const ROI& reach,
+                     const ROI& window, const ROI& reach,
                      double lateral_ca, const Imath::V2d& centre, const LayerSink& sink,
                      int nthreads)
 {
     ImageBuf frame;
     for (size_t i = 0; i < scene.layers.size(); ++i) {
-        if (layers[i].passes.empty())
+        // The part of the window the layer lights (all of it, magnified).
+        ROI lit;
+        bool magnified = false;
+        for (const LayerPass& p : layers[i].passes) {
+            lit = roi_union(lit, p.spread.extent());
+            magnified |= p.channels.magnified;
+        }
+        lit = magnified ? window : roi_intersection(window, lit);
+        lit.chbegin = 0;
+        lit.chend = 4;
+        if (layers[i].passes.empty() || lit.npixels() <= 0)
             continue;
         const LayerPass* alone = storable_pass(layers[i]);
-        reset_zeroed_except(frame, frame_spec, alone ? alone->spread.engine->extent() : ROI(),
-                            nthreads);
+        reset_zeroed_except(frame, result_spec(scene.spec, lit, TypeFloat),
+                            alone ? alone->spread.engine->extent() : ROI(), nthreads);
         for (LayerPass& p : layers[i].passes)
-            composite_pass(frame, p, &p == alone, scene.spec, window, reach, lateral_ca, centre,
+            composite_pass(frame, p, &p == alone, scene.spec, lit, reach, lateral_ca, centre,
                            nthreads);
         layers[i] = LayerSpreads();
-        if (!sink(i, frame))
+        if (!sink(i, frame, window))
             return false;
     }
     return true;
@@ -541,8 +551,8 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
     if (report)
         report->insert(report->end(), depths.begin(), depths.end());
     if (apart) {
-        const bool done = composite_apart(scene, layers, frame_spec, window, reach,
-                                          camera.lateral_ca, centre, *apart, nthreads);
+        const bool done = composite_apart(scene, layers, window, reach, camera.lateral_ca,
+                                          centre, *apart, nthreads);
         timings.spread += spread_timer();
         return done;
     }

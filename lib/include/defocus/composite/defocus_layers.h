@@ -49,13 +49,15 @@ bool defocus_layers(OIIO::ImageBuf& dst, const LayeredScene& scene, const Camera
                     SpreadTimings* timings = nullptr, int nthreads = 0);
 
 /// Receives one layer's spread, composited alone onto black: its index in
-/// the scene and float RGBA over the result's window. False stops the
-/// spreading, with the receiver's own error.
-using LayerSink = std::function<bool(size_t layer, const OIIO::ImageBuf& spread)>;
+/// the scene, and float RGBA over the part of the result's `window` it
+/// lights (it is black in the rest). False stops the spreading, with the
+/// receiver's own error.
+using LayerSink = std::function<bool(size_t layer, const OIIO::ImageBuf& spread,
+                                     const OIIO::ROI& window)>;
 
 /// defocus_layers() with each layer composited onto black alone and handed
-/// to `sink`, back to front, rather than over the others: every layer's
-/// window is the one defocus_layers() gives, and compositing the layers
+/// to `sink`, back to front, rather than over the others: the window is the
+/// one defocus_layers() gives, and compositing the layers
 /// with "over" in that order gives its image, except for the scene's
 /// holdout, which is not applied, and chromatic aberration, whose colours
 /// each have their own alpha. Layers without pixels are left out.
