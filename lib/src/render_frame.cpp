@@ -68,7 +68,7 @@ std::string history_line(const Shot& shot, int frame)
 }
 
 /// The compression a deep result is written with: the shot's, else the
-/// input's where OpenEXR's deep files take it, else zips.
+/// input's where deep files are written with it, else zips.
 std::string deep_compression(const Shot& shot, const ImageSpec& input)
 {
     if (!shot.compression.empty())
