@@ -53,12 +53,8 @@ bool coc_aov(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
     spec.y = roi.ybegin;
     spec.channelnames = { "coc" };
     dst.reset(spec, InitializePixels::Yes);
-    Camera reach = camera;
-    reach.axial_ca = reach.lateral_ca = 0.0;
-    SpreadOptions shape = spread;
-    shape.psf_image.clear();
-    const ApertureImages no_psf { images.mask, nullptr };
-    const CircleOfConfusion coc(reach, scene.spec.roi_full());
+    const ReachOnly reach = reach_only(camera, spread, images);
+    const CircleOfConfusion coc(reach.camera, scene.spec.roi_full());
     // Back to front: the front-most layer that reaches a pixel writes it last.
     for (size_t i = 0; i < scene.layers.size(); ++i) {
         if (scene.reports[i].pixels == 0)
@@ -70,8 +66,8 @@ bool coc_aov(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
         alone.layers.push_back(coc_layer(scene.layers[i], coc, nthreads));
         alone.reports = { scene.reports[i] };
         ImageBuf spread_layer;
-        if (!defocus_layers(spread_layer, alone, reach, shape, no_psf, window, nullptr, nullptr,
-                            nthreads)) {
+        if (!defocus_layers(spread_layer, alone, reach.camera, reach.spread, reach.images,
+                            window, nullptr, nullptr, nthreads)) {
             dst.errorfmt("{}", spread_layer.geterror());
             return false;
         }

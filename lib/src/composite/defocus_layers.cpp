@@ -572,6 +572,15 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
 
 }  // namespace
 
+ReachOnly reach_only(const Camera& camera, const SpreadOptions& spread,
+                     const ApertureImages& images)
+{
+    ReachOnly reach { camera, spread, { images.mask, nullptr } };
+    reach.camera.axial_ca = reach.camera.lateral_ca = 0.0;
+    reach.spread.psf_image.clear();
+    return reach;
+}
+
 ImageSpec result_spec(const ImageSpec& scene, const ROI& window, TypeDesc format)
 {
     ImageSpec spec(window, format);

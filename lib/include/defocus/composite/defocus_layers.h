@@ -69,6 +69,18 @@ bool spread_layers_apart(const LayeredScene& scene, const Camera& camera,
                          std::vector<LayerReport>* report = nullptr,
                          SpreadTimings* timings = nullptr, int nthreads = 0);
 
+/// What decides how far each layer's light reaches, not its colour: a
+/// camera and spread less chromatic aberration and the PSF image. Quantities
+/// spread as colour (the CoC AOV, data channels) are spread with it.
+struct ReachOnly {
+    Camera camera;
+    SpreadOptions spread;
+    ApertureImages images;
+};
+
+ReachOnly reach_only(const Camera& camera, const SpreadOptions& spread,
+                     const ApertureImages& images);
+
 /// The largest window defocus_layers() gives with OutputWindow::Grown for
 /// layers within the data window of `scene` (a scene's spec), extended
 /// past it by extend_edges(), at the largest blur `camera` allows (its max
