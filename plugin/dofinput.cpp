@@ -324,7 +324,22 @@ bool DofInput::read_native_scanlines(int subimage, int miplevel, int ybegin, int
         return false;
     }
     const ROI rows(m_spec.x, m_spec.x + m_spec.width, ybegin, yend, 0, 1, 0, m_spec.nchannels);
-    return m_pixels.get_pixels(rows, m_spec.format, data);
+    if (m_spec.channelformats.empty())
+        return m_pixels.get_pixels(rows, m_spec.format, data);
+    // Data channels are float beside colour of the output's type: each
+    // channel goes to its place in the native pixel.
+    const stride_t pixel = stride_t(m_spec.pixel_bytes(true));
+    size_t offset = 0;
+    for (int c = 0; c < m_spec.nchannels; ++c) {
+        ROI one = rows;
+        one.chbegin = c;
+        one.chend = c + 1;
+        if (!m_pixels.get_pixels(one, m_spec.channelformat(c), static_cast<char*>(data) + offset,
+                                 pixel, pixel * m_spec.width))
+            return false;
+        offset += m_spec.channelformat(c).size();
+    }
+    return true;
 }
 
 bool DofInput::read_native_deep_scanlines(int subimage, int miplevel, int ybegin, int yend,

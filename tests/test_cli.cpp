@@ -213,6 +213,11 @@ TEST_CASE("every bad input ends in a one-line error and no output")
           "--lateral-ca cannot be written with --deep" },
         { example_scene() + " -o " + out + camera + " --deep --output focusmap",
           "--deep writes the defocused image, not --output focusmap" },
+        // Data channels the input lacks, or of an unknown kind.
+        { example_scene() + " -o " + out + camera + " --data-channels auto,matId",
+          "--data-channels auto,matId: the input has no channel matId" },
+        { example_scene() + " -o " + out + camera + " --data-channels Z:sum",
+          "--data-channels: unknown kind 'sum' for channel Z" },
         // Conflicting or unused options.
         { example_scene() + " -o " + out + camera + " --crop --grow",
           "--crop and --grow contradict each other" },

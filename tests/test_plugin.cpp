@@ -139,6 +139,28 @@ TEST_CASE("AOVs, a holdout and a deep result reach oiiotool through the plugin a
     }
 }
 
+TEST_CASE("a .dof's data channels read through the plugin as the command writes them, in float")
+{
+    const std::string dof = scene_dof();
+    const std::string out = scratch_dir("plugin_data") + "/data.exr";
+    std::string log;
+    INFO(log);
+    REQUIRE(run(with_plugin + OIIOTOOL_BIN + " --iconfig dof:data_channels auto " + dof + " -o "
+                    + out,
+                log) == 0);
+    const std::string cli = cli_render(dof, "--data-channels auto");
+    const ImageSpec spec = read_spec(out), written = read_spec(cli);
+    CHECK(spec.channelnames == written.channelnames);
+    CHECK(spec.channelindex("ZFront") >= 0);
+    // oiiotool writes every channel in the format the plugin reports: float
+    // keeps data channels whole, and holds the command's colour exactly.
+    CHECK(spec.format == TypeFloat);
+    CHECK(written.channelformat(written.channelindex("ZFront")) == TypeFloat);
+    const auto diff = ImageBufAlgo::compare(ImageBuf(out), ImageBuf(cli), 0.0f, 0.0f);
+    CHECK(diff.nfail == 0);
+    CHECK(diff.maxerror == 0.0);
+}
+
 TEST_CASE("oiiotool renders each frame of a sequence scene: shot.#.dof, or --iconfig dof:frame")
 {
     // A three-frame sequence with a focus pull from 1 m to 8 m.

@@ -7,6 +7,7 @@
 #include <defocus/color/primaries.h>
 #include <defocus/composite/coc_aov.h>
 #include <defocus/composite/confidence.h>
+#include <defocus/composite/data_channels.h>
 #include <defocus/composite/deep_result.h>
 #include <defocus/composite/holdout.h>
 #include <defocus/focus/focus_at.h>
@@ -228,6 +229,32 @@ bool spread_fits(const Shot& shot, int frame, std::string& error)
     return false;
 }
 
+/// The data channels `shot` carries from the scene whose header is `input`;
+/// false with `error` naming the files.
+bool frame_data_plan(const Shot& shot, int frame, const ImageSpec& input, DataPlan& plan,
+                     std::string& error)
+{
+    if (plan_data_channels(input, shot.data_channels, plan, error))
+        return true;
+    error = format("{}: {}", Strutil::join(frame_inputs(shot, frame), " "), error);
+    return false;
+}
+
+/// How a frame's files are read, with the data channels its shot carries.
+bool frame_reading(const Shot& shot, int frame, ReadOptions& options, std::string& error)
+{
+    options = frame_read_options(shot, frame);
+    if (shot.data_channels == Shot().data_channels)
+        return true;
+    ImageSpec input;
+    DataPlan plan;
+    if (!read_scene_spec(frame_inputs(shot, frame), options, input, error)
+        || !frame_data_plan(shot, frame, input, plan, error))
+        return false;
+    options.data_channels = plan.input_channels();
+    return true;
+}
+
 }  // namespace
 
 bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, LayeredScene& layered,
@@ -236,8 +263,10 @@ bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, Layer
 {
     Timer timer;
     Scene scene;
+    ReadOptions options;
     if (!run_stage(on_stage, "read", error) || !spread_fits(shot, frame, error)
-        || !read_scene(frame_inputs(shot, frame), frame_read_options(shot, frame), scene, error))
+        || !frame_reading(shot, frame, options, error)
+        || !read_scene(frame_inputs(shot, frame), options, scene, error))
         return false;
     return layer_scene(std::move(scene), shot, frame, assets, layered, out, error, on_stage,
                        nthreads, timer);
@@ -424,7 +453,9 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
         }
         lap("focus map");
     } else {
-        if (!read_holdout(shot, frame, layered.spec, layered.holdout, error))
+        DataPlan plan;
+        if (!read_holdout(shot, frame, layered.spec, layered.holdout, error)
+            || !frame_data_plan(shot, frame, layered.spec, plan, error))
             return false;
         const double bytes = spread_bytes(layered);
         if (!shot.read.memory_limit.allows(bytes)) {
@@ -453,22 +484,33 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
         }
         out.timings.emplace_back("spread and composite", timings.spread);
         timer.lap();
-        ImageBuf aov;
+        ImageBuf aov, data;
         if (!aov_channel(aov, image, layered, shot, out.camera, images, error, nthreads))
             return false;
         if (aov.initialized())
             lap(aov_name(shot.aov));
+        if (!plan.empty()) {
+            if (!data_channels(data, image, layered, out.camera, shot.spread, images,
+                               shot.window, plan, nthreads)) {
+                error = data.geterror();
+                return false;
+            }
+            lap("data channels");
+        }
         if (color.config
             && !color.config->convert(image, color.working, color.output, error, nthreads))
             return false;
-        if (aov.initialized()) {
+        for (const ImageBuf* extra : { &aov, &data }) {
+            if (!extra->initialized())
+                continue;
             ImageBuf both;
-            if (!ImageBufAlgo::channel_append(both, image, aov, {}, nthreads)) {
+            if (!ImageBufAlgo::channel_append(both, image, *extra, {}, nthreads)) {
                 error = both.geterror();
                 return false;
             }
             image = std::move(both);
         }
+        out.data_channels = data.initialized() ? data.nchannels() : 0;
         lap("colour out");
     }
     describe_output(image.specmod(), layered.spec, shot, out.camera, color, frame);
@@ -527,6 +569,21 @@ bool frame_spec(const Shot& shot, int frame, const ShotAssets& assets, ImageSpec
     if (shot.output == OutputKind::Image && shot.aov != Aov::None) {
         spec.nchannels += 1;
         spec.channelnames.push_back(aov_name(shot.aov));
+    }
+    DataPlan plan;
+    if (!frame_data_plan(shot, frame, input, plan, error))
+        return false;
+    if (!plan.empty() && shot.output == OutputKind::Image) {
+        // Data is written as float: IDs are float bits, P is far from 0.
+        spec.channelformats.assign(spec.nchannels, spec.format);
+        for (const std::string& name : plan.output_channels()) {
+            spec.channelnames.push_back(name);
+            spec.channelformats.push_back(TypeFloat);
+        }
+        spec.nchannels = int(spec.channelnames.size());
+        // A host that writes every channel as one type (oiiotool) takes the
+        // spec's format: float keeps the IDs whole.
+        spec.format = TypeFloat;
     }
     describe_output(spec, input, shot, camera, color, frame);
     // Focusing at a pixel measures the focus from the pixels.

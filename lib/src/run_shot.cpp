@@ -137,7 +137,8 @@ ScheduleResult run_plan(const Shot& shot, const ShotAssets& assets, const RunPla
                 if (!plan.side_files[s].empty()
                     && !request.sides[s].write(result, plan.side_files[s][i], error))
                     return false;
-            if (!write_image_atomic(result.image, plan.outputs[i], result.pixel_type, "", error))
+            if (!write_image_atomic(result.image, plan.outputs[i], result.pixel_type, "", error,
+                                    result.data_channels))
                 return false;
             result.timings.emplace_back("write", write_timer());
             return true;

@@ -437,6 +437,38 @@ def test_a_deep_result_is_written_as_the_command_and_a_dof_write_it(example, tmp
     assert np.abs(flattened - flat).max() < 1e-5
 
 
+def test_data_channels_as_the_command_and_a_dof_carry_them(tmp_path):
+    # A card at 1 m (ID 7) in front of a wall at 6 m (ID 3), with P.
+    spec = oiio.ImageSpec(96, 64, 9, oiio.FLOAT)
+    spec.channelnames = ("R", "G", "B", "A", "Z", "objectId", "P.x", "P.y", "P.z")
+    scene = np.zeros((64, 96, 9), np.float32)
+    scene[:] = (0.2, 0.3, 0.4, 1.0, 6.0, 3.0, 0.0, 0.0, 6.0)
+    scene[20:44, 30:60] = (0.9, 0.8, 0.1, 1.0, 1.0, 7.0, 0.0, 0.0, 1.0)
+    out = oiio.ImageOutput.create(str(tmp_path / "flat.exr"))
+    assert out.open(str(tmp_path / "flat.exr"), spec)
+    out.write_image(scene)
+    out.close()
+    shot = defocus.Shot(inputs=[tmp_path / "flat.exr"], data_channels="auto", **SMALL_CAMERA)
+    ours = defocus.render(shot)
+    assert ours.shape[2] == 4 + 2 + 4  # RGBA, Z and ZFront, the ID and P
+    assert set(np.unique(ours[..., 6])) <= {3.0, 7.0}  # never a mix
+    assert set(np.unique(np.round(ours[..., 9], 4))) <= {1.0, 6.0}
+    assert ours[..., 4].min() >= 1.0 - 1e-4 and ours[..., 4].max() <= 6.0 + 1e-4
+    defocus.render_to_file(shot, tmp_path / "py.exr")
+    shot.save(tmp_path / "shot.dof")
+    defocus.render_to_file(tmp_path / "shot.dof", tmp_path / "dof.exr")
+    args = [word for k, v in SMALL_CAMERA.items() for word in (f"--{k}", str(v))]
+    assert cli(tmp_path / "flat.exr", "-o", tmp_path / "cli.exr", "--data-channels", "auto",
+               *args) == (0, "")
+    theirs, _ = pixels(tmp_path / "cli.exr")
+    for other in ("py.exr", "dof.exr"):
+        assert np.array_equal(pixels(tmp_path / other)[0], theirs)
+    assert np.array_equal(ours, theirs)
+    with pytest.raises(defocus.Error, match=r'data_channels="auto,uv": the input has no channel uv'):
+        defocus.render(defocus.Shot(inputs=[tmp_path / "flat.exr"], data_channels="auto,uv",
+                                    **SMALL_CAMERA))
+
+
 @pytest.mark.parametrize("bad, message", [
     (lambda l: [(l[0][0].astype(np.float64), l[0][1])], r"rgba: dtype float64; expected float32"),
     (lambda l: [(l[0][0][..., :3], l[0][1])], r"rgba: shape \(64, 96, 3\); expected"),

@@ -32,6 +32,9 @@ struct FrameResult {
     /// and the settings used (defocus:*, oiio:ColorSpace, compression).
     OIIO::ImageBuf image;
     OIIO::TypeDesc pixel_type;  ///< to write it as
+    /// The last channels of `image` that are data (composite/data_channels.h),
+    /// written as float whatever pixel_type is.
+    int data_channels = 0;
     PixelCounts fixed;
     std::vector<std::string> notes;  ///< how reading took what the files did not say
     std::string slicing;  ///< how flat or deep input was cut into layers ("" = not)

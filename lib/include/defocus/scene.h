@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,12 @@ struct Layer {
     /// One channel, nonzero there, over part of the layer's window; empty
     /// when nothing is.
     OIIO::ImageBuf rebuilt {};
+    /// The data channels (IDs, cryptomatte, P, N: see
+    /// composite/data_channels.h) of the render or part the layer was cut
+    /// from, float, over that source's data window: a layer pixel's data is
+    /// the source pixel's at the same place. Shared by every layer cut from
+    /// one source; null when none were asked for.
+    std::shared_ptr<const OIIO::ImageBuf> data {};
 };
 
 /// One deep sample: premultiplied colour, alpha, and the depth interval it

@@ -291,19 +291,25 @@ bool write_text_atomic(const std::string& filename, const std::string& text,
 
 bool write_image_atomic(const ImageBuf& image, const std::string& filename,
                         TypeDesc type, const std::string& compression,
-                        std::string& error)
+                        std::string& error, int float_channels)
 {
     ImageSpec spec = image.spec();
     if (type != TypeUnknown && !spec.deep) {
         spec.set_format(type);
         spec.channelformats.clear();
+        if (float_channels > 0 && type != TypeFloat) {
+            spec.channelformats.assign(spec.nchannels, type);
+            std::fill(spec.channelformats.end() - std::min(float_channels, spec.nchannels),
+                      spec.channelformats.end(), TypeFloat);
+        }
     }
     if (!compression.empty())
         spec.attribute("compression", compression);
     return write_atomic(filename, [&](ImageOutput& out, const std::string& tmp) {
         if (out.supports("displaywindow")) {
             ImageBuf half;
-            if (spec.format == TypeHalf && !spec.deep && convert_to_half(image, half))
+            if (spec.format == TypeHalf && spec.channelformats.empty() && !spec.deep
+                && convert_to_half(image, half))
                 return out.open(tmp, spec) && half.write(&out);
             return out.open(tmp, spec) && image.write(&out);
         }

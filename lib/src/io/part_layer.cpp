@@ -1,5 +1,6 @@
 #include "io/part_layer.h"
 
+#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/parallel.h>
 #include <OpenImageIO/strutil.h>
 
@@ -184,6 +185,45 @@ bool read_layer(const ExrInput& exr, ImageInput& in, const std::string& filename
     }
     if (!color_part.channels.has_alpha())
         set_opaque(layer);
+    return true;
+}
+
+bool read_data_channels(const ExrInput& exr, ImageInput& in, const std::string& filename,
+                        const Part& part, const std::vector<std::string>& names, Layer& layer,
+                        std::string& error)
+{
+    std::vector<std::string> present;
+    std::vector<int> indices;
+    for (const std::string& name : names)
+        if (const int c = part.spec.channelindex(name); c >= 0) {
+            present.push_back(name);
+            indices.push_back(c);
+        }
+    if (present.empty())
+        return true;
+    const ROI window = part.spec.roi();
+    ImageSpec spec = depth_image(window, part.spec).spec();
+    spec.nchannels = int(present.size());
+    spec.channelnames = present;
+    auto data = std::make_shared<ImageBuf>(spec, InitializePixels::No);
+    if (exr.is_open()) {
+        const size_t n = present.size();
+        float* origin = static_cast<float*>(data->localpixels());
+        std::vector<ChannelTarget> targets;
+        for (size_t c = 0; c < n; ++c)
+            targets.push_back({ present[c], origin + c, n, n * size_t(window.width()) });
+        if (!exr.read(part.subimage, window, targets, error, 0))
+            return false;
+    } else {
+        ImageBuf all;
+        if (!read_pixels(in, part, all, filename, error))
+            return false;
+        if (!ImageBufAlgo::channels(*data, all, int(indices.size()), indices.data())) {
+            error = format("{}: {}: {}", filename, part.label, data->geterror());
+            return false;
+        }
+    }
+    layer.data = std::move(data);
     return true;
 }
 

@@ -41,4 +41,10 @@ bool read_layer(const ExrInput& exr, OIIO::ImageInput& in, const std::string& fi
                 const std::string& name, const Part& color_part, const Part* depth_part,
                 Layer& layer, std::string& error);
 
+/// Sets a layer's `data` to those of the channels `names` that `part` has,
+/// as float over the part's data window; leaves it null when it has none.
+bool read_data_channels(const ExrInput& exr, OIIO::ImageInput& in, const std::string& filename,
+                        const Part& part, const std::vector<std::string>& names, Layer& layer,
+                        std::string& error);
+
 }  // namespace defocus

@@ -371,7 +371,8 @@ bool read_file(const std::string& filename, const ReadOptions& options,
             continue;
         }
         Layer layer;
-        if (!read_layer(exr, *in, filename, layer_name(part, "layer"), part, &part, layer, error))
+        if (!read_layer(exr, *in, filename, layer_name(part, "layer"), part, &part, layer, error)
+            || !read_data_channels(exr, *in, filename, part, options.data_channels, layer, error))
             return false;
         (layout.complete.size() > 1 ? scene.layers : scene.flat).push_back(std::move(layer));
     }
@@ -381,7 +382,9 @@ bool read_file(const std::string& filename, const ReadOptions& options,
             layout.joined_depth >= 0 ? &layout.parts[layout.joined_depth] : nullptr;
         const std::string name = color_part.spec.get_string_attribute("name", "beauty");
         Layer layer;
-        if (!read_layer(exr, *in, filename, name, color_part, depth_part, layer, error))
+        if (!read_layer(exr, *in, filename, name, color_part, depth_part, layer, error)
+            || !read_data_channels(exr, *in, filename, color_part, options.data_channels, layer,
+                                   error))
             return false;
         if (!layout.depth_file.empty()) {
             if (!read_depth_file(layout.depth_file, color_part.spec, options.memory_limit, layer,

@@ -190,6 +190,8 @@ bool slice(const Source& frags, const std::string& base, const LayerBounds& boun
         }
         Layer layer;
         layer.name = Strutil::fmt::format("{}.{:02d}", base, k);
+        if (render)
+            layer.data = render->data;
         const ROI& all = frags.roi();
         if (render && k == last && window.xbegin == all.xbegin && window.xend == all.xend
             && window.ybegin == all.ybegin && window.yend == all.yend) {

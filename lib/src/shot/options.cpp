@@ -1,5 +1,7 @@
 #include <defocus/shot/options.h>
 
+#include <OpenImageIO/strutil.h>
+
 #include "util/parse_name.h"
 
 namespace defocus {
@@ -64,6 +66,49 @@ const char* output_window_name(OutputWindow window)
     case OutputWindow::Grown: return "grown";
     }
     return "?";
+}
+
+const char* data_kind_name(DataKind kind)
+{
+    switch (kind) {
+    case DataKind::Id: return "id";
+    case DataKind::Dominant: return "dominant";
+    case DataKind::Average: return "average";
+    }
+    return "?";
+}
+
+bool parse_data_channels(const std::string& label, const std::string& setting,
+                         std::vector<DataChannelEntry>& entries, std::string& error)
+{
+    using OIIO::Strutil::fmt::format;
+    entries.clear();
+    if (setting == "none")
+        return true;
+    for (std::string item : OIIO::Strutil::splits(setting, ",")) {
+        item = OIIO::Strutil::strip(item);
+        DataChannelEntry entry;
+        entry.automatic = item == "auto";
+        const size_t colon = item.rfind(':');
+        if (!entry.automatic)
+            entry.name = item.substr(0, colon);
+        if (!entry.automatic && colon != std::string::npos
+            && !parse_name(item.substr(colon + 1),
+                           { DataKind::Id, DataKind::Dominant, DataKind::Average },
+                           data_kind_name, entry.kind)) {
+            error = format("{}: unknown kind '{}' for channel {} (choose id, dominant or "
+                           "average)", label, item.substr(colon + 1), entry.name);
+            return false;
+        }
+        if (!entry.automatic && entry.name.empty()) {
+            error = format("{}: an empty channel name in '{}' (give none, auto, or channel "
+                           "names, each with an optional :id, :dominant or :average)",
+                           label, setting);
+            return false;
+        }
+        entries.push_back(entry);
+    }
+    return true;
 }
 
 }  // namespace defocus

@@ -448,6 +448,23 @@ std::vector<SettingRule> output_rules()
                  "drive other blurs from (default: none)" },
                [](auto& s) -> auto& { return s.aov; }, parse_aov, aov_name, "AOV",
                "none, confidence or coc"),
+        { { "data-channels", "output", "data_channels", K::Text, G::Output,
+            "--data-channels LIST",
+            "Carry the input's data channels through the defocus, not averaged as colour: "
+            "auto for every channel whose name says it is data (cryptomatte sets, IDs such "
+            "as id or objectId, P, N, Position, Normal) and the depth, written as Z "
+            "(coverage-weighted) and ZFront (the front-most layer's); or channel names, "
+            "each with :id (the ID with the largest share of the pixel), :dominant (the "
+            "value of the layer with the largest share; the default) or :average, beside "
+            "auto or not, e.g. auto,matId:id (default: none)" },
+          [](Shot& shot, const std::string& label, const std::string& value, std::string& error) {
+              std::vector<DataChannelEntry> entries;
+              if (!parse_data_channels(label, value, entries, error))
+                  return false;
+              shot.data_channels = value;
+              return true;
+          },
+          [](const Shot& shot) { return shot.data_channels; } },
         choice({ "deep", "output", "deep", K::Switch, G::Output, nullptr,
                  "A deep OpenEXR result: each layer's defocused RGBA a sample at the "
                  "layer's depths (Z, ZBack), to merge with other elements",

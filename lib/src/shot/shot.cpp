@@ -98,6 +98,9 @@ std::string deep_refusal(const Shot& shot)
         return format("{} cannot be written with {}: merge the deep result with the holdout "
                       "instead",
                       setting_label(shot, "holdout"), deep);
+    if (shot.data_channels != Shot().data_channels)
+        return format("{} cannot be written with {}: a deep sample holds colour and depth only",
+                      setting_label(shot, "data-channels"), deep);
     for (const char* name : { "axial-ca", "lateral-ca" })
         if (shot_setting(shot, name) != shot_setting(Shot(), name))
             return format("{} cannot be written with {}: each colour is occluded by its own "
@@ -127,6 +130,9 @@ bool check_shot(const Shot& shot, std::string& error)
                            setting_label(shot, "aov"), mention("output", "focusmap")));
     if (shot.deep && !deep_refusal(shot).empty())
         return fail(deep_refusal(shot));
+    if (shot.output == OutputKind::FocusMap && shot.data_channels != Shot().data_channels)
+        return fail(format("{} applies to the defocused image, not {}",
+                           setting_label(shot, "data-channels"), mention("output", "focusmap")));
     // Settings that shape only a polygon would do nothing to other apertures.
     if (aperture.shape != ApertureShape::Polygon)
         for (const char* polygon_only : { "blades", "roundness", "rotation" })

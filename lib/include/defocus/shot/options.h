@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include <defocus/optics/aperture.h>
 #include <defocus/shot/memory_limit.h>
@@ -39,6 +40,9 @@ struct ReadOptions {
     /// (its Z channel, or its only channel) over the same display window
     /// ("" = the input's Z).
     std::string depth;
+    /// Data channels to read beside colour and depth, into each layer's
+    /// `data`, where its part has them (see composite/data_channels.h).
+    std::vector<std::string> data_channels;
     /// What a file may ask to allocate (the shot's --memory-limit).
     MemoryLimit memory_limit;
 };
@@ -101,5 +105,30 @@ enum class Aov {
 };
 bool parse_aov(const std::string& name, Aov& aov);
 const char* aov_name(Aov aov);
+
+/// How a data channel read from the input is carried through defocus
+/// (composite/data_channels.h).
+enum class DataKind {
+    Id,        ///< the ID with the largest share of the pixel
+    Dominant,  ///< the value of the layer with the largest share (P, N)
+    Average,   ///< the coverage-weighted mean
+};
+
+const char* data_kind_name(DataKind kind);
+
+/// One entry of the data channels setting: "auto", or a channel and how it
+/// is carried.
+struct DataChannelEntry {
+    bool automatic = false;
+    std::string name;
+    DataKind kind = DataKind::Dominant;
+};
+
+/// Reads the data channels setting: "none", or a comma-separated list of
+/// "auto" and channel names, each optionally followed by ":id",
+/// ":dominant" (the default) or ":average". False with `error` naming
+/// `label`.
+bool parse_data_channels(const std::string& label, const std::string& setting,
+                         std::vector<DataChannelEntry>& entries, std::string& error);
 
 }  // namespace defocus

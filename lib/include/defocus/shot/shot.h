@@ -75,6 +75,9 @@ struct Shot {
     Aov aov = Aov::None;
     /// A deep result: each layer's defocused RGBA a sample at its depth.
     bool deep = false;
+    /// The input's data channels to carry through (composite/data_channels.h):
+    /// "none", "auto", or channel names.
+    std::string data_channels = "none";
     EdgeMode edge = EdgeMode::Auto;  ///< beyond the data window, when the blur reaches it
 
     /// The settings given by set_shot_setting(), each with where (its
