@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <cstring>
+#include <limits>
 
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/strutil.h>
@@ -293,4 +294,58 @@ TEST_CASE("a data channels setting that cannot be carried is refused in one line
     map.emplace_back("output", "focusmap");
     CHECK_FALSE(render_with(scene, map, result, error));
     CHECK(one_line_error(error, "--data-channels applies to the defocused image"));
+}
+
+TEST_CASE("bad data values never reach the output, and integer IDs come out whole")
+{
+    const std::string dir = scratch_dir("data_bad");
+    ImageBuf image(scene_spec());
+    std::vector<float> empty(channels.size(), 0.0f);
+    empty[4] = 1e10f;
+    ImageBufAlgo::fill(image, empty);
+    ImageBufAlgo::fill(image, object_pixel(false), back_card);
+    ImageBufAlgo::fill(image, object_pixel(true), front_card);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const float inf = std::numeric_limits<float>::infinity();
+    const int id = 9, coverage = 6, px = 10;
+    for (int y = 40; y < 60; ++y) {
+        image.setpixel(50, y, std::vector<float> { 0.9f, 0.3f, 0.1f, 1.0f, 2.0f, nan, nan, 0.0f,
+                                                   0.0f, inf, nan, 1e38f, -inf, nan, 0.0f,
+                                                   1.0f }.data());
+    }
+    REQUIRE(image.getchannel(50, 45, 0, coverage) != image.getchannel(50, 45, 0, coverage));
+    REQUIRE(std::isinf(image.getchannel(50, 45, 0, id)));
+    REQUIRE(std::isnan(image.getchannel(50, 45, 0, px)));
+    const std::string bad = dir + "/bad.exr";
+    REQUIRE(image.write(bad));
+    const ImageBuf out = rendered(bad, with_data());
+    CHECK(no_nan(out));
+
+    // IDs stored as unsigned integers, as some renderers write them.
+    ImageSpec spec = scene_spec();
+    spec.channelformats.assign(channels.size(), TypeFloat);
+    spec.channelformats[id] = TypeUInt;
+    const std::string integer = dir + "/integer.exr";
+    auto file = ImageOutput::create(integer);
+    ImageBuf source(scene_spec());
+    ImageBufAlgo::fill(source, empty);
+    ImageBufAlgo::fill(source, object_pixel(false), back_card);
+    ImageBufAlgo::fill(source, object_pixel(true), front_card);
+    // Native pixels: the ID as an unsigned integer, not a scaled float.
+    std::vector<uint32_t> native(size_t(width) * height * channels.size());
+    const float* from = static_cast<const float*>(source.localpixels());
+    for (size_t i = 0; i < native.size(); ++i) {
+        if (i % channels.size() == size_t(id))
+            native[i] = uint32_t(from[i]);
+        else
+            std::memcpy(&native[i], &from[i], sizeof(float));
+    }
+    REQUIRE(file->open(integer, spec));
+    REQUIRE(file->write_image(TypeUnknown, native.data()));
+    REQUIRE(file->close());
+    const ImageSpec written = read_spec(integer);
+    REQUIRE(written.channelformat(written.channelindex("objectId")) == TypeUInt);
+    const ImageBuf ids = rendered(integer, with_data("objectId:id"));
+    CHECK(ids.getchannel(45, 50, 0, 4) == 1.0f);
+    CHECK(ids.getchannel(120, 50, 0, 4) == 2.0f);
 }

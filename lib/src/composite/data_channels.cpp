@@ -110,6 +110,14 @@ private:
     std::vector<Imath::V2i> m_nearest;  ///< empty when nothing is rebuilt
 };
 
+/// A data value safe to spread: NaN and infinity carry nothing (0), and
+/// values beyond +-1e30 are clamped there, as sanitize() clamps colour
+/// (float sums of them overflow).
+float safe_value(float v)
+{
+    return std::isfinite(v) ? std::clamp(v, -1e30f, 1e30f) : 0.0f;
+}
+
 /// Fills up to three quantities of a layer pixel.
 using QuantityFill = std::function<void(int x, int y, float q[3])>;
 
@@ -271,7 +279,7 @@ bool spread_quantities(ImageBuf& dst, Coverage& cov, const Spreader& spreader,
             layers.push_back(quantity_layer(layer, layer.color.roi(), [&](int x, int y, float q[3]) {
                 for (size_t j = 0; j < channels.size(); ++j)
                     q[j] = targets[j].source.empty() ? *depth(x, y)
-                           : channels[j] >= 0       ? lookup(x, y)[channels[j]]
+                           : channels[j] >= 0       ? safe_value(lookup(x, y)[channels[j]])
                                                     : 0.0f;
             }, spreader.nthreads));
         }
@@ -326,7 +334,7 @@ int pixel_objects(const ObjectSet& set, const float* data, const std::vector<int
                   PixelObject objects[max_ranks])
 {
     if (!set.crypto) {
-        if (channels[0] < 0)
+        if (channels[0] < 0 || !std::isfinite(data[channels[0]]))
             return 0;
         objects[0] = { float_bits(data[channels[0]]), 1.0f };
         return 1;
@@ -337,7 +345,7 @@ int pixel_objects(const ObjectSet& set, const float* data, const std::vector<int
         if (channels[r] < 0 || channels[r + 1] < 0)
             continue;
         const float coverage = data[channels[r + 1]];
-        if (!(coverage > 0.0f))
+        if (!(coverage > 0.0f) || !std::isfinite(coverage) || !std::isfinite(data[channels[r]]))
             continue;
         objects[n++] = { float_bits(data[channels[r]]), coverage };
         total += coverage;
