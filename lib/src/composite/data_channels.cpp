@@ -131,7 +131,13 @@ Layer quantity_layer(const Layer& layer, const ROI& roi, const QuantityFill& fil
     ROI zroi = roi;
     zroi.chbegin = 0;
     zroi.chend = 1;
-    ImageBufAlgo::crop(out.depth, layer.depth, zroi, nthreads);
+    const ROI whole = layer.depth.roi();
+    if (whole == zroi && layer.depth.localpixels() && layer.depth.spec().format == TypeFloat)
+        // The whole layer: its depth is read, not copied (the layer outlives
+        // the spread).
+        out.depth = ImageBuf(layer.depth.spec(), const_cast<void*>(layer.depth.localpixels()));
+    else
+        ImageBufAlgo::crop(out.depth, layer.depth, zroi, nthreads);
     const FloatPixels color(layer.color, roi);
     parallel_for(roi.ybegin, roi.yend, [&](int y) {
         float* o = static_cast<float*>(out.color.pixeladdr(roi.xbegin, y));
@@ -169,9 +175,12 @@ struct Spreader {
         alone.spec = scene.spec;
         alone.luma = scene.luma;
         const CircleOfConfusion coc(reach.camera, scene.spec.roi_full());
-        for (Layer& layer : layers) {
-            alone.reports.push_back(describe_layer(layer, coc, nthreads));
-            alone.layers.push_back(std::move(layer));
+        for (size_t k = 0; k < layers.size(); ++k) {
+            // A whole layer's quantities have its alpha and depth: its report.
+            const bool whole = layers[k].color.roi() == scene.layers[from[k]].color.roi();
+            alone.reports.push_back(whole ? scene.reports[from[k]]
+                                          : describe_layer(layers[k], coc, nthreads));
+            alone.layers.push_back(std::move(layers[k]));
         }
         return spread_layers_apart(alone, reach.camera, reach.spread, reach.images, window,
                                    [&](size_t i, const ImageBuf& s, const ROI&) {
@@ -258,10 +267,12 @@ std::vector<size_t> lit_layers(const LayeredScene& scene)
 }
 
 /// Spreads the depth and the Average and Dominant channels, three at a
-/// time, through every layer; the first spread also fills `cov`.
+/// time, through every layer; the first spread also fills `cov` (each
+/// layer's alpha only when `keep_alphas`: mattes need it).
 bool spread_quantities(ImageBuf& dst, Coverage& cov, const Spreader& spreader,
                        const std::vector<DataLookup>& lookups,
-                       const std::vector<QuantityTarget>& all, std::string& error)
+                       const std::vector<QuantityTarget>& all, bool keep_alphas,
+                       std::string& error)
 {
     const LayeredScene& scene = spreader.scene;
     const std::vector<size_t> from = lit_layers(scene);
@@ -287,7 +298,7 @@ bool spread_quantities(ImageBuf& dst, Coverage& cov, const Spreader& spreader,
         if (!spreader.spread(std::move(layers), from, [&](size_t i, const ImageBuf& s) {
                 composite_quantities(dst, cov, s, i, targets, first_pass, spreader.nthreads);
                 const int alpha[] = { 3 };
-                if (first_pass)
+                if (first_pass && keep_alphas)
                     ImageBufAlgo::channels(cov.layer_alpha[i], s, 1, alpha);
             }, error))
             return false;
@@ -622,7 +633,7 @@ bool data_channels(ImageBuf& dst, const ImageBuf& result, const LayeredScene& sc
     std::vector<std::array<int, 3>> normals;
     lay_out(plan, names, targets, sets, averages, normals);
     std::string error;
-    if (!spread_quantities(dst, cov, spreader, lookups, targets, error)) {
+    if (!spread_quantities(dst, cov, spreader, lookups, targets, !sets.empty(), error)) {
         dst.errorfmt("{}", error);
         return false;
     }

@@ -456,6 +456,22 @@ void composite_layers(ImageBuf& frame, const LayeredScene& scene,
     }
 }
 
+/// The part of `window` a layer's spreads light (all of it, magnified);
+/// empty when it has none.
+ROI lit_window(const LayerSpreads& layer, const ROI& window)
+{
+    ROI lit;
+    bool magnified = false;
+    for (const LayerPass& p : layer.passes) {
+        lit = roi_union(lit, p.spread.extent());
+        magnified |= p.channels.magnified;
+    }
+    lit = magnified ? window : roi_intersection(window, lit);
+    lit.chbegin = 0;
+    lit.chend = 4;
+    return layer.passes.empty() || lit.npixels() <= 0 ? ROI(0, 0, 0, 0, 0, 1, 0, 4) : lit;
+}
+
 /// Composites each layer's passes onto a black frame of its own over the
 /// part of `window` it lights, back to front, and hands it to `sink`, each
 /// layer's spreads freed once composited.
@@ -464,23 +480,19 @@ bool composite_apart(const LayeredScene& scene, std::vector<LayerSpreads>& layer
                      double lateral_ca, const Imath::V2d& centre, const LayerSink& sink,
                      int nthreads)
 {
-    ImageBuf frame;
+    // One buffer, as large as the largest layer's frame, holds each in
+    // turn: a fresh one per layer faulted in a 4K frame's pages again.
+    size_t largest = 0;
+    for (const LayerSpreads& l : layers)
+        largest = std::max(largest, size_t(lit_window(l, window).npixels()));
+    std::unique_ptr<float[]> pixels(new float[4 * largest]);
     for (size_t i = 0; i < scene.layers.size(); ++i) {
-        // The part of the window the layer lights (all of it, magnified).
-        ROI lit;
-        bool magnified = false;
-        for (const LayerPass& p : layers[i].passes) {
-            lit = roi_union(lit, p.spread.extent());
-            magnified |= p.channels.magnified;
-        }
-        lit = magnified ? window : roi_intersection(window, lit);
-        lit.chbegin = 0;
-        lit.chend = 4;
-        if (layers[i].passes.empty() || lit.npixels() <= 0)
+        const ROI lit = lit_window(layers[i], window);
+        if (lit.npixels() <= 0)
             continue;
         const LayerPass* alone = storable_pass(layers[i]);
-        reset_zeroed_except(frame, result_spec(scene.spec, lit, TypeFloat),
-                            alone ? alone->spread.engine->extent() : ROI(), nthreads);
+        ImageBuf frame(result_spec(scene.spec, lit, TypeFloat), pixels.get());
+        zero_except(frame, alone ? alone->spread.engine->extent() : ROI(), nthreads);
         for (LayerPass& p : layers[i].passes)
             composite_pass(frame, p, &p == alone, scene.spec, lit, reach, lateral_ca, centre,
                            nthreads);

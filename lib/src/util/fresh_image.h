@@ -38,14 +38,13 @@ inline void reset_for_overwrite(OIIO::ImageBuf& image, const OIIO::ImageSpec& sp
     prefault(image.localpixels(), spec.image_bytes(), nthreads);
 }
 
-/// Resets `image` to `spec` (local pixels) with every pixel zero but those
+/// Sets every pixel of `image` (local or wrapped pixels) to zero but those
 /// of `unset` (if defined), which the caller writes. OIIO's own
 /// zero-initialisation goes through its pixel iterator, which costs a 4K
 /// frame more than spreading a sparse layer into it.
-inline void reset_zeroed_except(OIIO::ImageBuf& image, const OIIO::ImageSpec& spec,
-                                const OIIO::ROI& unset, int nthreads)
+inline void zero_except(OIIO::ImageBuf& image, const OIIO::ROI& unset, int nthreads)
 {
-    reset_for_overwrite(image, spec, nthreads);
+    const OIIO::ImageSpec& spec = image.spec();
     const OIIO::ROI all = image.roi();
     const OIIO::ROI untouched = unset.defined() && spec.depth == 1
                                     ? OIIO::roi_intersection(unset, all)
@@ -63,6 +62,15 @@ inline void reset_zeroed_except(OIIO::ImageBuf& image, const OIIO::ImageSpec& sp
         std::memset(p + size_t(untouched.xend - all.xbegin) * pixel_bytes, 0,
                     size_t(all.xend - untouched.xend) * pixel_bytes);
     }, by_rows(nthreads));
+}
+
+/// Resets `image` to `spec` (local pixels) with every pixel zero but those
+/// of `unset` (if defined), which the caller writes.
+inline void reset_zeroed_except(OIIO::ImageBuf& image, const OIIO::ImageSpec& spec,
+                                const OIIO::ROI& unset, int nthreads)
+{
+    reset_for_overwrite(image, spec, nthreads);
+    zero_except(image, unset, nthreads);
 }
 
 /// Resets `image` to `spec` (local pixels) with every pixel zero.
