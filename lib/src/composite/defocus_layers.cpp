@@ -204,18 +204,14 @@ public:
 
     MagnifiedAxis(int begin, int end, double m, double o) : m_begin(begin)
     {
-        // Pixel indices, centres at i + 1/2: where source pixel i lands,
-        // and where output pixel i comes from.
-        auto lands = [&](double i) { return o + (i + 0.5 - o) * m - 0.5; };
-        auto comes = [&](double i) { return o + (i + 0.5 - o) / m - 0.5; };
         for (int i = begin; i < end; ++i) {
-            const double from = comes(i);
-            Pixel p { int(std::floor(from)), 0.0, int(std::ceil(comes(i - 1))), 0,
+            const double from = comes(i, m, o);
+            Pixel p { int(std::floor(from)), 0.0, int(std::ceil(comes(i - 1, m, o))), 0,
                       m_weights.size() };
             p.fraction = from - p.from;
-            p.sources = std::max(0, int(std::floor(comes(i + 1))) - p.first_source + 1);
+            p.sources = std::max(0, int(std::floor(comes(i + 1, m, o))) - p.first_source + 1);
             for (int k = 0; k < p.sources; ++k)
-                m_weights.push_back(1.0 - std::abs(lands(p.first_source + k) - i));
+                m_weights.push_back(1.0 - std::abs(lands(p.first_source + k, m, o) - i));
             m_pixels.push_back(p);
         }
     }
@@ -223,14 +219,18 @@ public:
     /// [begin, end) can reach, with a pixel to spare.
     static std::pair<int, int> reached(int begin, int end, double m, double o)
     {
-        auto lands = [&](double i) { return o + (i + 0.5 - o) * m - 0.5; };
-        return { int(std::floor(lands(begin))) - 2, int(std::ceil(lands(end))) + 2 };
+        return { int(std::floor(lands(begin, m, o))) - 2, int(std::ceil(lands(end, m, o))) + 2 };
     }
 
     const Pixel& operator[](int i) const { return m_pixels[size_t(i - m_begin)]; }
     double weight(const Pixel& p, int k) const { return m_weights[p.weights + size_t(k)]; }
 
 private:
+    // Pixel indices, centres at i + 1/2: where source pixel i lands, and
+    // where output pixel i comes from.
+    static double lands(double i, double m, double o) { return o + (i + 0.5 - o) * m - 0.5; }
+    static double comes(double i, double m, double o) { return o + (i + 0.5 - o) / m - 0.5; }
+
     int m_begin;
     std::vector<Pixel> m_pixels;
     std::vector<double> m_weights;
