@@ -140,14 +140,17 @@ void deep_rows(const DeepData& image, const ImageSpec& spec, int ybegin, int yen
     rows.set_all_samples(counts);
     const bool whole = chbegin == 0 && chend == image.channels();
     for (int64_t p = 0; p < npixels; ++p) {
-        if (whole && counts[size_t(p)] > 0) {
-            std::memcpy(rows.data_ptr(p, 0, 0), image.data_ptr(first + p, 0, 0),
-                        counts[size_t(p)] * image.samplesize());
+        const int samples = int(counts[size_t(p)]);
+        if (samples == 0)
             continue;
+        if (whole) {  // the same sample layout: copied as it is
+            std::memcpy(rows.data_ptr(p, 0, 0), image.data_ptr(first + p, 0, 0),
+                        size_t(samples) * image.samplesize());
+        } else {
+            for (int s = 0; s < samples; ++s)
+                for (int c = chbegin; c < chend; ++c)
+                    rows.set_deep_value(p, c - chbegin, s, image.deep_value(first + p, c, s));
         }
-        for (int s = 0; s < int(counts[size_t(p)]) && !whole; ++s)
-            for (int c = chbegin; c < chend; ++c)
-                rows.set_deep_value(p, c - chbegin, s, image.deep_value(first + p, c, s));
     }
 }
 
