@@ -68,16 +68,6 @@ std::string history_line(const Shot& shot, int frame)
     return line;
 }
 
-/// The compression a deep result is written with: the shot's, else the
-/// input's where deep files are written with it, else zips.
-std::string deep_compression(const Shot& shot, const ImageSpec& input)
-{
-    if (!shot.compression.empty())
-        return shot.compression;
-    const std::string inherited = input.get_string_attribute("compression");
-    return deep_compressions().count(inherited) ? inherited : "zips";
-}
-
 /// The metadata of a result: the input's (less what describes one part),
 /// its colour space, and the settings used.
 void describe_output(ImageSpec& spec, const ImageSpec& input, const Shot& shot,
@@ -94,7 +84,8 @@ void describe_output(ImageSpec& spec, const ImageSpec& input, const Shot& shot,
         record_color_space(spec, *color.config, color.output);
     }
     if (shot.deep)
-        spec.attribute("compression", deep_compression(shot, input));
+        spec.attribute("compression",
+                       deep_compression(shot.compression, input.get_string_attribute("compression")));
     else if (!shot.compression.empty())
         spec.attribute("compression", shot.compression);
     record_camera(spec, camera);

@@ -154,6 +154,13 @@ const std::set<std::string>& deep_compressions()
     return names;
 }
 
+std::string deep_compression(const std::string& given, const std::string& inherited)
+{
+    if (!given.empty())
+        return given;
+    return deep_compressions().count(inherited) ? inherited : "zips";
+}
+
 bool check_output(const std::string& filename, const std::string& compression,
                   std::string& error, bool deep)
 {

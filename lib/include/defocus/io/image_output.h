@@ -42,6 +42,11 @@ bool check_output(const std::string& filename, const std::string& compression,
 /// The compressions deep EXR files are written with.
 const std::set<std::string>& deep_compressions();
 
+/// The compression a deep result is written with: the one `given`
+/// (checked by check_output()), else the input's when it is one of those,
+/// else zips.
+std::string deep_compression(const std::string& given, const std::string& inherited);
+
 /// Whether the files a run writes leave every file it reads alone: false
 /// when one of `written` is one of `read`, by file identity (device and
 /// inode, so symbolic and hard links count), with `error` naming both
