@@ -6,6 +6,7 @@
 #include <cstring>
 #include <limits>
 
+#include <OpenImageIO/deepdata.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/strutil.h>
 
@@ -99,6 +100,34 @@ std::string layered_scene(const std::string& dir, bool with_front, bool with_bac
     return path;
 }
 
+/// The same cards as a deep image: a sample for each card a pixel shows,
+/// the one behind kept where the other hides it.
+std::string deep_scene(const std::string& dir, bool with_front, bool with_back)
+{
+    ImageSpec spec = scene_spec();
+    spec.deep = true;
+    DeepData data(spec);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            std::vector<std::vector<float>> samples;
+            if (with_front && front_card.contains(x, y))
+                samples.push_back(object_pixel(true));
+            if (with_back && back_card.contains(x, y))
+                samples.push_back(object_pixel(false));
+            const int64_t p = int64_t(y) * width + x;
+            data.set_samples(p, int(samples.size()));
+            for (int k = 0; k < int(samples.size()); ++k)
+                for (int c = 0; c < int(channels.size()); ++c)
+                    data.set_deep_value(p, c, k, samples[k][c]);
+        }
+    const std::string path = Strutil::fmt::format("{}/deep{}{}.exr", dir, with_front, with_back);
+    auto out = ImageOutput::create(path);
+    REQUIRE(out->open(path, spec));
+    REQUIRE(out->write_deep_image(data));
+    REQUIRE(out->close());
+    return path;
+}
+
 /// Blur of about 26 px at 2 m and 15 px at 5 m.
 const Settings camera = { { "focus", "3.2" }, { "fstop", "1.4" }, { "focal", "85" },
                           { "sensor", "6" } };
@@ -174,6 +203,12 @@ TEST_CASE("decoded cryptomatte mattes are each object's share of the defocused a
         check_mattes(rendered(layered_scene(dir, true, true), with_data()),
                      rendered(layered_scene(dir, true, false), camera),
                      rendered(layered_scene(dir, false, true), camera));
+    }
+    SECTION("a deep image")
+    {
+        check_mattes(rendered(deep_scene(dir, true, true), with_data()),
+                     rendered(deep_scene(dir, true, false), camera),
+                     rendered(deep_scene(dir, false, true), camera));
     }
     SECTION("written as half, the IDs stay float and the mattes still sum to the alpha")
     {

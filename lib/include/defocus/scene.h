@@ -43,6 +43,10 @@ struct DeepImage {
     OIIO::ROI roi;                  ///< data window
     std::vector<uint64_t> offsets;  ///< pixel i's samples are [offsets[i], offsets[i+1])
     std::vector<DeepSample> samples;
+    /// Data channels read beside colour and depth (see Layer::data), and
+    /// their values: data_names.size() of them per sample, in sample order.
+    std::vector<std::string> data_names;
+    std::vector<float> data;
 
     int64_t pixel_index(int x, int y) const
     {

@@ -120,8 +120,6 @@ bool plan_data_channels(const ImageSpec& input, const std::string& setting, Data
     for (const DataChannelEntry& entry : entries) {
         if (entry.automatic) {
             plan.depth = true;
-            if (input.deep)
-                continue;
             plan.crypto = crypto_sets(input);
             for (const std::string& name : input.channelnames) {
                 bool normal = false;
@@ -135,11 +133,6 @@ bool plan_data_channels(const ImageSpec& input, const std::string& setting, Data
         if (entry.name == "Z") {
             plan.depth = true;
             continue;
-        }
-        if (input.deep) {
-            error = format("{}: a deep input's data channels are not carried, only its depth "
-                           "(as Z)", mention("data-channels", setting));
-            return false;
         }
         if (input.channelindex(entry.name) < 0) {
             error = format("{}: the input has no channel {} (channels: {})",

@@ -543,7 +543,7 @@ bool deep_samples_allowed(const std::string& filename, int64_t width, int64_t he
 
 /// The image of the samples decoded per channel (R, G, B, A, Z and, when
 /// there are six, ZBack), `counts` of them per pixel of `dw`.
-void gather_samples(const std::vector<std::vector<float>>& values,
+void gather_samples(const std::vector<std::vector<float>>& values, bool has_back,
                     const std::vector<unsigned>& counts, const Imath::Box2i& dw,
                     DeepImage& image)
 {
@@ -560,8 +560,13 @@ void gather_samples(const std::vector<std::vector<float>>& values,
         d.b = values[2][s];
         d.a = values[3][s];
         d.z = values[4][s];
-        d.zback = values.size() == 6 ? values[5][s] : d.z;
+        d.zback = has_back ? values[5][s] : d.z;
     }
+    const size_t first_data = has_back ? 6 : 5, ndata = values.size() - first_data;
+    image.data.resize(total * ndata);
+    for (size_t c = 0; c < ndata; ++c)
+        for (size_t s = 0; s < total; ++s)
+            image.data[s * ndata + c] = values[first_data + c][s];
 }
 
 }  // namespace
@@ -583,10 +588,15 @@ bool read_deep_part(const std::string& filename, int part, const DeepChannels& c
         // Each channel's samples go in one array, through a pointer per
         // pixel to its first sample there, filled in once the counts are
         // known.
-        const int nchannels = channels.depth_back.empty() ? 5 : 6;
-        const std::string* names[6] = { &channels.color[0], &channels.color[1],
-                                        &channels.color[2], &channels.color[3], &channels.depth,
-                                        &channels.depth_back };
+        const bool has_back = !channels.depth_back.empty();
+        std::vector<const std::string*> names = { &channels.color[0], &channels.color[1],
+                                                  &channels.color[2], &channels.color[3],
+                                                  &channels.depth };
+        if (has_back)
+            names.push_back(&channels.depth_back);
+        for (const std::string& name : channels.data)
+            names.push_back(&name);
+        const int nchannels = int(names.size());
         const size_t origin = size_t(dw.min.y) * size_t(width) + size_t(dw.min.x);
         std::vector<unsigned> counts(npixels, 0);
         std::vector<std::vector<float*>> firsts(nchannels, std::vector<float*>(npixels, nullptr));
@@ -616,7 +626,8 @@ bool read_deep_part(const std::string& filename, int part, const DeepChannels& c
             }
         }
         deep.read_samples();
-        gather_samples(values, counts, dw, image);
+        gather_samples(values, has_back, counts, dw, image);
+        image.data_names = channels.data;
         return true;
     } catch (const std::exception& e) {
         error = damaged(filename, OIIO::Strutil::replace(e.what(), "\n", " ", true));

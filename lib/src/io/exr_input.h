@@ -72,6 +72,7 @@ private:
 /// the part has one, the back of each sample's depth interval.
 struct DeepChannels {
     std::string color[4], depth, depth_back;
+    std::vector<std::string> data;  ///< data channels, into DeepImage::data
 };
 
 /// Bytes of a deep part's per-pixel tables over a data window of
@@ -79,7 +80,8 @@ struct DeepChannels {
 double deep_table_bytes(int64_t width, int64_t height);
 
 /// Reads deep part `part` (scanline or tiled) of an OpenEXR file, with
-/// every sample's RGBA, Z and ZBack (ZBack = Z without one). False with
+/// every sample's RGBA, Z and ZBack (ZBack = Z without one), and its data
+/// channels. False with
 /// `error` when the file is damaged, or would need more memory than
 /// `limit` (checked on the data window, then on the sample counts, before
 /// either is allocated).

@@ -1,6 +1,7 @@
 #include <defocus/io/scene_io.h>
 
 #include <cstdio>
+#include <map>
 #include <memory>
 
 #include <OpenImageIO/deepdata.h>
@@ -362,6 +363,9 @@ bool read_file(const std::string& filename, const ReadOptions& options,
             const int zback = first_channel(part.spec, { channel_name(c.prefix, "ZBack"), "ZBack" });
             if (zback >= 0)
                 names.depth_back = part.spec.channelnames[zback];
+            for (const std::string& name : options.data_channels)
+                if (part.spec.channelindex(name) >= 0)
+                    names.data.push_back(name);
             DeepImage image;
             image.name = layer_name(part, "deep");
             if (!read_deep_part(filename, part.subimage, names, options.memory_limit, image,
@@ -430,10 +434,29 @@ DeepImage merge_deep(std::vector<DeepImage>& images)
     for (int64_t q = 0; q < n; ++q)
         merged.offsets[q + 1] += merged.offsets[q];
     merged.samples.resize(merged.offsets.back());
+    // Data channels by name: the union of the images', 0 where one lacks it.
+    for (const DeepImage& image : images)
+        for (const std::string& name : image.data_names)
+            if (std::find(merged.data_names.begin(), merged.data_names.end(), name)
+                == merged.data_names.end())
+                merged.data_names.push_back(name);
+    const size_t ndata = merged.data_names.size();
+    merged.data.assign(merged.samples.size() * ndata, 0.0f);
+    std::map<const DeepImage*, std::vector<size_t>> places;  // of each image's data channels
+    for (const DeepImage& image : images)
+        for (const std::string& name : image.data_names)
+            places[&image].push_back(size_t(
+                std::find(merged.data_names.begin(), merged.data_names.end(), name)
+                - merged.data_names.begin()));
     std::vector<uint64_t> fill(merged.offsets.begin(), merged.offsets.end() - 1);
     for_each_source_pixel([&](const DeepImage& image, int64_t p, int64_t q) {
-        for (uint64_t i = image.offsets[p]; i < image.offsets[p + 1]; ++i)
-            merged.samples[fill[q]++] = image.samples[i];
+        const std::vector<size_t>& at = places[&image];
+        for (uint64_t i = image.offsets[p]; i < image.offsets[p + 1]; ++i) {
+            const uint64_t to = fill[q]++;
+            merged.samples[to] = image.samples[i];
+            for (size_t c = 0; c < at.size(); ++c)
+                merged.data[to * ndata + at[c]] = image.data[i * at.size() + c];
+        }
     });
     return merged;
 }
@@ -477,12 +500,14 @@ double content_bytes(const Scene& scene)
     double bytes = 0.0;
     for_each_content(scene,
         [&](const Layer& layer) {
-            bytes += double(layer.color.spec().image_bytes()) + double(layer.depth.spec().image_bytes());
+            bytes += double(layer.color.spec().image_bytes()) + double(layer.depth.spec().image_bytes())
+                     + (layer.data ? double(layer.data->spec().image_bytes()) : 0.0);
             return true;
         },
         [&](const DeepImage& image) {
             bytes += double(image.samples.size()) * sizeof(DeepSample)
-                     + double(image.offsets.size()) * sizeof(uint64_t);
+                     + double(image.offsets.size()) * sizeof(uint64_t)
+                     + double(image.data.size()) * sizeof(float);
             return true;
         });
     return bytes;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <utility>
 
@@ -208,6 +209,43 @@ bool slice(const Source& frags, const std::string& base, const LayerBounds& boun
     return true;
 }
 
+/// The data of a layer cut from a deep image: at each covered pixel, that
+/// of the pixel's sample nearest the layer's depth there (the surface the
+/// layer shows), over the layer's window.
+std::shared_ptr<const ImageBuf> deep_layer_data(const DeepImage& deep, const Layer& layer,
+                                                int nthreads)
+{
+    const ROI window = layer.color.roi();
+    ImageSpec spec(window, TypeFloat);
+    spec.nchannels = int(deep.data_names.size());
+    spec.channelnames = deep.data_names;
+    auto data = std::make_shared<ImageBuf>(spec, InitializePixels::Yes);
+    const ROI both = roi_intersection(window, deep.roi);
+    const size_t n = deep.data_names.size();
+    parallel_for(both.ybegin, both.yend, [&](int y) {
+        for (int x = both.xbegin; x < both.xend; ++x) {
+            if (!(static_cast<const float*>(layer.color.pixeladdr(x, y))[3] > 0.0f))
+                continue;
+            const float z = *static_cast<const float*>(layer.depth.pixeladdr(x, y));
+            const int64_t p = deep.pixel_index(x, y);
+            uint64_t nearest = deep.offsets[p + 1];
+            float distance = INFINITY;
+            for (uint64_t i = deep.offsets[p]; i < deep.offsets[p + 1]; ++i) {
+                const DeepSample& s = deep.samples[i];
+                const float d = z < s.z ? s.z - z : z > s.zback ? z - s.zback : 0.0f;
+                if (s.a > 0.0f && d < distance) {
+                    distance = d;
+                    nearest = i;
+                }
+            }
+            if (nearest < deep.offsets[p + 1])
+                std::copy_n(&deep.data[nearest * n], n,
+                            static_cast<float*>(data->pixeladdr(x, y)));
+        }
+    }, by_rows(nthreads));
+    return data;
+}
+
 }  // namespace
 
 bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
@@ -234,9 +272,13 @@ bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
             error = cutting_exceeds(options.memory_limit, deep.name, bounds, fragments);
             return false;
         }
+        const size_t first = scene.layers.size();
         if (!slice(deep_fragments(deep, coc, bounds, nthreads), deep.name, bounds,
                    options.memory_limit, held, scene.layers, error, nullptr, nthreads))
             return false;
+        if (!deep.data_names.empty())
+            for (size_t i = first; i < scene.layers.size(); ++i)
+                scene.layers[i].data = deep_layer_data(deep, scene.layers[i], nthreads);
     }
     layered.source = std::move(scene.source);
     layered.spec = std::move(scene.spec);

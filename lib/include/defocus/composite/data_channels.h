@@ -64,8 +64,7 @@ struct DataPlan {
 /// data (cryptomatte sets, by their metadata or `Crypto*NN.R`; IDs such as
 /// `id`, `objectId`, `IndexOB`; P, N, Position and Normal sets), with the
 /// depth; or channel names, with their kinds (parse_data_channels()).
-/// Of a deep input only the depth is carried. False with `error` for a
-/// named channel the input lacks, or any of a deep input.
+/// False with `error` for a named channel the input lacks.
 bool plan_data_channels(const OIIO::ImageSpec& input, const std::string& setting,
                         DataPlan& plan, std::string& error);
 
