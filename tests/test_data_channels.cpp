@@ -342,6 +342,10 @@ TEST_CASE("bad data values never reach the output, and integer IDs come out whol
     ImageBufAlgo::fill(image, object_pixel(true), front_card);
     const float nan = std::numeric_limits<float>::quiet_NaN();
     const float inf = std::numeric_limits<float>::infinity();
+    std::vector<float> sky(channels.size(), 0.0f);  // opaque, infinitely far
+    sky[2] = sky[3] = 1.0f;
+    sky[4] = inf;
+    ImageBufAlgo::fill(image, sky, ROI(0, width, 0, 6));
     const int id = 9, coverage = 6, px = 10;
     for (int y = 40; y < 60; ++y) {
         image.setpixel(50, y, std::vector<float> { 0.9f, 0.3f, 0.1f, 1.0f, 2.0f, nan, nan, 0.0f,
@@ -355,6 +359,7 @@ TEST_CASE("bad data values never reach the output, and integer IDs come out whol
     REQUIRE(image.write(bad));
     const ImageBuf out = rendered(bad, with_data());
     CHECK(no_nan(out));
+    CHECK(out.getchannel(80, 0, 0, out.spec().channelindex("Z")) > 1e29f);  // the sky, far
 
     // IDs stored as unsigned integers, as some renderers write them.
     ImageSpec spec = scene_spec();

@@ -118,6 +118,13 @@ float safe_value(float v)
     return std::isfinite(v) ? std::clamp(v, -1e30f, 1e30f) : 0.0f;
 }
 
+/// A depth safe to spread: the sky's infinity as the farthest value that
+/// sums without overflow.
+float safe_depth(float z)
+{
+    return std::min(z, 1e30f);
+}
+
 /// Fills up to three quantities of a layer pixel.
 using QuantityFill = std::function<void(int x, int y, float q[3])>;
 
@@ -289,7 +296,7 @@ bool spread_quantities(ImageBuf& dst, Coverage& cov, const Spreader& spreader,
             const FloatPixels depth(layer.depth, layer.depth.roi());
             layers.push_back(quantity_layer(layer, layer.color.roi(), [&](int x, int y, float q[3]) {
                 for (size_t j = 0; j < channels.size(); ++j)
-                    q[j] = targets[j].source.empty() ? *depth(x, y)
+                    q[j] = targets[j].source.empty() ? safe_depth(*depth(x, y))
                            : channels[j] >= 0       ? safe_value(lookup(x, y)[channels[j]])
                                                     : 0.0f;
             }, spreader.nthreads));
