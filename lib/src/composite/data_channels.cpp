@@ -493,7 +493,7 @@ bool spread_objects(const ObjectSet& set, const std::vector<ObjectExtent>& objec
                 for (size_t m = 0; m < count; ++m)
                     for (int k = 0; k < n; ++k)
                         if (found[k].id == objects[first + m].id)
-                            q[m] = found[k].fraction;
+                            q[m] += found[k].fraction;
             }, spreader.nthreads));
             from.push_back(i);
         }
@@ -512,6 +512,8 @@ bool spread_objects(const ObjectSet& set, const std::vector<ObjectExtent>& objec
                 }, by_rows(spreader.nthreads));
             }, error))
             return false;
+        if (!touched.defined())  // lit nothing in the window
+            continue;
         parallel_for(touched.ybegin, touched.yend, [&](int y) {
             for (int x = touched.xbegin; x < touched.xend; ++x) {
                 const size_t i = cov.index(x, y);
