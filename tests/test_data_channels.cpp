@@ -308,6 +308,17 @@ TEST_CASE("data channels leave the colour as it is, and only what is asked is ca
     // Averaged P.x where both cards reach: between theirs, not either.
     CHECK(named.getchannel(70, 50, 0, 5) > -1.0f);
     CHECK(named.getchannel(70, 50, 0, 5) < 1.0f);
+    // Left out, they are named for -v, with the setting that carries them.
+    auto noted = [&](const Settings& settings) {
+        FrameResult result;
+        std::string error;
+        REQUIRE(render_with(scene, settings, result, error));
+        const std::string all = command_line_words(Strutil::join(result.notes, "\n"));
+        return Strutil::contains(all, "data channels left out: objectId, N, P, CryptoObject "
+                                      "(--data-channels auto carries them)");
+    };
+    CHECK(noted(camera));
+    CHECK_FALSE(noted(with_data("Z")));
     const ImageBuf depth_only = rendered(scene, with_data("Z"));
     CHECK(depth_only.spec().channelnames == std::vector<std::string>({ "R", "G", "B", "A", "Z", "ZFront" }));
 }

@@ -129,6 +129,28 @@ bool run_stage(const StageCallback& on_stage, const char* name, std::string& err
     return false;
 }
 
+/// A note, for -v, of the data channels the input has and a shot that
+/// names none leaves out: a user may not know they could be carried.
+void note_data_channels(const ImageSpec& input, std::vector<std::string>& notes)
+{
+    DataPlan found;
+    std::string unused;
+    if (!plan_data_channels(input, "auto", found, unused))
+        return;
+    std::vector<std::string> sets;
+    auto add = [&](const std::string& name) {
+        if (std::find(sets.begin(), sets.end(), name) == sets.end())
+            sets.push_back(name);
+    };
+    for (const DataChannel& c : found.channels)
+        add(c.name.substr(0, c.name.rfind('.')));
+    for (const CryptoSet& set : found.crypto)
+        add(set.name);
+    if (!sets.empty())
+        notes.push_back(format("data channels left out: {} ({} carries them)",
+                               Strutil::join(sets, ", "), mention("data-channels", "auto")));
+}
+
 /// prepare_layers() from the scene read; `timer` started with the read.
 bool layer_scene(Scene&& scene, const Shot& shot, int frame, const ShotAssets& assets,
                  LayeredScene& layered, FrameResult& out, std::string& error,
@@ -137,6 +159,8 @@ bool layer_scene(Scene&& scene, const Shot& shot, int frame, const ShotAssets& a
     auto lap = [&](const char* name) { out.timings.emplace_back(name, timer.lap()); };
     out.source = scene.source;
     out.notes  = scene.notes;
+    if (shot.data_channels == Shot().data_channels)
+        note_data_channels(scene.spec, out.notes);
     out.fixed  = sanitize(scene, nthreads);
     lap("read");
     // The readers name the file that failed; later stages' errors are
