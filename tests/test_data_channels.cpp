@@ -10,6 +10,7 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/strutil.h>
 
+#include <defocus/composite/data_channels.h>
 #include <defocus/io/image_output.h>
 
 #include "test_support.h"
@@ -399,4 +400,38 @@ TEST_CASE("bad data values never reach the output, and integer IDs come out whol
     const ImageBuf ids = rendered(integer, with_data("objectId:id"));
     CHECK(ids.getchannel(45, 50, 0, 4) == 1.0f);
     CHECK(ids.getchannel(120, 50, 0, 4) == 2.0f);
+}
+
+TEST_CASE("data channels are found by their names, Blender's view-layer prefix and all")
+{
+    ImageSpec spec(8, 8, 0, TypeFloat);
+    for (const char* name :
+         { "ViewLayer.Combined.R", "ViewLayer.Combined.G", "ViewLayer.Combined.B",
+           "ViewLayer.Combined.A", "ViewLayer.Depth.Z", "ViewLayer.IndexOB", "ViewLayer.Normal.X",
+           "ViewLayer.Normal.Y", "ViewLayer.Normal.Z", "ViewLayer.CryptoObject00.R",
+           "ViewLayer.CryptoObject00.G", "ViewLayer.CryptoObject00.B",
+           "ViewLayer.CryptoObject00.A", "ViewLayer.CryptoObject01.R", "diffuse.R" })
+        spec.channelnames.push_back(name);
+    spec.nchannels = int(spec.channelnames.size());
+    DataPlan plan;
+    std::string error;
+    REQUIRE(plan_data_channels(spec, "auto", plan, error));
+    CHECK(plan.depth);
+    REQUIRE(plan.crypto.size() == 1);
+    CHECK(plan.crypto[0].name == "ViewLayer.CryptoObject");
+    CHECK(plan.crypto[0].ranks() == 2);  // the incomplete second quad is left out
+    REQUIRE(plan.channels.size() == 4);
+    CHECK(plan.channels[0].name == "ViewLayer.IndexOB");
+    CHECK(plan.channels[0].kind == DataKind::Id);
+    for (int c = 1; c < 4; ++c) {
+        CHECK(plan.channels[c].kind == DataKind::Dominant);
+        CHECK(plan.channels[c].normal);
+    }
+    // Named: a kind changed, another channel added, none.
+    REQUIRE(plan_data_channels(spec, "auto,ViewLayer.IndexOB:average,diffuse.R:id", plan, error));
+    CHECK(plan.channels[0].kind == DataKind::Average);
+    CHECK(plan.channels.back().name == "diffuse.R");
+    CHECK(plan.channels.back().kind == DataKind::Id);
+    REQUIRE(plan_data_channels(spec, "none", plan, error));
+    CHECK(plan.empty());
 }

@@ -41,7 +41,8 @@ bool is_surface_vector(const std::string& name, bool& normal)
 }
 
 /// The cryptomatte sets of `input`: those its metadata names
-/// (cryptomatte/<key>/name), and channel sets named Crypto*NN.R..A.
+/// (cryptomatte/<key>/name), and channel sets named Crypto*NN.R..A (under
+/// any prefix).
 std::vector<CryptoSet> crypto_sets(const ImageSpec& input)
 {
     std::set<std::string> declared;
@@ -60,9 +61,10 @@ std::vector<CryptoSet> crypto_sets(const ImageSpec& input)
         const size_t rgba = std::string("RGBA").find(channel[dot + 1]);
         const std::string digits = channel.substr(dot - 2, 2);
         const std::string set = channel.substr(0, dot - 2);
-        if (rgba == std::string::npos || !Strutil::string_is_int(digits)
-            || !isdigit(digits[0]) || !isdigit(digits[1])
-            || !(declared.count(set) || Strutil::starts_with(set, "Crypto")))
+        // Blender prefixes the view layer: ViewLayer.CryptoObject00.R.
+        const std::string last = set.substr(set.rfind('.') + 1);
+        if (rgba == std::string::npos || !isdigit(digits[0]) || !isdigit(digits[1])
+            || !(declared.count(set) || Strutil::istarts_with(last, "crypto")))
             continue;
         quads[set][Strutil::stoi(digits)] |= 1 << rgba;
     }

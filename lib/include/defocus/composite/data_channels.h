@@ -61,7 +61,7 @@ struct DataPlan {
 
 /// The data channels `setting` names among the channels of `input` (the
 /// scene's header): "none"; "auto", every channel whose name says it is
-/// data (cryptomatte sets, by their metadata or `Crypto*NN.R`; IDs such as
+/// data (cryptomatte sets, by their metadata or `[prefix.]Crypto*NN.R`; IDs such as
 /// `id`, `objectId`, `IndexOB`; P, N, Position and Normal sets), with the
 /// depth; or channel names, with their kinds (parse_data_channels()).
 /// False with `error` for a named channel the input lacks.
