@@ -13,9 +13,6 @@ using namespace OIIO;
 
 namespace {
 
-/// Reaching a pixel: spread coverage above this.
-constexpr float reaches = 1e-3f;
-
 /// `layer` with each pixel's signed CoC diameter as its colour,
 /// premultiplied: red holds it behind the focus, green in front (spread
 /// colour stays non-negative).
@@ -76,7 +73,7 @@ bool coc_aov(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
             const float* s = static_cast<const float*>(spread_layer.pixeladdr(both.xbegin, y));
             float* out = static_cast<float*>(dst.pixeladdr(both.xbegin, y));
             for (int x = both.xbegin; x < both.xend; ++x, s += 4, ++out)
-                if (s[3] > reaches)
+                if (s[3] > reach_coverage)
                     *out = (s[0] - s[1]) / s[3];
         }, by_rows(nthreads));
     }

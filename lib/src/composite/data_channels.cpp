@@ -25,10 +25,6 @@ using namespace OIIO;
 
 namespace {
 
-/// A layer reaching a pixel: spread coverage above this. Below it, float
-/// noise of the spread is too large a part of the quantity times alpha.
-constexpr float reaches = 1e-3f;
-
 /// Where each pixel of a layer finds its data: the source pixel at the same
 /// place, or, for a pixel rebuilt behind nearer layers, the nearest pixel
 /// of the layer that was seen (the surface it continues); clamped into the
@@ -244,7 +240,7 @@ void composite_quantities(ImageBuf& dst, Coverage& cov, const ImageBuf& spread, 
             if (first) {
                 cov.alpha[i] = a + (1.0f - a) * cov.alpha[i];
                 cov.best_weight[i] *= 1.0f - a;
-                if (a > cov.best_weight[i] && a > reaches) {
+                if (a > cov.best_weight[i] && a > reach_coverage) {
                     cov.best_weight[i] = a;
                     cov.best_layer[i] = int(layer);
                 }
@@ -254,9 +250,9 @@ void composite_quantities(ImageBuf& dst, Coverage& cov, const ImageBuf& spread, 
                 const QuantityTarget& t = targets[j];
                 if (t.kind == DataKind::Average)
                     out[t.channel] = s[j] + (1.0f - a) * out[t.channel];
-                else if (cov.best_layer[i] == int(layer) && a > reaches)
+                else if (cov.best_layer[i] == int(layer) && a > reach_coverage)
                     out[t.channel] = s[j] / a;
-                if (t.front >= 0 && a > reaches)
+                if (t.front >= 0 && a > reach_coverage)
                     out[t.front] = s[j] / a;
             }
         }
@@ -565,7 +561,7 @@ void finish_quantities(ImageBuf& dst, const Coverage& cov, const std::vector<int
             float* out = static_cast<float*>(dst.pixeladdr(x, y));
             const float a = cov.alpha[cov.index(x, y)];
             for (int c : averages)
-                out[c] = a > reaches ? out[c] / a : 0.0f;
+                out[c] = a > reach_coverage ? out[c] / a : 0.0f;
             for (const auto& n : normals) {
                 const float length = std::sqrt(out[n[0]] * out[n[0]] + out[n[1]] * out[n[1]]
                                                + out[n[2]] * out[n[2]]);

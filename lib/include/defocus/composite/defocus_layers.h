@@ -69,6 +69,11 @@ bool spread_layers_apart(const LayeredScene& scene, const Camera& camera,
                          std::vector<LayerReport>* report = nullptr,
                          SpreadTimings* timings = nullptr, int nthreads = 0);
 
+/// A layer's spread reaches a pixel where its coverage there is above
+/// this: below it, float noise of the spread is too large a part of a
+/// quantity spread times alpha (the CoC AOV, data channels).
+constexpr float reach_coverage = 1e-3f;
+
 /// What decides how far each layer's light reaches, not its colour: a
 /// camera and spread less chromatic aberration and the PSF image. Quantities
 /// spread as colour (the CoC AOV, data channels) are spread with it.
