@@ -22,15 +22,6 @@ namespace {
 /// No pixel counts as a highlight: every large footprint is merged.
 const HighlightTest merge_all {};
 
-Aperture hexagon()
-{
-    Aperture a;
-    a.shape = ApertureShape::Polygon;
-    a.blades = 6;
-    a.rotation_deg = 10.0;
-    return a;
-}
-
 }  // namespace
 
 TEST_CASE("below radius 7.5 the bounded disc is the exact disc")
@@ -105,12 +96,8 @@ TEST_CASE("a highlight keeps its exact bokeh among merged pixels")
 {
     // A bright point on a dim field at radius 40: its outline is what the
     // eye sees, so it is spread in place, never merged.
-    const ROI roi(0, 200, 0, 200);
     ImageBuf color, radius;
-    random_layer(roi, 40.0, 40.0, 3, color, radius);
-    OIIO::ImageBufAlgo::mul(color, color, 1e-3f);
-    const float bright[4] = { 1000.0f, 1000.0f, 1000.0f, 1.0f };
-    color.setpixel(101, 97, bright);
+    highlight_on_dim_field(ROI(0, 200, 0, 200), Imath::V2i(101, 97), color, radius);
     const ApertureProfile profile{Aperture()};
     ImageBuf bounded, exact;
     REQUIRE(spread_aperture(bounded, color, radius, profile,

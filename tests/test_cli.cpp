@@ -752,10 +752,10 @@ TEST_CASE("an interrupted run leaves its targets as they were and no temporary f
     REQUIRE(run_defocus(scene + " -o " + target + " --focus 4", log) == 0);
     std::string before;
     REQUIRE(Filesystem::read_text_file(target, before));
-    // --cateye spreads pixel by pixel, here with blurs up to 200 px: some
-    // 2.5 s of work to interrupt at 0.4 s.
+    // --spread exact with --cateye spreads pixel by pixel, here with blurs
+    // up to 200 px: some 2.5 s of work to interrupt at 0.4 s.
     const std::vector<std::string> slow = { "--focus", "4", "--focal", "85", "--fstop", "1",
-                                            "--cateye", "1" };
+                                            "--cateye", "1", "--spread", "exact" };
     const std::string errors = scratch_dir("cli_interrupt_log") + "/stderr.txt";
     auto slow_run = [&](std::vector<std::string> args) {
         args.insert(args.end(), slow.begin(), slow.end());

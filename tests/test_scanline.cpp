@@ -277,23 +277,9 @@ TEST_CASE("cat's eye: clipped scanline spreading equals its direct reference, ke
         ImageBuf fast;
         REQUIRE(spread_cateye(fast, color, radius, profile, cateye));
         // The direct reference: every pixel adds its own footprint table.
-        ImageBuf direct(fast.spec());
-        OIIO::ImageBufAlgo::zero(direct);
-        for (int y = roi.ybegin; y < roi.yend; ++y)
-            for (int x = roi.xbegin; x < roi.xend; ++x) {
-                float v[4], r;
-                color.getpixel(x, y, v);
-                radius.getpixel(x, y, &r);
-                const Footprint fp = cateye_footprint(profile, cateye, { x + 0.5, y + 0.5 }, r);
-                for (int j = 0; j < fp.height; ++j)
-                    for (int i = 0; i < fp.width; ++i) {
-                        float out[4];
-                        direct.getpixel(x + fp.x0 + i, y + fp.y0 + j, out);
-                        for (int c = 0; c < 4; ++c)
-                            out[c] += float(fp.at(i, j) * v[c]);
-                        direct.setpixel(x + fp.x0 + i, y + fp.y0 + j, out);
-                    }
-            }
+        const ImageBuf direct = direct_sum(color, radius, fast, [&](int x, int y, double r) {
+            return cateye_footprint(profile, cateye, { x + 0.5, y + 0.5 }, r);
+        });
         INFO(aperture_shape_name(shape.shape) << " " << shape.blades);
         CHECK(worst_relative_error(fast, direct, 1e-4, 1e-6) <= 1.0);
         for (int c = 0; c < 4; ++c)

@@ -73,6 +73,15 @@ ImageBuf zero_image(const ROI& roi, int nchannels)
     return image;
 }
 
+defocus::Aperture hexagon()
+{
+    defocus::Aperture a;
+    a.shape = defocus::ApertureShape::Polygon;
+    a.blades = 6;
+    a.rotation_deg = 10.0;
+    return a;
+}
+
 ImageBuf impulse()
 {
     ImageBuf image = zero_image(ROI(0, 1, 0, 1), 4);
@@ -125,6 +134,39 @@ void random_layer(const ROI& roi, double rmin, double rmax, unsigned seed, Image
             const float r = float(rmin + (rmax - rmin) * rng.uniform());
             radius.setpixel(x, y, &r);
         }
+}
+
+ImageBuf direct_sum(const ImageBuf& color, const ImageBuf& radius, const ImageBuf& like,
+                    const std::function<defocus::Footprint(int, int, double)>& footprint)
+{
+    ImageBuf direct(like.spec());
+    OIIO::ImageBufAlgo::zero(direct);
+    const ROI roi = color.roi();
+    for (int y = roi.ybegin; y < roi.yend; ++y)
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            float v[4], r;
+            color.getpixel(x, y, v);
+            radius.getpixel(x, y, &r);
+            const defocus::Footprint fp = footprint(x, y, double(r));
+            for (int j = 0; j < fp.height; ++j)
+                for (int i = 0; i < fp.width; ++i) {
+                    float out[4];
+                    direct.getpixel(x + fp.x0 + i, y + fp.y0 + j, out);
+                    for (int c = 0; c < 4; ++c)
+                        out[c] += float(fp.at(i, j) * v[c]);
+                    direct.setpixel(x + fp.x0 + i, y + fp.y0 + j, out);
+                }
+        }
+    return direct;
+}
+
+void highlight_on_dim_field(const ROI& roi, const Imath::V2i& at, ImageBuf& color,
+                            ImageBuf& radius)
+{
+    random_layer(roi, 40.0, 40.0, 3, color, radius);
+    OIIO::ImageBufAlgo::mul(color, color, 1e-3f);
+    const float bright[4] = { 1000.0f, 1000.0f, 1000.0f, 1.0f };
+    color.setpixel(at.x, at.y, bright);
 }
 
 defocus::Camera synthetic_camera(double focus)

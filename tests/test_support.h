@@ -12,6 +12,7 @@
 #include <defocus/render_frame.h>
 #include <defocus/scene.h>
 #include <defocus/optics/camera.h>
+#include <defocus/spread/footprint.h>
 
 namespace defocus_test {
 
@@ -40,6 +41,9 @@ ImageBuf zero_image(const ROI& roi, int nchannels);
 /// k·(1/focus - 1/z) with k = f²/(N s)·W = 0.1·(100/36)·120 = 33.3 px.
 defocus::Camera synthetic_camera(double focus);
 
+/// A hexagonal aperture, turned by 10 degrees.
+defocus::Aperture hexagon();
+
 /// An impulse: one RGBA pixel of 1 at the origin.
 ImageBuf impulse();
 
@@ -65,6 +69,16 @@ private:
 /// radii in [rmin, rmax].
 void random_layer(const ROI& roi, double rmin, double rmax, unsigned seed, ImageBuf& color,
                   ImageBuf& radius);
+
+/// The direct reference of a spread: over an image like `like`, every
+/// pixel (x, y) of `color` adds footprint(x, y, its radius) times its value.
+ImageBuf direct_sum(const ImageBuf& color, const ImageBuf& radius, const ImageBuf& like,
+                    const std::function<defocus::Footprint(int, int, double)>& footprint);
+
+/// A bright point (1000) at `at` on a dim random field (under 0.01) over
+/// roi, every pixel of CoC radius 40: a highlight whose bokeh shows.
+void highlight_on_dim_field(const ROI& roi, const Imath::V2i& at, ImageBuf& color,
+                            ImageBuf& radius);
 
 /// Sum of channel `c` over the whole data window, in double.
 double channel_sum(const ImageBuf& image, int c);

@@ -306,8 +306,7 @@ std::vector<SettingRule> lens_effect_rules()
         number({ "cateye", "camera", "cateye", K::Number, G::Camera, "--cateye AMOUNT",
                  "Optical vignetting: towards the edges the bokeh is clipped by a disc "
                  "offset towards the optical centre; 1 = at the farthest corner the clip "
-                 "reaches the bokeh's centre; 0..1.5. Spreads every pixel on its own: time "
-                 "grows with the blur (default: 0)" },
+                 "reaches the bokeh's centre; 0..1.5 (default: 0)" },
                [](auto& s) -> auto& { return s.camera.cateye; }, 0.0, 1.5),
     };
 }

@@ -13,7 +13,8 @@
 namespace defocus {
 
 /// Consecutive pixels or blocks (a block's width apart) that share a
-/// footprint program: n of them from anchor column x, their colours from
+/// footprint program, program k of `family`: n of them from anchor column
+/// x, their colours from
 /// index `at` of a colour array. When they all blend the program's two
 /// sizes alike (one radius: a plane, a sky), the run keeps that blend `t`
 /// and 4 values per item; otherwise 4 values per item on the smaller size
@@ -22,6 +23,7 @@ struct ProgramRun {
     int x, n, k, at;
     float t;
     bool blended;
+    const ProgramFamily* family;
 };
 
 /// One row of pixels or blocks to spread, as runs.
@@ -36,14 +38,14 @@ struct ItemRow {
         color.clear();
         longest = 0;
     }
-    /// Appends a run of n items of program k, blending its sizes by t
+    /// Appends a run of n items of program k of `family`, blending its sizes by t
     /// alike (folded) or not (blended), and returns where its colours go:
     /// 4 values per item, then for a blended run 4 more per item on the
     /// larger size.
-    double* add_run(int x, int n, int k, float t, bool blended)
+    double* add_run(int x, int n, int k, float t, bool blended, const ProgramFamily* family)
     {
         longest = std::max(longest, n);
-        runs.push_back({ x, n, k, int(color.size()), blended ? 0.0f : t, blended });
+        runs.push_back({ x, n, k, int(color.size()), blended ? 0.0f : t, blended, family });
         color.resize(color.size() + size_t(n) * (blended ? 8 : 4));
         return color.data() + runs.back().at;
     }
@@ -57,7 +59,9 @@ struct SpreadEngine::Sparse {
     using Row = ItemRow;
     int level = 0;  ///< blocks of 2^level pixels
     bool half = false;
-    const ProgramFamily* family = nullptr;  ///< of blocks of grid_block() grid pixels
+    /// Of blocks of grid_block() grid pixels: their reach and which program
+    /// a radius takes.
+    const ProgramFamily* family = nullptr;
     int first_block_row = 0;
     std::vector<Row> rows;          ///< per block row
     Reach reach { 0, -1, 0, -1 };  ///< of its programs, from the anchor, in grid pixels

@@ -16,18 +16,24 @@ namespace {
 /// program as they come, pixel row by pixel row; then made into runs.
 class BlockRowSums {
 public:
-    /// Starts a block row of `blocks` blocks from block first_block.
-    void start(int first_block, int blocks)
+    /// Starts block row `block_row` of `blocks` blocks of `size` pixels
+    /// from block first_block, their footprints from `families`.
+    void start(int first_block, int blocks, int block_row, int size, FamilyFinder& families)
     {
         m_first = first_block;
+        m_size = size;
+        m_centre_y = (block_row + 0.5) * size;
+        m_families = &families;
         m_sums.assign(size_t(blocks), Sum {});
         m_others.clear();
     }
 
-    /// Adds `value` to block `b` on program k, blending its sizes by t.
-    DEFOCUS_KERNEL void add(int b, int k, float t, const d4& value)
+    /// Adds `value`, from a pixel of radius r, to block `b` on program k,
+    /// blending its sizes by t.
+    DEFOCUS_KERNEL void add(int b, int k, float t, float r, const d4& value)
     {
         Sum* sum = &m_sums[size_t(b - m_first)];
+        const ProgramFamily* family = sum->family;
         // A block across a change of program keeps a sum per program,
         // chained from its first: rows where every block changes program
         // (the radius changing down the rows) find them in a step or two.
@@ -44,6 +50,9 @@ public:
             sum->b = b;
             sum->k = k;
             sum->t = t;
+            sum->family = family ? family
+                                 : m_families->at((b + 0.5) * m_size, m_centre_y,
+                                                  m_size == 1 ? cateye_fineness(r) : 0);
         }
         sum->blended |= sum->t != t;
         store4(sum->smaller, load4(sum->smaller) + value * splat(1.0 - t));
@@ -80,6 +89,7 @@ public:
 private:
     struct Sum {
         int b = 0, k = -1;     ///< block and program; k < 0: no pixel yet
+        const ProgramFamily* family = nullptr;  ///< of the block's footprints
         int next = -1;         ///< the block's next sum in m_others, if any
         float t = 0.0f;        ///< the blend of its pixels, when they all share one
         bool blended = false;  ///< when they do not
@@ -97,13 +107,15 @@ private:
                 continue;
             }
             size_t j = i + 1;
-            while (j < all.size() && all[j].k == all[i].k && all[j].b == all[j - 1].b + 1)
+            while (j < all.size() && all[j].k == all[i].k && all[j].family == all[i].family
+                   && all[j].b == all[j - 1].b + 1)
                 ++j;
             const bool folded = std::all_of(all.begin() + i, all.begin() + j, [&](const Sum& e) {
                 return !e.blended && e.t == all[i].t;
             });
             const int count = int(j - i);
-            double* out = row.add_run(level.anchor(all[i].b), count, all[i].k, all[i].t, !folded);
+            double* out = row.add_run(level.anchor(all[i].b), count, all[i].k, all[i].t, !folded,
+                                      all[i].family);
             for (size_t e = i; e < j; ++e, out += 4)
                 for (int ch = 0; ch < 4; ++ch) {
                     out[ch] = folded ? all[e].smaller[ch] + all[e].larger[ch] : all[e].smaller[ch];
@@ -114,7 +126,9 @@ private:
         }
     }
 
-    int m_first = 0;
+    int m_first = 0, m_size = 1;
+    double m_centre_y = 0.0;
+    FamilyFinder* m_families = nullptr;
     std::vector<Sum> m_sums;    ///< per block, its first program
     std::vector<Sum> m_others;  ///< other programs of a block
 };
@@ -140,7 +154,7 @@ DEFOCUS_KERNEL d4 alike_in_block(const SpreadSource& source, size_t p, int& x, i
 }
 
 DEFOCUS_CLONES
-void survey_rows(const SpreadSource& source, SpreadMethod method,
+void survey_rows(const SpreadSource& source, SpreadMethod method, const ShapePrograms* shape,
                  const std::vector<std::unique_ptr<SpreadEngine::Sparse>>& levels, int y0, int y1,
                  LayerSurvey& found, std::mutex& merge)
 {
@@ -151,6 +165,9 @@ void survey_rows(const SpreadSource& source, SpreadMethod method,
     thread_local std::vector<BlockRowSums> sums;  // reused: their rows are long
     sums.resize(nlevels);
     std::vector<int> open(nlevels, INT_MIN);  // the block row each level's sums hold
+    std::vector<FamilyFinder> families;
+    for (int l = 0; l < nlevels; ++l)
+        families.emplace_back(*shape, levels[l]->grid_shift());
     auto finish = [&](int l) {
         if (open[l] == INT_MIN)
             return;
@@ -195,9 +212,10 @@ void survey_rows(const SpreadSource& source, SpreadMethod method,
                     finish(l);
                     open[l] = by;
                     const int first = floor_shift(roi.xbegin, l);
-                    sums[l].start(first, floor_shift(roi.xend - 1, l) - first + 1);
+                    sums[l].start(first, floor_shift(roi.xend - 1, l) - first + 1, by, 1 << l,
+                                  families[l]);
                 }
-                sums[l].add(floor_shift(x, l), blend[i].k, blend[i].t,
+                sums[l].add(floor_shift(x, l), blend[i].k, blend[i].t, r,
                             value * splat(c[i].weight));
             }
         }

@@ -22,8 +22,9 @@ struct LayerSurvey {
 
 /// Surveys source rows [y0, y1), which hold whole block rows of every
 /// level: each pixel's components once, dense ones noted, sparse ones
-/// summed into their level's blocks.
-void survey_rows(const SpreadSource& source, SpreadMethod method,
+/// summed into their level's blocks, each block on the footprints of its
+/// centre (see ShapePrograms).
+void survey_rows(const SpreadSource& source, SpreadMethod method, const ShapePrograms* shape,
                  const std::vector<std::unique_ptr<SpreadEngine::Sparse>>& levels, int y0, int y1,
                  LayerSurvey& found, std::mutex& merge);
 

@@ -253,12 +253,13 @@ DEFOCUS_KERNEL void add_run(double* row, const FootprintProgram& p, int o, const
         }
 }
 
-/// Appends a run of n pixels of program k, colours `color` (4 each),
-/// blending its sizes by `t` each: folded when they all blend alike.
-void add_run_colors(ItemRow& row, int x, int n, int k, const double* color, const float* t)
+/// Appends a run of n pixels of program k of `family`, colours `color` (4
+/// each), blending its sizes by `t` each: folded when they all blend alike.
+void add_run_colors(ItemRow& row, int x, int n, int k, const ProgramFamily* family,
+                    const double* color, const float* t)
 {
     const bool blended = !std::all_of(t, t + n, [&](float ti) { return ti == t[0]; });
-    double* out = row.add_run(x, n, k, t[0], blended);
+    double* out = row.add_run(x, n, k, t[0], blended, family);
     if (!blended) {
         std::copy(color, color + size_t(n) * 4, out);
         return;
@@ -275,10 +276,12 @@ void add_run_colors(ItemRow& row, int x, int n, int k, const double* color, cons
 }  // namespace
 
 DEFOCUS_CLONES
-void prepare_dense_row(const SpreadSource& src, SpreadMethod method, const ProgramFamily& family,
+void prepare_dense_row(const SpreadSource& src, SpreadMethod method, const ShapePrograms& shape,
                        int sy, int x0, int x1, ItemRow& row, std::vector<double>& color,
                        std::vector<float>& blend)
 {
+    const ProgramFamily& pixels = shape.pixels();
+    FamilyFinder families(shape, 0);
     const size_t base = size_t(sy - src.roi.ybegin) * src.roi.width() - src.roi.xbegin;
     row.clear();
     color.resize(size_t(std::max(0, x1 - x0)) * 4);
@@ -290,6 +293,8 @@ void prepare_dense_row(const SpreadSource& src, SpreadMethod method, const Progr
     int components_count = 0;
     ProgramBlend b { 0, 0.0f };
     int run_x = 0, n = 0, k = -1;
+    const ProgramFamily* family = nullptr;  // of the pixel at x
+    const ProgramFamily* run_family = nullptr;
     for (int x = x0; x <= x1; ++x) {
         const float* v = x < x1 ? src.color + (base + x) * 4 : nullptr;
         int count = 0;
@@ -301,13 +306,15 @@ void prepare_dense_row(const SpreadSource& src, SpreadMethod method, const Progr
                 cached_radius = keep ? NAN : r;
                 components_count = components(method, r, keep, c);
                 if (c[0].level == 0 && r <= dense_limit)
-                    b = family.pick(r);
+                    b = pixels.pick(r);
             }
             count = components_count;
         }
         const bool dense = count > 0 && c[0].level == 0 && r <= dense_limit;
-        if (n > 0 && (!dense || b.k != k || run_x + n != x)) {
-            add_run_colors(row, run_x, n, k, color.data(), blend.data());
+        if (dense)
+            family = families.at(x + 0.5, sy + 0.5);
+        if (n > 0 && (!dense || b.k != k || family != run_family || run_x + n != x)) {
+            add_run_colors(row, run_x, n, k, run_family, color.data(), blend.data());
             n = 0;
         }
         if (!dense)
@@ -315,6 +322,7 @@ void prepare_dense_row(const SpreadSource& src, SpreadMethod method, const Progr
         if (n == 0) {
             run_x = x;
             k = b.k;
+            run_family = family;
         }
         store4(&color[size_t(n) * 4], load4(v) * splat(count == 2 ? c[0].weight : 1.0));
         blend[n++] = b.t;
@@ -356,8 +364,8 @@ void scatter_box_row(const SpreadSource& src, int sy, int x0, int x1, double* ro
 }
 
 DEFOCUS_CLONES
-void scatter_items(const ProgramFamily& family, int shift, const Reach& reach,
-                   const ItemRow& items, int anchor, double* rows, const Tile& tile)
+void scatter_items(int shift, const Reach& reach, const ItemRow& items, int anchor,
+                   double* rows, const Tile& tile)
 {
     const size_t row_size = size_t(tile.cells()) * 4;
     const RunsInReach runs = runs_in_reach(items, shift, reach, tile);
@@ -368,7 +376,7 @@ void scatter_items(const ProgramFamily& family, int shift, const Reach& reach,
         const int i1 = std::min(run.n, -floor_shift(run.x - x_hi, shift));
         if (i0 >= i1)
             continue;
-        const FootprintProgram& p = family.program(run.k);
+        const FootprintProgram& p = run.family->program(run.k);
         const int o_lo = std::max(p.first_row(), tile.y_begin - anchor);
         const int o_hi = std::min(p.last_row(), tile.y_end - 1 - anchor);
         const double* color = &items.color[run.at];

@@ -12,8 +12,8 @@
 namespace defocus {
 
 /// The dense pixels of source row `sy` within [x0, x1), as runs of
-/// consecutive pixels on one program.
-void prepare_dense_row(const SpreadSource& src, SpreadMethod method, const ProgramFamily& family,
+/// consecutive pixels on one program of `shape`.
+void prepare_dense_row(const SpreadSource& src, SpreadMethod method, const ShapePrograms& shape,
                        int sy, int x0, int x1, ItemRow& row, std::vector<double>& color,
                        std::vector<float>& blend);
 
@@ -25,10 +25,9 @@ void scatter_box_row(const SpreadSource& src, int sy, int x0, int x1, double* ro
 
 /// Adds the footprints of one row of items (pixels or blocks 2^shift
 /// columns apart, anchored on row `anchor`) to the tile's delta rows: the
-/// items' reach is `reach` (of the largest of `family`'s programs they
-/// use).
-void scatter_items(const ProgramFamily& family, int shift, const Reach& reach,
-                   const ItemRow& items, int anchor, double* rows, const Tile& tile);
+/// items' reach is `reach` (of the largest of the programs they use).
+void scatter_items(int shift, const Reach& reach, const ItemRow& items, int anchor,
+                   double* rows, const Tile& tile);
 
 /// Integrates a tile row along x in place (after adding it to the column
 /// carry, for the box), starting from the row carry, which it updates.

@@ -17,12 +17,9 @@ namespace {
 /// Sub-rows per footprint row: odd, so that sub-rows tile pixel rows.
 constexpr int sub_rows = 3;
 
-/// One interval of a clipped footprint: `row` offset from the pixel,
-/// [left, right] relative to its centre, `weight` per unit of length.
-struct Interval {
-    int row;
-    double left, right, weight;
-};
+/// Fine enough for radii up to 8 x 2^6 = 512 pixels; the cells' offsets
+/// then stay within 16 bits (see ShapePrograms::clipped_blocks).
+constexpr int max_cateye_fineness = 6;
 
 /// The shape's sub-row spans at one radius, kept while neighbours share
 /// it (a layer's radius mostly changes slowly).
@@ -42,18 +39,18 @@ struct SpanCache {
     }
 };
 
-/// The intervals of the shape of a pixel centred at `at` with CoC radius r,
-/// clipped by the cat's eye, normalised to total weight 1.
-void clipped_intervals(const RowProfile& profile, const CatEye& cateye, const V2d& at, double r,
-                       SpanCache& cache, std::vector<Interval>& out)
+/// The sub-row spans `sub` of a shape (its spans at sub_rows times the
+/// radius r) as spans of the footprint's rows, each cut by the disc of
+/// radius r centred at d when `clip` (unclipped if the clip leaves
+/// nothing). Returns their area.
+double clip_sub_rows(const std::vector<RowSpan>& sub, double r, bool clip, const V2d& d,
+                     std::vector<RowSpan>& out)
 {
-    const bool clip = cateye.amount > 0.0 && r >= cateye_min_radius;
-    const V2d d = clip ? cateye.offset(at, r) : V2d(0.0, 0.0);
-    const std::vector<RowSpan>& spans = cache.at(profile, r);
-    for (const bool clipping : { clip, false }) {  // unclipped if the clip left nothing
+    double area = 0.0;
+    for (const bool clipping : { clip, false }) {
         out.clear();
-        double total = 0.0;
-        for (const RowSpan& s : spans) {
+        area = 0.0;
+        for (const RowSpan& s : sub) {
             const double y = double(s.row) / sub_rows;  // the sub-row's middle
             double left = s.left / sub_rows, right = s.right / sub_rows;
             if (clipping) {
@@ -68,14 +65,24 @@ void clipped_intervals(const RowProfile& profile, const CatEye& cateye, const V2
             }
             const double weight = s.weight / sub_rows;
             out.push_back({ int(std::floor(y + 0.5)), left, right, weight });
-            total += (right - left) * weight;
+            area += (right - left) * weight;
         }
-        if (total > 0.0) {
-            for (Interval& i : out)
-                i.weight /= total;
-            return;
-        }
+        if (area > 0.0)
+            break;
     }
+    return area;
+}
+
+/// The intervals of the shape of a pixel centred at `at` with CoC radius r,
+/// clipped by the cat's eye, normalised to total weight 1.
+void clipped_intervals(const RowProfile& profile, const CatEye& cateye, const V2d& at, double r,
+                       SpanCache& cache, std::vector<RowSpan>& out)
+{
+    const bool clip = cateye.amount > 0.0 && r >= cateye_min_radius;
+    const V2d d = clip ? cateye.offset(at, r) : V2d(0.0, 0.0);
+    const double area = clip_sub_rows(cache.at(profile, r), r, clip, d, out);
+    for (RowSpan& i : out)
+        i.weight /= area;
 }
 
 /// Adds w times the coverage of [a, b] (pixel i covering [i, i + 1]) to a
@@ -94,6 +101,41 @@ void add_interval(double* row, int nc, double a, double b, const float* v, doubl
 
 }  // namespace
 
+int cateye_fineness(double r)
+{
+    // The edge's error is at most r times half a step: r / 64 at fineness 0.
+    int fineness = 0;
+    while (fineness < max_cateye_fineness && r > 8.0 * (1 << fineness))
+        ++fineness;
+    return fineness;
+}
+
+CatEyeCell cateye_cell(const CatEye& cateye, const V2d& at, int fineness)
+{
+    const V2d u = cateye.offset(at, 1.0) * (double(1 << fineness) / cateye_cell_size);
+    return { int(std::floor(u.x)), int(std::floor(u.y)), fineness };
+}
+
+V2d cateye_cell_offset(const CatEyeCell& cell)
+{
+    return V2d(cell.x + 0.5, cell.y + 0.5) * (cateye_cell_size / (1 << cell.fineness));
+}
+
+ClippedProfile::ClippedProfile(std::shared_ptr<const RowProfile> aperture,
+                               const V2d& offset_per_radius, bool clip)
+    : m_aperture(std::move(aperture))
+    , m_offset(offset_per_radius)
+    , m_clip(clip)
+{
+}
+
+double ClippedProfile::rows(double r, std::vector<RowSpan>& spans) const
+{
+    std::vector<RowSpan> sub;
+    m_aperture->rows(sub_rows * r, sub);
+    return clip_sub_rows(sub, r, m_clip && r >= cateye_min_radius, m_offset * r, spans);
+}
+
 bool spread_cateye(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
                    const RowProfile& profile, const CatEye& cateye, ROI roi, int nthreads)
 {
@@ -106,9 +148,9 @@ bool spread_cateye(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
         true,
         [&](int x, int y, const float* v, int nc, double r, auto&& row) {
             thread_local SpanCache spans;
-            thread_local std::vector<Interval> intervals;
+            thread_local std::vector<RowSpan> intervals;
             clipped_intervals(profile, cateye, V2d(x + 0.5, y + 0.5), r, spans, intervals);
-            for (const Interval& i : intervals)
+            for (const RowSpan& i : intervals)
                 if (double* out = row(y + i.row))
                     add_interval(out, nc, x + 0.5 + i.left, x + 0.5 + i.right, v, i.weight);
         });
@@ -148,12 +190,12 @@ Footprint cateye_footprint(const RowProfile& profile, const CatEye& cateye, cons
                            double r)
 {
     SpanCache spans;
-    std::vector<Interval> intervals;
+    std::vector<RowSpan> intervals;
     clipped_intervals(profile, cateye, at, r, spans, intervals);
     // Offsets from the pixel at `at`, whose own column spans [0, 1) here.
     const double x = at.x - std::floor(at.x);
     int first = 0, last = 0, left = 0, right = 0;
-    for (const Interval& i : intervals) {
+    for (const RowSpan& i : intervals) {
         first = std::min(first, i.row);
         last = std::max(last, i.row);
         left = std::min(left, int(std::floor(x + i.left)));
@@ -165,7 +207,7 @@ Footprint cateye_footprint(const RowProfile& profile, const CatEye& cateye, cons
     fp.width = right - left + 1;
     fp.height = last - first + 1;
     fp.weights.assign(size_t(fp.width) * fp.height, 0.0);
-    for (const Interval& i : intervals)
+    for (const RowSpan& i : intervals)
         for (int c = left; c <= right; ++c) {
             const double overlap = std::min(double(c + 1), x + i.right)
                                    - std::max(double(c), x + i.left);

@@ -125,7 +125,7 @@ std::shared_ptr<const RowProfile> borrow(const RowProfile& profile)
 
 bool spread_image(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const OIIO::ImageBuf& radius,
                   ROI roi, int nthreads, SpreadMethod method, const RowProfile* shape,
-                  const HighlightTest& highlights)
+                  const HighlightTest& highlights, const CatEye& cateye)
 {
     const SpreadInputs in = prepare_spread(dst, src, radius, roi, nthreads);
     if (!in.valid)
@@ -162,7 +162,7 @@ bool spread_image(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const OIIO::Im
     }
     std::unique_ptr<ShapePrograms> programs;
     if (shape)
-        programs = std::make_unique<ShapePrograms>(borrow(*shape), in.max_radius);
+        programs = std::make_unique<ShapePrograms>(borrow(*shape), in.max_radius, cateye);
     const SpreadEngine engine(source, method, programs.get(), nthreads);
     // The engine hands on every pixel of its extent.
     reset_for_overwrite(dst, output_spec(src, engine.extent()), nthreads);

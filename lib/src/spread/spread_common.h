@@ -3,6 +3,7 @@
 
 #include <OpenImageIO/imagebuf.h>
 
+#include <defocus/spread/cateye.h>
 #include <defocus/spread/hybrid.h>
 
 #include "spread/spread_engine.h"
@@ -42,10 +43,11 @@ ImageSpec output_spec(const OIIO::ImageBuf& src, const OIIO::ROI& window);
 
 /// Spreads src (at most 4 channels) into dst, a float image over every
 /// pixel the spread lights, with the engine `method`; `shape` for the
-/// shape methods. The pixels that pass `highlights` (see visible_bokeh)
-/// are never merged into blocks.
+/// shape methods, clipped by `cateye` when its amount is not 0. The pixels
+/// that pass `highlights` (see visible_bokeh) are never merged into blocks.
 bool spread_image(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const OIIO::ImageBuf& radius,
                   OIIO::ROI roi, int nthreads, SpreadMethod method,
-                  const RowProfile* shape = nullptr, const HighlightTest& highlights = {});
+                  const RowProfile* shape = nullptr, const HighlightTest& highlights = {},
+                  const CatEye& cateye = {});
 
 }  // namespace defocus

@@ -26,11 +26,36 @@ double smallest_merged_radius()
     return level_start(1) * (1.0 - transition);
 }
 
-ShapePrograms::ShapePrograms(std::shared_ptr<const RowProfile> profile, double max_radius)
+ShapePrograms::ShapePrograms(std::shared_ptr<const RowProfile> profile, double max_radius,
+                             const CatEye& cateye)
+    : m_profile(std::move(profile))
+    , m_max_radius(max_radius)
+    , m_cateye(cateye)
 {
+    // Clipped shapes are cut in sub-rows: their uncut sub-rows bound them.
+    const std::shared_ptr<const RowProfile> bound =
+        clipped() ? std::make_shared<ClippedProfile>(m_profile, Imath::V2d(0.0, 0.0), false)
+                  : m_profile;
     for (int level = 0; level <= max_level; ++level)
         m_families.push_back(std::make_unique<ProgramFamily>(
-            profile, 1 << level, (1 << level) / radius_bins_per_pixel, max_radius));
+            bound, 1 << level, (1 << level) / radius_bins_per_pixel, max_radius));
+}
+
+ShapePrograms::~ShapePrograms() = default;
+
+const ProgramFamily& ShapePrograms::clipped_blocks(int level, const CatEyeCell& cell) const
+{
+    // Cells lie within a few thousand of the origin (offsets of at most
+    // the largest amount): 16 bits each.
+    const int64_t key = (int64_t(level) << 40) | (int64_t(cell.fineness) << 32)
+                        | (int64_t(uint16_t(cell.x)) << 16) | int64_t(uint16_t(cell.y));
+    std::lock_guard<std::mutex> lock(m_mutex);
+    std::unique_ptr<ProgramFamily>& family = m_clipped[key];
+    if (!family)
+        family = std::make_unique<ProgramFamily>(
+            std::make_shared<ClippedProfile>(m_profile, cateye_cell_offset(cell)), 1 << level,
+            (1 << level) / radius_bins_per_pixel, m_max_radius);
+    return *family;
 }
 
 SpreadEngine::SpreadEngine(const SpreadSource& source, SpreadMethod method,
@@ -62,7 +87,7 @@ SpreadEngine::SpreadEngine(const SpreadSource& source, SpreadMethod method,
     parallel_for_each_item(0, stripes, [&](int64_t i) {
         const int y0 = std::max(roi.ybegin, (first_stripe + int(i)) * stripe);
         const int y1 = std::min(roi.yend, (first_stripe + int(i) + 1) * stripe);
-        survey_rows(source, method, levels, y0, y1, found, merge);
+        survey_rows(source, method, shape, levels, y0, y1, found, merge);
     }, nthreads);
     m_dense.max_radius = found.dense_max;
     m_dense.rows = std::move(found.dense_rows);
@@ -180,7 +205,7 @@ void SpreadEngine::spread_band(const Band& band, Workspace& ws, RowSink& sink) c
             ws.dense.resize(band.sy1 - band.sy0);
         for (int sy = band.sy0; sy < band.sy1; ++sy) {
             if (m_dense.rows[size_t(sy - roi.ybegin)])
-                prepare_dense_row(m_source, m_method, m_shape->pixels(), sy, band.sx0, band.sx1,
+                prepare_dense_row(m_source, m_method, *m_shape, sy, band.sx0, band.sx1,
                                   ws.dense[sy - band.sy0], ws.color, ws.blend);
             else
                 ws.dense[sy - band.sy0].clear();
@@ -221,7 +246,7 @@ void SpreadEngine::spread_box_tile(const Band& band, const Tile& tile, Workspace
 }
 
 /// Shapes: every source row and block row within reach of the tile (or of
-/// its half-resolution twin) is visited, visit(family, shift, reach, items,
+/// its half-resolution twin) is visited, visit(shift, reach, items,
 /// anchor, at_half), until visit returns false.
 template<typename Visit>
 void SpreadEngine::visit_item_rows(const Band& band, const Tile& tile, const Tile& half_tile,
@@ -231,7 +256,7 @@ void SpreadEngine::visit_item_rows(const Band& band, const Tile& tile, const Til
         const Reach dense_reach { m_dense.first_row, m_dense.last_row, m_dense.first_column,
                                   m_dense.last_column };
         for (int sy = band.sy0; sy < band.sy1; ++sy)
-            if (!visit(m_shape->pixels(), 0, dense_reach, ws.dense[sy - band.sy0], sy, false))
+            if (!visit(0, dense_reach, ws.dense[sy - band.sy0], sy, false))
                 return;
     }
     for (const std::unique_ptr<Sparse>& level : m_sparse) {
@@ -242,7 +267,7 @@ void SpreadEngine::visit_item_rows(const Band& band, const Tile& tile, const Til
         const int hi = std::min(first + int(level->rows.size()) - 1,
                                 floor_div(t.y_end - 1 - level->reach.first_row - offset, s));
         for (int b = lo; b <= hi; ++b)
-            if (!visit(*level->family, level->grid_shift(), level->reach, level->rows[b - first],
+            if (!visit(level->grid_shift(), level->reach, level->rows[b - first],
                        level->anchor(b), level->half))
                 return;
     }
@@ -315,8 +340,7 @@ void SpreadEngine::spread_shape_tile(const Band& band, const Tile& tile, Workspa
     // resolution.
     bool lit[2] = { false, false };
     visit_item_rows(band, tile, half_tile, ws,
-                    [&](const ProgramFamily&, int shift, const Reach& reach, const ItemRow& items,
-                        int, bool at_half) {
+                    [&](int shift, const Reach& reach, const ItemRow& items, int, bool at_half) {
         lit[at_half] = lit[at_half]
                        || !runs_in_reach(items, shift, reach, at_half ? half_tile : tile).empty();
         return !(lit[0] && lit[1]);
@@ -338,12 +362,12 @@ void SpreadEngine::spread_shape_tile(const Band& band, const Tile& tile, Workspa
     if (add_half)
         ws.half_rows.assign(size_t(half_tile.y_end - half_tile.y_begin) * half_row_size, 0.0);
     visit_item_rows(band, tile, half_tile, ws,
-                    [&](const ProgramFamily& family, int shift, const Reach& reach,
+                    [&](int shift, const Reach& reach,
                         const ItemRow& items, int anchor, bool at_half) {
         if (at_half)
-            scatter_items(family, shift, reach, items, anchor, ws.half_rows.data(), half_tile);
+            scatter_items(shift, reach, items, anchor, ws.half_rows.data(), half_tile);
         else
-            scatter_items(family, shift, reach, items, anchor, ws.rows.data(), tile);
+            scatter_items(shift, reach, items, anchor, ws.rows.data(), tile);
         return true;
     });
     if (add_half) {

@@ -31,10 +31,15 @@
 // sink as they are made, so that compositing needs no layer-sized buffer.
 #pragma once
 
+#include <cstdint>
 #include <memory>
+#include <mutex>
+#include <unordered_map>
 #include <vector>
 
 #include <OpenImageIO/imagebuf.h>
+
+#include <defocus/spread/cateye.h>
 
 #include "spread/footprint_program.h"
 
@@ -56,18 +61,71 @@ public:
 
 /// The footprints of one aperture shape, for single pixels and for merged
 /// blocks of every size, built as spreading needs them and shared by all
-/// layers of a frame.
+/// layers of a frame. With a cat's eye, each pixel or block takes the shape
+/// clipped at the cell of its centre (ClippedProfile), one family of
+/// footprints per cell and size, made the first time it is asked for.
 class ShapePrograms {
 public:
-    ShapePrograms(std::shared_ptr<const RowProfile> profile, double max_radius);
+    ShapePrograms(std::shared_ptr<const RowProfile> profile, double max_radius,
+                  const CatEye& cateye = {});
+    ~ShapePrograms();
 
-    /// Single pixels.
+    /// Single pixels: where a footprint of a radius reaches (of the
+    /// unclipped shape, which bounds every clipped one), and which program
+    /// a radius takes (in every family of single pixels alike).
     const ProgramFamily& pixels() const { return *m_families.front(); }
-    /// Uniform blocks of 2^level x 2^level pixels (see ProgramFamily).
+    /// The same for uniform blocks of 2^level x 2^level pixels (see
+    /// ProgramFamily).
     const ProgramFamily& blocks(int level) const { return *m_families[level]; }
 
+    bool clipped() const { return m_cateye.amount > 0.0; }
+    const CatEye& cateye() const { return m_cateye; }
+    /// The footprints of blocks of 2^level pixels (as blocks()) clipped at
+    /// `cell`; thread-safe.
+    const ProgramFamily& clipped_blocks(int level, const CatEyeCell& cell) const;
+
 private:
+    std::shared_ptr<const RowProfile> m_profile;
+    double m_max_radius;
+    CatEye m_cateye;
     std::vector<std::unique_ptr<ProgramFamily>> m_families;
+    mutable std::mutex m_mutex;
+    mutable std::unordered_map<int64_t, std::unique_ptr<ProgramFamily>> m_clipped;
+};
+
+/// The footprints of the pixels or blocks of one size by their centre
+/// (ShapePrograms::clipped_blocks, remembering the last cell: neighbours
+/// mostly share it).
+class FamilyFinder {
+public:
+    FamilyFinder(const ShapePrograms& shape, int level)
+        : m_shape(shape)
+        , m_level(level)
+        , m_family(&shape.blocks(level))
+    {
+    }
+
+    /// For a centre in full-resolution pixel coordinates, on the grid of
+    /// `fineness` (see cateye_fineness).
+    const ProgramFamily* at(double x, double y, int fineness = 0)
+    {
+        if (!m_shape.clipped())
+            return m_family;
+        const CatEyeCell cell = cateye_cell(m_shape.cateye(), Imath::V2d(x, y), fineness);
+        if (!m_found || cell != m_cell) {
+            m_family = &m_shape.clipped_blocks(m_level, cell);
+            m_cell = cell;
+            m_found = true;
+        }
+        return m_family;
+    }
+
+private:
+    const ShapePrograms& m_shape;
+    int m_level;
+    const ProgramFamily* m_family;
+    CatEyeCell m_cell { 0, 0, 0 };
+    bool m_found = false;
 };
 
 /// A layer to spread: premultiplied RGBA and CoC radius over `roi`.

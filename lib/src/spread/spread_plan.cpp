@@ -18,7 +18,7 @@ namespace {
 
 /// A layer spread on its own, as an image: the hybrid method (highlights
 /// with the PSF image, the rest with the aperture's filter), the smooth
-/// filters, or any aperture clipped by a cat's eye.
+/// filters, or exact spreading and the box clipped by a cat's eye.
 bool spread_apart(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
                   const SpreadOptions& spread, const ApertureImages& images,
                   const RowProfile* profile, const CatEye& cateye, const Imath::V3d& luma,
@@ -36,7 +36,12 @@ bool spread_apart(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
                 const Psf psf = [order](double r) { return smooth_footprint(order, r); };
                 return spread_cateye(out, in, radius, psf, cateye, {}, nthreads);
             }
-            default: return spread_cateye(out, in, radius, *profile, cateye, {}, nthreads);
+            default:
+                return spread.exact_shape
+                           ? spread_cateye(out, in, radius, *profile, cateye, {}, nthreads)
+                           : spread_cateye_bounded(out, in, radius, *profile, cateye,
+                                                   { exact_highlight_threshold, luma }, {},
+                                                   nthreads);
             }
         }
         switch (spread.aperture.shape) {
@@ -108,8 +113,6 @@ bool plan_spread(const SpreadOptions& options, const ApertureImages& images,
         }
         plan.profile = images.mask;
     }
-    plan.programs = plan.profile ? std::make_unique<ShapePrograms>(plan.profile, max_radius)
-                                 : nullptr;
     plan.method = aperture.shape == ApertureShape::Box ? SpreadMethod::Box
                   : options.exact_shape                ? SpreadMethod::Exact
                                                        : SpreadMethod::Bounded;
@@ -120,8 +123,15 @@ bool plan_spread(const SpreadOptions& options, const ApertureImages& images,
         for (const int y : { display.ybegin, display.yend })
             plan.cateye.corner_distance = std::max(plan.cateye.corner_distance,
                                                    (Imath::V2d(x, y) - centre).length());
+    // A cat's eye goes through the engine with merged blocks only: exact
+    // spreading and the box take it pixel by pixel.
+    const bool clipped = plan.cateye.amount != 0.0;
     plan.in_engine = !images.psf && aperture.shape != ApertureShape::Tent
-                     && aperture.shape != ApertureShape::Smooth && plan.cateye.amount == 0.0;
+                     && aperture.shape != ApertureShape::Smooth
+                     && (!clipped || plan.method == SpreadMethod::Bounded);
+    if (plan.profile)
+        plan.programs = std::make_unique<ShapePrograms>(
+            plan.profile, max_radius, plan.in_engine ? plan.cateye : CatEye {});
     return true;
 }
 

@@ -35,8 +35,7 @@ struct SpreadPlan {
     CatEye cateye;
     /// Layers go through the engine, composited as they are spread; else
     /// each is spread apart, as an image (the hybrid method, tent and
-    /// smooth, any cat's eye): the engine's footprints depend on the radius
-    /// alone.
+    /// smooth, a cat's eye with the box or exact spreading).
     bool in_engine = false;
 };
 

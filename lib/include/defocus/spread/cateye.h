@@ -4,11 +4,15 @@
 // the pixel towards the optical centre.
 #pragma once
 
+#include <memory>
+#include <vector>
+
 #include <Imath/ImathVec.h>
 #include <OpenImageIO/imagebuf.h>
 
 #include <defocus/spread/aperture_profile.h>
 #include <defocus/spread/footprint.h>
+#include <defocus/spread/hybrid.h>
 
 namespace defocus {
 
@@ -34,6 +38,57 @@ struct CatEye {
 /// itself.
 constexpr double cateye_min_radius = 1.0;
 
+/// A cell of a grid on which the bounded-time cat's eye
+/// (spread_cateye_bounded) takes the clip's offset per unit of radius:
+/// a grid of step cateye_cell_size / 2^fineness.
+struct CatEyeCell {
+    int x, y, fineness;
+    bool operator==(const CatEyeCell& o) const
+    {
+        return x == o.x && y == o.y && fineness == o.fineness;
+    }
+    bool operator!=(const CatEyeCell& o) const { return !(*this == o); }
+};
+
+/// The coarsest grid's step: a footprint of radius r clipped at its
+/// cell's centre has the clip's edge within r / 64 of where its own offset
+/// puts it.
+constexpr double cateye_cell_size = 1.0 / 32.0;
+
+/// The grid a single pixel of CoC radius r takes: fine enough that its
+/// clip's edge is within 1/8 of a pixel of its own (a highlight's bokeh
+/// shows its outline). Merged blocks take the coarsest: they already move
+/// light by half a block.
+int cateye_fineness(double r);
+
+/// The cell of the offset per unit of radius, cateye.offset(at, 1), on the
+/// grid of `fineness`.
+CatEyeCell cateye_cell(const CatEye& cateye, const Imath::V2d& at, int fineness = 0);
+
+/// The offset per unit of radius at the centre of `cell`.
+Imath::V2d cateye_cell_offset(const CatEyeCell& cell);
+
+/// An aperture shape clipped by the barrel with a fixed offset per unit of
+/// radius: at CoC radius r (from cateye_min_radius), the shape cut by the
+/// disc of radius r centred r times `offset_per_radius` away. Each row is
+/// cut into 3 sub-rows, each an interval of the shape (area-exact, from
+/// aperture.rows()) intersected with the clip disc's chord at its middle.
+/// Where the clip leaves nothing, and with `clip` false, the sub-rows are
+/// uncut: those bound every clipped shape's reach.
+class ClippedProfile final : public RowProfile {
+public:
+    ClippedProfile(std::shared_ptr<const RowProfile> aperture,
+                   const Imath::V2d& offset_per_radius, bool clip = true);
+
+    double rows(double r, std::vector<RowSpan>& spans) const override;
+    double extent() const override { return m_aperture->extent(); }
+
+private:
+    std::shared_ptr<const RowProfile> m_aperture;
+    Imath::V2d m_offset;
+    bool m_clip;
+};
+
 /// Scanline spreading (spread_scanline) of a constant-intensity shape
 /// clipped by `cateye`: each footprint row is cut into 3 sub-rows, each an
 /// interval of the shape (area-exact, from profile.rows()) intersected with
@@ -51,6 +106,18 @@ bool spread_cateye(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const OIIO::I
 /// the clip disc is dropped and the rest renormalised. O(r²) per pixel.
 bool spread_cateye(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const OIIO::ImageBuf& radius,
                    const Psf& psf, const CatEye& cateye, OIIO::ROI roi = {}, int nthreads = 0);
+
+/// The same clip in bounded time per pixel, as spread_aperture spreads the
+/// unclipped shape: pixels of CoC radius below 7.5 and the highlights that
+/// pass `highlights` alone, larger footprints merged in blocks. Each pixel
+/// or block takes the clipped shape (ClippedProfile) of the cell
+/// (cateye_cell, a pixel of radius r on the grid of cateye_fineness(r)) of
+/// its centre; below radius 7.5 a pixel's footprint is aperture_psf of
+/// that shape. The sum of dst equals the sum of src.
+bool spread_cateye_bounded(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
+                           const OIIO::ImageBuf& radius, const RowProfile& profile,
+                           const CatEye& cateye, const HighlightTest& highlights = {},
+                           OIIO::ROI roi = {}, int nthreads = 0);
 
 /// The footprint that spread_cateye(profile) gives a pixel centred at `at`
 /// with CoC radius r, as a weight table: the direct reference.
