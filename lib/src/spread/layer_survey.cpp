@@ -52,7 +52,7 @@ public:
             sum->t = t;
             sum->family = family ? family
                                  : m_families->at((b + 0.5) * m_size, m_centre_y,
-                                                  m_size == 1 ? cateye_fineness(r) : 0);
+                                                  cateye_fineness(m_size, r));
         }
         sum->blended |= sum->t != t;
         store4(sum->smaller, load4(sum->smaller) + value * splat(1.0 - t));

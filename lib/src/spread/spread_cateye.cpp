@@ -17,7 +17,7 @@ namespace {
 /// Sub-rows per footprint row: odd, so that sub-rows tile pixel rows.
 constexpr int sub_rows = 3;
 
-/// Fine enough for radii up to 8 x 2^6 = 512 pixels; the cells' offsets
+/// Fine enough for radii up to 32 x 2^6 = 2048 pixels; the cells' offsets
 /// then stay within 16 bits (see ShapePrograms::clipped_blocks).
 constexpr int max_cateye_fineness = 6;
 
@@ -101,24 +101,29 @@ void add_interval(double* row, int nc, double a, double b, const float* v, doubl
 
 }  // namespace
 
-int cateye_fineness(double r)
+int cateye_fineness(int block, double r)
 {
-    // The edge's error is at most r times half a step: r / 64 at fineness 0.
+    // The edge's error is at most r times half a step, r / 64 at
+    // fineness 0. Blocks take radii under 16 times their width.
+    if (block > 1)
+        return 0;
     int fineness = 0;
-    while (fineness < max_cateye_fineness && r > 8.0 * (1 << fineness))
+    while (fineness < max_cateye_fineness && r > 32.0 * (1 << fineness))
         ++fineness;
     return fineness;
 }
 
 CatEyeCell cateye_cell(const CatEye& cateye, const V2d& at, int fineness)
 {
-    const V2d u = cateye.offset(at, 1.0) * (double(1 << fineness) / cateye_cell_size);
-    return { int(std::floor(u.x)), int(std::floor(u.y)), fineness };
+    // Cells centred on the grid's points, so that the optical centre's
+    // cell is not clipped off-centre.
+    const V2d u = cateye.offset(at, 1.0) * (std::ldexp(1.0, fineness) / cateye_cell_size);
+    return { int(std::lround(u.x)), int(std::lround(u.y)), fineness };
 }
 
 V2d cateye_cell_offset(const CatEyeCell& cell)
 {
-    return V2d(cell.x + 0.5, cell.y + 0.5) * (cateye_cell_size / (1 << cell.fineness));
+    return V2d(cell.x, cell.y) * std::ldexp(cateye_cell_size, -cell.fineness);
 }
 
 ClippedProfile::ClippedProfile(std::shared_ptr<const RowProfile> aperture,

@@ -26,9 +26,50 @@ double smallest_merged_radius()
     return level_start(1) * (1.0 - transition);
 }
 
+namespace {
+
+/// A shape's spans, each size made once: the clipped shapes of a cat's
+/// eye's cells all cut the same sizes of the same aperture.
+class RememberedProfile final : public RowProfile {
+public:
+    explicit RememberedProfile(std::shared_ptr<const RowProfile> profile)
+        : m_profile(std::move(profile))
+    {
+    }
+
+    double rows(double r, std::vector<RowSpan>& spans) const override
+    {
+        {
+            std::lock_guard<std::mutex> lock(m_mutex);
+            const auto found = m_sizes.find(r);
+            if (found != m_sizes.end()) {
+                spans = found->second.spans;
+                return found->second.area;
+            }
+        }
+        const double area = m_profile->rows(r, spans);
+        std::lock_guard<std::mutex> lock(m_mutex);
+        m_sizes.emplace(r, Size { area, spans });
+        return area;
+    }
+    double extent() const override { return m_profile->extent(); }
+
+private:
+    struct Size {
+        double area;
+        std::vector<RowSpan> spans;
+    };
+    std::shared_ptr<const RowProfile> m_profile;
+    mutable std::mutex m_mutex;
+    mutable std::unordered_map<double, Size> m_sizes;
+};
+
+}  // namespace
+
 ShapePrograms::ShapePrograms(std::shared_ptr<const RowProfile> profile, double max_radius,
                              const CatEye& cateye)
-    : m_profile(std::move(profile))
+    : m_profile(cateye.amount > 0.0 ? std::make_shared<RememberedProfile>(std::move(profile))
+                                    : std::move(profile))
     , m_max_radius(max_radius)
     , m_cateye(cateye)
 {

@@ -85,7 +85,7 @@ public:
     const ProgramFamily& clipped_blocks(int level, const CatEyeCell& cell) const;
 
 private:
-    std::shared_ptr<const RowProfile> m_profile;
+    std::shared_ptr<const RowProfile> m_profile;  ///< with a cat's eye, its sizes remembered
     double m_max_radius;
     CatEye m_cateye;
     std::vector<std::unique_ptr<ProgramFamily>> m_families;
@@ -107,7 +107,7 @@ public:
 
     /// For a centre in full-resolution pixel coordinates, on the grid of
     /// `fineness` (see cateye_fineness).
-    const ProgramFamily* at(double x, double y, int fineness = 0)
+    const ProgramFamily* at(double x, double y, int fineness)
     {
         if (!m_shape.clipped())
             return m_family;

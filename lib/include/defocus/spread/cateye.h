@@ -40,7 +40,8 @@ constexpr double cateye_min_radius = 1.0;
 
 /// A cell of a grid on which the bounded-time cat's eye
 /// (spread_cateye_bounded) takes the clip's offset per unit of radius:
-/// a grid of step cateye_cell_size / 2^fineness.
+/// a grid of step cateye_cell_size / 2^fineness, cell (x, y) centred on
+/// (x, y) steps.
 struct CatEyeCell {
     int x, y, fineness;
     bool operator==(const CatEyeCell& o) const
@@ -50,16 +51,17 @@ struct CatEyeCell {
     bool operator!=(const CatEyeCell& o) const { return !(*this == o); }
 };
 
-/// The coarsest grid's step: a footprint of radius r clipped at its
-/// cell's centre has the clip's edge within r / 64 of where its own offset
-/// puts it.
+/// The step of the grid of fineness 0: a footprint of radius r clipped at
+/// its cell's centre has the clip's edge within r / 64 of where its own
+/// offset puts it.
 constexpr double cateye_cell_size = 1.0 / 32.0;
 
-/// The grid a single pixel of CoC radius r takes: fine enough that its
-/// clip's edge is within 1/8 of a pixel of its own (a highlight's bokeh
-/// shows its outline). Merged blocks take the coarsest: they already move
-/// light by half a block.
-int cateye_fineness(double r);
+/// The grid that a pixel (block 1) of CoC radius r takes, or a merged
+/// block of `block` pixels: fine enough that the clip's edge lies within
+/// r / 64 but at most half a pixel of the pixel's own (a highlight's bokeh
+/// shows its outline); blocks take the coarsest, r / 64 being at most a
+/// quarter of a block at the radii it is merged at.
+int cateye_fineness(int block, double r);
 
 /// The cell of the offset per unit of radius, cateye.offset(at, 1), on the
 /// grid of `fineness`.
@@ -111,9 +113,8 @@ bool spread_cateye(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const OIIO::I
 /// unclipped shape: pixels of CoC radius below 7.5 and the highlights that
 /// pass `highlights` alone, larger footprints merged in blocks. Each pixel
 /// or block takes the clipped shape (ClippedProfile) of the cell
-/// (cateye_cell, a pixel of radius r on the grid of cateye_fineness(r)) of
-/// its centre; below radius 7.5 a pixel's footprint is aperture_psf of
-/// that shape. The sum of dst equals the sum of src.
+/// (cateye_cell, on the grid of cateye_fineness) of its centre; below
+/// radius 7.5 a pixel's footprint is aperture_psf of that shape. The sum of dst equals the sum of src.
 bool spread_cateye_bounded(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
                            const OIIO::ImageBuf& radius, const RowProfile& profile,
                            const CatEye& cateye, const HighlightTest& highlights = {},
