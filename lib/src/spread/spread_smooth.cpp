@@ -99,6 +99,38 @@ Footprint smooth_footprint(int order, double coc_radius)
 
 namespace {
 
+/// An integer-valued double (|x| < 2^127) as a 128-bit integer, without
+/// the library call that a cast makes: the two 64-bit halves of |x| are
+/// exact doubles.
+Fixed to_fixed(double x)
+{
+    const double m = std::abs(x);
+    const double high = std::floor(m * 0x1p-64);
+    const double low = m - high * 0x1p64;  // in [0, 2^64), exact
+    const Fixed f = (Fixed(uint64_t(high)) << 64) | Fixed(uint64_t(low));
+    return x < 0.0 ? -f : f;
+}
+
+/// How a pixel of one radius is spread: its two widths and the amplitude
+/// of each of its four separable pieces (x width a, y width b) per unit of
+/// value, 0 for a piece of no weight.
+struct SmoothPieces {
+    Widths ws;
+    double scale[2][2];
+
+    SmoothPieces(int order, double r)
+        : ws(smooth_widths(order, r))
+    {
+        for (int a = 0; a < 2; ++a)
+            for (int b = 0; b < 2; ++b) {
+                double power = 1.0;  // (w_a w_b)^order, exact
+                for (int k = 0; k < order; ++k)
+                    power *= double(ws.w[a]) * double(ws.w[b]);
+                scale[a][b] = ws.weight[a] * ws.weight[b] / power;
+            }
+    }
+};
+
 /// The accumulation buffer of spread_smooth: rows of `ext`, `nc` fixed-point
 /// channels a pixel.
 struct SmoothAccumulator {
@@ -116,19 +148,17 @@ struct SmoothAccumulator {
     /// Pixel (x, y)'s value `v` as the corner deltas of its four
     /// separable pieces (widths `ws`), those in rows [r0, r1). Deltas
     /// beyond the right edge only reach further out: dropped.
-    void scatter(int x, int y, const float* v, const Widths& ws, int r0, int r1)
+    void scatter(int x, int y, const float* v, const SmoothPieces& pieces, int r0, int r1)
     {
+        const Widths& ws = pieces.ws;
         for (int a = 0; a < 2; ++a)
             for (int b = 0; b < 2; ++b) {
-                const double scale = ws.weight[a] * ws.weight[b]
-                                     / std::pow(double(ws.w[a]), order)
-                                     / std::pow(double(ws.w[b]), order);
+                const double scale = pieces.scale[a][b];
                 if (scale == 0.0)
                     continue;
                 Fixed amplitude[8];
                 for (int c = 0; c < nc; ++c)
-                    amplitude[c] = Fixed(__int128(
-                        std::nearbyint(double(v[c]) * scale * fixed_scale)));
+                    amplitude[c] = to_fixed(std::nearbyint(double(v[c]) * scale * fixed_scale));
                 for (int k = 0; k <= order; ++k) {
                     const int row = y - ext.ybegin - half_support(order, ws.w[b]) + k * ws.w[b];
                     if (row < r0 || row >= r1)
@@ -209,11 +239,19 @@ bool spread_smooth(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, i
         // A source row writes rows from y - half to y + half + order.
         const int ylo = std::max(roi.ybegin, ext.ybegin + r0 - reach - order);
         const int yhi = std::min(roi.yend, ext.ybegin + r1 + reach);
+        // Neighbours mostly share a radius: its pieces made once per change.
+        float radius = NAN;
+        SmoothPieces pieces(order, 0.0);
         for (int y = ylo; y < yhi; ++y)
             for (int x = roi.xbegin; x < roi.xend; ++x) {
                 const float* v = in.pixels(x, y);
-                if (!is_zero(v, nc))
-                    acc.scatter(x, y, v, smooth_widths(order, *in.radii(x, y)), r0, r1);
+                if (is_zero(v, nc))
+                    continue;
+                if (*in.radii(x, y) != radius) {
+                    radius = *in.radii(x, y);
+                    pieces = SmoothPieces(order, radius);
+                }
+                acc.scatter(x, y, v, pieces, r0, r1);
             }
         acc.integrate_rows(r0, r1);
     });
