@@ -177,6 +177,69 @@ struct SmoothAccumulator {
             }
     }
 
+    /// Pixels [x0, x1) of source row y, all of one pair of widths: each
+    /// piece's column deltas are gathered on a line first, then added to
+    /// the piece's rows (those in [r0, r1)) scaled by their row binomial.
+    /// The same sums as scatter() pixel by pixel, but each row is written
+    /// once, along its length, not at every pixel's columns: the deltas of
+    /// a long run stay in cache.
+    void scatter_run(int x0, int x1, int y, const SpreadInputs& in, int r0, int r1,
+                     std::vector<Fixed>& line)
+    {
+        float radius = NAN;
+        SmoothPieces pieces(order, 0.0);
+        const Widths ws = smooth_widths(order, *in.radii(x0, y));
+        for (int b = 0; b < 2; ++b) {
+            const int row0 = y - ext.ybegin - half_support(order, ws.w[b]);
+            const int first_k = r0 > row0 ? (r0 - row0 + ws.w[b] - 1) / ws.w[b] : 0;
+            if (first_k > order || row0 + first_k * ws.w[b] >= r1)
+                continue;
+            int lo = ext.width(), hi = 0;  // the line's cells written
+            for (int x = x0; x < x1; ++x) {
+                if (*in.radii(x, y) != radius) {
+                    radius = *in.radii(x, y);
+                    pieces = SmoothPieces(order, radius);
+                }
+                const float* v = in.pixels(x, y);
+                for (int a = 0; a < 2; ++a) {
+                    const double scale = pieces.scale[a][b];
+                    if (scale == 0.0)
+                        continue;
+                    const int col0 = x - ext.xbegin - half_support(order, ws.w[a]);
+                    lo = std::min(lo, col0);
+                    hi = std::max(hi, std::min(ext.width(), col0 + order * ws.w[a] + 1));
+                    for (int c = 0; c < nc; ++c) {
+                        const Fixed amplitude =
+                            to_fixed(std::nearbyint(double(v[c]) * scale * fixed_scale));
+                        for (int l = 0; l <= order; ++l) {
+                            const int col = col0 + l * ws.w[a];
+                            if (col >= ext.width())
+                                break;
+                            const Fixed d = amplitude * Fixed(binomial(order, l));
+                            Fixed& cell = line[size_t(col) * nc + c];
+                            cell = l % 2 ? cell - d : cell + d;
+                        }
+                    }
+                }
+            }
+            if (lo >= hi)  // every pixel's piece of weight 0
+                continue;
+            for (int k = first_k; k <= order && row0 + k * ws.w[b] < r1; ++k) {
+                Fixed* row = &acc[size_t(row0 + k * ws.w[b]) * row_len];
+                const int times = binomial(order, k);
+                const bool subtract = k % 2;
+                for (size_t i = size_t(lo) * nc; i < size_t(hi) * nc; ++i) {
+                    Fixed d = line[i];
+                    for (int t = 1; t < times; ++t)
+                        d += line[i];
+                    row[i] = subtract ? row[i] - d : row[i] + d;
+                }
+            }
+            std::fill(line.begin() + ptrdiff_t(lo) * nc, line.begin() + ptrdiff_t(hi) * nc,
+                      Fixed(0));
+        }
+    }
+
     /// Each of rows [r0, r1) integrated `order` times.
     void integrate_rows(int r0, int r1)
     {
@@ -242,16 +305,33 @@ bool spread_smooth(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, i
         // Neighbours mostly share a radius: its pieces made once per change.
         float radius = NAN;
         SmoothPieces pieces(order, 0.0);
+        std::vector<Fixed> line(acc.row_len, Fixed(0));
         for (int y = ylo; y < yhi; ++y)
-            for (int x = roi.xbegin; x < roi.xend; ++x) {
+            for (int x = roi.xbegin; x < roi.xend;) {
                 const float* v = in.pixels(x, y);
-                if (is_zero(v, nc))
+                if (is_zero(v, nc)) {
+                    ++x;
                     continue;
-                if (*in.radii(x, y) != radius) {
-                    radius = *in.radii(x, y);
-                    pieces = SmoothPieces(order, radius);
                 }
-                acc.scatter(x, y, v, pieces, r0, r1);
+                // A run of lit pixels of one pair of widths at least half
+                // a footprint long goes by lines.
+                const int w0 = smooth_widths(order, *in.radii(x, y)).w[0];
+                int end = x + 1;
+                while (end < roi.xend && !is_zero(in.pixels(end, y), nc)
+                       && smooth_widths(order, *in.radii(end, y)).w[0] == w0)
+                    ++end;
+                if (2 * (end - x) >= half_support(order, w0 + 2)) {
+                    acc.scatter_run(x, end, y, in, r0, r1, line);
+                    x = end;
+                    continue;
+                }
+                for (; x < end; ++x) {
+                    if (*in.radii(x, y) != radius) {
+                        radius = *in.radii(x, y);
+                        pieces = SmoothPieces(order, radius);
+                    }
+                    acc.scatter(x, y, in.pixels(x, y), pieces, r0, r1);
+                }
             }
         acc.integrate_rows(r0, r1);
     });
