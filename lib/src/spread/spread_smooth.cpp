@@ -13,7 +13,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <memory>
+
+#include <immintrin.h>
 
 #include <OpenImageIO/parallel.h>
 
@@ -99,15 +102,23 @@ Footprint smooth_footprint(int order, double coc_radius)
 
 namespace {
 
-/// An integer-valued double (|x| < 2^127) as a 128-bit integer, without
-/// the library call that a cast makes: the two 64-bit halves of |x| are
-/// exact doubles.
+/// x (|x| < 2^127) rounded to the nearest integer, ties to even (as
+/// nearbyint), as a 128-bit integer, without library calls: below 2^62 one
+/// conversion instruction rounds it; above, it is an integer already, its
+/// 53-bit mantissa shifted by its exponent.
 Fixed to_fixed(double x)
 {
     const double m = std::abs(x);
-    const double high = std::floor(m * 0x1p-64);
-    const double low = m - high * 0x1p64;  // in [0, 2^64), exact
-    const Fixed f = (Fixed(uint64_t(high)) << 64) | Fixed(uint64_t(low));
+    Fixed f;
+    if (m < 0x1p62) {
+        f = Fixed(uint64_t(_mm_cvtsd_si64(_mm_set_sd(m))));
+    } else {
+        uint64_t bits;
+        std::memcpy(&bits, &m, sizeof bits);
+        const int exponent = int(bits >> 52) - 1075;  // m = mantissa 2^exponent
+        const uint64_t mantissa = (bits & ((uint64_t(1) << 52) - 1)) | (uint64_t(1) << 52);
+        f = Fixed(mantissa) << exponent;
+    }
     return x < 0.0 ? -f : f;
 }
 
@@ -138,11 +149,14 @@ struct SmoothAccumulator {
     int nc, order;
     size_t row_len;
     std::unique_ptr<Fixed[]> acc;
+    int binomials[4];  ///< of `order` (at most 3), by k: made once, they divide
 
     SmoothAccumulator(const ROI& ext, int nc, int order)
         : ext(ext), nc(nc), order(order), row_len(size_t(ext.width()) * nc)
         , acc(new Fixed[row_len * ext.height()])
     {
+        for (int k = 0; k <= order; ++k)
+            binomials[k] = binomial(order, k);
     }
 
     /// Pixel (x, y)'s value `v` as the corner deltas of its four
@@ -158,17 +172,17 @@ struct SmoothAccumulator {
                     continue;
                 Fixed amplitude[8];
                 for (int c = 0; c < nc; ++c)
-                    amplitude[c] = to_fixed(std::nearbyint(double(v[c]) * scale * fixed_scale));
+                    amplitude[c] = to_fixed(double(v[c]) * scale * fixed_scale);
                 for (int k = 0; k <= order; ++k) {
                     const int row = y - ext.ybegin - half_support(order, ws.w[b]) + k * ws.w[b];
                     if (row < r0 || row >= r1)
                         continue;
-                    const int ck = (k % 2 ? -1 : 1) * binomial(order, k);
+                    const int ck = (k % 2 ? -1 : 1) * binomials[k];
                     for (int l = 0; l <= order; ++l) {
                         const int col = x - ext.xbegin - half_support(order, ws.w[a]) + l * ws.w[a];
                         if (col >= ext.width())
                             continue;
-                        const __int128 coef = __int128(ck) * ((l % 2 ? -1 : 1) * binomial(order, l));
+                        const __int128 coef = __int128(ck) * ((l % 2 ? -1 : 1) * binomials[l]);
                         Fixed* p = &acc[row * row_len + size_t(col) * nc];
                         for (int c = 0; c < nc; ++c)
                             p[c] += amplitude[c] * Fixed(coef);
@@ -210,12 +224,14 @@ struct SmoothAccumulator {
                     hi = std::max(hi, std::min(ext.width(), col0 + order * ws.w[a] + 1));
                     for (int c = 0; c < nc; ++c) {
                         const Fixed amplitude =
-                            to_fixed(std::nearbyint(double(v[c]) * scale * fixed_scale));
+                            to_fixed(double(v[c]) * scale * fixed_scale);
                         for (int l = 0; l <= order; ++l) {
                             const int col = col0 + l * ws.w[a];
                             if (col >= ext.width())
                                 break;
-                            const Fixed d = amplitude * Fixed(binomial(order, l));
+                            Fixed d = amplitude;  // times the binomial, by additions
+                            for (int t = 1; t < binomials[l]; ++t)
+                                d += amplitude;
                             Fixed& cell = line[size_t(col) * nc + c];
                             cell = l % 2 ? cell - d : cell + d;
                         }
@@ -226,7 +242,7 @@ struct SmoothAccumulator {
                 continue;
             for (int k = first_k; k <= order && row0 + k * ws.w[b] < r1; ++k) {
                 Fixed* row = &acc[size_t(row0 + k * ws.w[b]) * row_len];
-                const int times = binomial(order, k);
+                const int times = binomials[k];
                 const bool subtract = k % 2;
                 for (size_t i = size_t(lo) * nc; i < size_t(hi) * nc; ++i) {
                     Fixed d = line[i];
@@ -315,10 +331,15 @@ bool spread_smooth(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, i
                 }
                 // A run of lit pixels of one pair of widths at least half
                 // a footprint long goes by lines.
-                const int w0 = smooth_widths(order, *in.radii(x, y)).w[0];
+                if (*in.radii(x, y) != radius) {
+                    radius = *in.radii(x, y);
+                    pieces = SmoothPieces(order, radius);
+                }
+                const int w0 = pieces.ws.w[0];
                 int end = x + 1;
                 while (end < roi.xend && !is_zero(in.pixels(end, y), nc)
-                       && smooth_widths(order, *in.radii(end, y)).w[0] == w0)
+                       && (*in.radii(end, y) == radius
+                           || smooth_widths(order, *in.radii(end, y)).w[0] == w0))
                     ++end;
                 if (2 * (end - x) >= half_support(order, w0 + 2)) {
                     acc.scatter_run(x, end, y, in, r0, r1, line);
