@@ -51,8 +51,7 @@ public:
             sum->k = k;
             sum->t = t;
             sum->family = family ? family
-                                 : m_families->at((b + 0.5) * m_size, m_centre_y,
-                                                  cateye_fineness(m_size, r));
+                                 : m_families->at((b + 0.5) * m_size, m_centre_y, m_size, r);
         }
         sum->blended |= sum->t != t;
         store4(sum->smaller, load4(sum->smaller) + value * splat(1.0 - t));

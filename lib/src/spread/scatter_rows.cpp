@@ -312,7 +312,7 @@ void prepare_dense_row(const SpreadSource& src, SpreadMethod method, const Shape
         }
         const bool dense = count > 0 && c[0].level == 0 && r <= dense_limit;
         if (dense)
-            family = families.at(x + 0.5, sy + 0.5, cateye_fineness(1, r));
+            family = families.at(x + 0.5, sy + 0.5, 1, r);
         if (n > 0 && (!dense || b.k != k || family != run_family || run_x + n != x)) {
             add_run_colors(row, run_x, n, k, run_family, color.data(), blend.data());
             n = 0;

@@ -105,13 +105,14 @@ public:
     {
     }
 
-    /// For a centre in full-resolution pixel coordinates, on the grid of
-    /// `fineness` (see cateye_fineness).
-    const ProgramFamily* at(double x, double y, int fineness)
+    /// For a pixel (block 1) or block of `block` pixels of CoC radius r
+    /// centred at (x, y), full-resolution pixel coordinates.
+    const ProgramFamily* at(double x, double y, int block, double r)
     {
         if (!m_shape.clipped())
             return m_family;
-        const CatEyeCell cell = cateye_cell(m_shape.cateye(), Imath::V2d(x, y), fineness);
+        const CatEyeCell cell = cateye_cell(m_shape.cateye(), Imath::V2d(x, y),
+                                            cateye_fineness(block, r));
         if (!m_found || cell != m_cell) {
             m_family = &m_shape.clipped_blocks(m_level, cell);
             m_cell = cell;
