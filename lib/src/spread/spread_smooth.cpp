@@ -122,6 +122,16 @@ Fixed to_fixed(double x)
     return x < 0.0 ? -f : f;
 }
 
+/// x times n, a binomial of order at most 3 (1, 2 or 3): by additions,
+/// cheaper than a 128-bit multiplication.
+Fixed times(Fixed x, int n)
+{
+    Fixed sum = x;
+    for (int i = 1; i < n; ++i)
+        sum += x;
+    return sum;
+}
+
 /// How a pixel of one radius is spread: its two widths and the amplitude
 /// of each of its four separable pieces (x width a, y width b) per unit of
 /// value, 0 for a piece of no weight.
@@ -229,9 +239,7 @@ struct SmoothAccumulator {
                             const int col = col0 + l * ws.w[a];
                             if (col >= ext.width())
                                 break;
-                            Fixed d = amplitude;  // times the binomial, by additions
-                            for (int t = 1; t < binomials[l]; ++t)
-                                d += amplitude;
+                            const Fixed d = times(amplitude, binomials[l]);
                             Fixed& cell = line[size_t(col) * nc + c];
                             cell = l % 2 ? cell - d : cell + d;
                         }
@@ -242,12 +250,9 @@ struct SmoothAccumulator {
                 continue;
             for (int k = first_k; k <= order && row0 + k * ws.w[b] < r1; ++k) {
                 Fixed* row = &acc[size_t(row0 + k * ws.w[b]) * row_len];
-                const int times = binomials[k];
                 const bool subtract = k % 2;
                 for (size_t i = size_t(lo) * nc; i < size_t(hi) * nc; ++i) {
-                    Fixed d = line[i];
-                    for (int t = 1; t < times; ++t)
-                        d += line[i];
+                    const Fixed d = times(line[i], binomials[k]);
                     row[i] = subtract ? row[i] - d : row[i] + d;
                 }
             }
