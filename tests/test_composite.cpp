@@ -167,6 +167,70 @@ TEST_CASE("a frame rendered into the last frame's image comes out as into a new 
     CHECK(diff.maxerror == 0.0);
 }
 
+TEST_CASE("each layer composited over the ones behind it gives the frame, and freeing the "
+          "layers as they go changes no pixel")
+{
+    // Three layers, each set up only when its turn comes: a blurred wall, a
+    // card in focus and a blurred card in front of part of it.
+    const Camera camera = synthetic_camera(3.0);
+    Scene scene = two_layer_scene();
+    scene.layers[0].depth = zero_image(square, 1);
+    OIIO::ImageBufAlgo::fill(scene.layers[0].depth, { 3.0f });
+    const ROI near_square(20, 60, 30, 70);
+    Layer near { "near", zero_image(near_square, 4), zero_image(near_square, 1) };
+    OIIO::ImageBufAlgo::fill(near.color, { 0.0f, 0.0f, 0.5f, 0.5f });
+    OIIO::ImageBufAlgo::fill(near.depth, { near_z });
+    near.color.specmod().alpha_channel = 3;
+    scene.layers.push_back(std::move(near));
+    const LayeredScene layers = layered_scene(scene, camera);
+    REQUIRE(layers.layers.size() == 3);
+
+    // The reference: each layer's spread alone, composited "over" in turn.
+    ImageBuf expected = zero_image(frame, 4);
+    std::string error;
+    REQUIRE(spread_layers_apart(layers, camera, {}, {}, OutputWindow::Input,
+                                [&](size_t, const ImageBuf& spread, const ROI& window) {
+                                    CHECK(window.xbegin == frame.xbegin);
+                                    CHECK(window.yend == frame.yend);
+                                    for (OIIO::ImageBuf::ConstIterator<float> s(spread);
+                                         !s.done(); ++s) {
+                                        float under[4];
+                                        expected.getpixel(s.x(), s.y(), under);
+                                        for (int c = 0; c < 4; ++c)
+                                            under[c] = s[c] + (1.0f - s[3]) * under[c];
+                                        expected.setpixel(s.x(), s.y(), under);
+                                    }
+                                    return true;
+                                },
+                                error));
+    ImageBuf kept;
+    std::vector<LayerReport> kept_report;
+    REQUIRE(defocus_layers(kept, layers, camera, {}, {}, OutputWindow::Input, &kept_report));
+    CHECK(worst_relative_error(kept, expected, 0.0, 1e-6) <= 1.0);
+    // Every layer lands: the near card's blue over half of the focused
+    // card's red, that card alone, and the wall's green beside it.
+    CHECK(channel_at(kept, 40, 50, 2) == Approx(0.5f).margin(1e-3));
+    CHECK(channel_at(kept, 40, 50, 0) == Approx(0.5f).margin(1e-3));
+    CHECK(channel_at(kept, 78, 22, 0) == Approx(1.0f).margin(1e-6));
+    CHECK(channel_at(kept, 100, 22, 1) > 0.2f);
+
+    LayeredScene freed = layers;
+    ImageBuf out;
+    std::vector<LayerReport> report;
+    REQUIRE(defocus_layers_freeing(out, freed, camera, {}, {}, OutputWindow::Input, &report));
+    const OIIO::ImageBufAlgo::CompareResults diff =
+        OIIO::ImageBufAlgo::compare(out, kept, 0.0f, 0.0f);
+    CHECK(diff.nfail == 0);
+    CHECK(diff.maxerror == 0.0);
+    REQUIRE(report.size() == kept_report.size());
+    for (size_t i = 0; i < freed.layers.size(); ++i) {
+        CHECK(report[i].name == kept_report[i].name);
+        CHECK(freed.layers[i].name == layers.layers[i].name);
+        CHECK_FALSE(freed.layers[i].color.initialized());
+        CHECK_FALSE(freed.layers[i].depth.initialized());
+    }
+}
+
 TEST_CASE("the focus map shows in-focus green, in front red, behind blue")
 {
     auto colour_at = [](const ImageBuf& map, int x, int y, float rgba[4]) {

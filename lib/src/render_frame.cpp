@@ -448,6 +448,26 @@ bool deep_frame(const Shot& shot, int frame, const ApertureImages& images,
     return true;
 }
 
+/// Spreads and composites the frame's layers into `out.image`, freeing
+/// them as it goes unless an AOV or data channels (`data`) read them after.
+bool spread_frame(const Shot& shot, const ApertureImages& images, LayeredScene& layered,
+                  bool data, FrameResult& out, std::string& error, int nthreads)
+{
+    SpreadTimings timings;
+    const bool spread
+        = shot.aov != Aov::None || data
+              ? defocus_layers(out.image, layered, out.camera, shot.spread, images, shot.window,
+                               &out.layers, &timings, nthreads)
+              : defocus_layers_freeing(out.image, layered, out.camera, shot.spread, images,
+                                       shot.window, &out.layers, &timings, nthreads);
+    if (!spread) {
+        error = out.image.geterror();
+        return false;
+    }
+    out.timings.emplace_back("spread and composite", timings.spread);
+    return true;
+}
+
 /// A frame from its prepared layers to the image to write. Errors do not
 /// name the source: the caller does.
 bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
@@ -491,13 +511,8 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
                                mention("edge", "black"));
         if (shot.deep)
             return deep_frame(shot, frame, images, layered, out, error, nthreads);
-        SpreadTimings timings;
-        if (!defocus_layers(image, layered, out.camera, shot.spread, images, shot.window,
-                            &out.layers, &timings, nthreads)) {
-            error = image.geterror();
+        if (!spread_frame(shot, images, layered, !plan.empty(), out, error, nthreads))
             return false;
-        }
-        out.timings.emplace_back("spread and composite", timings.spread);
         timer.lap();
         ImageBuf aov, data;
         if (!aov_channel(aov, image, layered, shot, out.camera, images, error, nthreads))

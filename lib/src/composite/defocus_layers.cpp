@@ -14,6 +14,7 @@
 #include <defocus/composite/holdout.h>
 #include <defocus/layers/edges.h>
 
+#include "composite/frame_spreads.h"
 #include "composite/magnified_axis.h"
 #include "spread/spread_engine.h"
 #include "spread/spread_plan.h"
@@ -55,39 +56,6 @@ bool coc_radius(ImageBuf& dst, const ImageBuf& depth,
 }
 
 namespace {
-
-/// The channels one spread of a layer composites as they are (`colour`,
-/// `alpha`), and whether it also composites red and blue magnified. Under
-/// axial chromatic aberration a layer is spread twice, green with its CoC
-/// and red and blue with theirs (CocChannel), each pass composited on its
-/// own spread alpha, so that each colour is occluded as its own blur says;
-/// the frame's alpha is green's. A magnified pass (lateral) is also kept
-/// whole, and its red and blue composited magnified, each by its own
-/// factor; without axial aberration, that is the one pass, its green and
-/// alpha composited as they are.
-struct ChannelPass {
-    CocChannel coc;
-    bool colour[3];
-    bool alpha;
-    bool magnified = false;
-};
-
-constexpr ChannelPass all_channels { CocChannel::Green, { true, true, true }, true };
-constexpr ChannelPass green_and_alpha { CocChannel::Green, { false, true, false }, true };
-
-/// The passes a camera spreads each layer in.
-std::vector<ChannelPass> channel_passes(const Camera& camera)
-{
-    const bool lateral = camera.lateral_ca != 0.0;
-    if (camera.axial_ca == 0.0) {
-        ChannelPass one = lateral ? green_and_alpha : all_channels;
-        one.magnified = lateral;
-        return { one };
-    }
-    const ChannelPass red_and_blue { CocChannel::RedBlue,
-                                     { !lateral, false, !lateral }, false, lateral };
-    return { green_and_alpha, red_and_blue };
-}
 
 /// Which of a pixel's four channels: all bits set, or none.
 using Lanes = int64_t __attribute__((vector_size(32)));
@@ -287,41 +255,6 @@ void composite_image(ImageBuf& frame, const ImageBuf& layer, const ChannelPass& 
     }, by_rows(nthreads));
 }
 
-/// One spread of a layer, in the channels of a pass. `spread.apart` also
-/// holds an engine's spread that is composited magnified.
-struct LayerPass {
-    ChannelPass channels;
-    PassSpread spread;
-};
-
-/// A layer ready to composite: its float pixels and its passes.
-struct LayerSpreads {
-    FloatPixels color_pixels;
-    std::vector<LayerPass> passes;
-};
-
-/// A layer's pass that can land on a black frame: stored rather than
-/// composited, so that only the frame beyond its reach is cleared first.
-/// That is its only pass, when the engine spreads it unmagnified; null
-/// otherwise.
-const LayerPass* storable_pass(const LayerSpreads& layer)
-{
-    return layer.passes.size() == 1 && layer.passes[0].spread.engine
-                   && !layer.passes[0].channels.magnified
-               ? &layer.passes[0]
-               : nullptr;
-}
-
-/// The back-most layer's pass that lands on the black frame (see
-/// storable_pass), or null.
-const LayerPass* pass_onto_black(const std::vector<LayerSpreads>& layers)
-{
-    for (const LayerSpreads& l : layers)
-        if (!l.passes.empty())
-            return storable_pass(l);
-    return nullptr;
-}
-
 /// Where a magnified pass's light can come from: the window, grown by the
 /// largest displacement lateral aberration gives within it, as far as
 /// anything is lit.
@@ -387,26 +320,31 @@ void composite_pass(ImageBuf& frame, LayerPass& p, bool onto_black, const ImageS
 }
 
 /// Composites the layers' passes into the frame over `window`, back to
-/// front, each layer's spreads freed once composited, and cuts what is
-/// composited by the holdout in front of each layer up to the next.
-void composite_layers(ImageBuf& frame, const LayeredScene& scene,
-                      std::vector<LayerSpreads>& layers, const LayerPass* back, const ROI& window,
-                      const ROI& reach, double lateral_ca, const Imath::V2d& centre, int nthreads)
+/// front, each layer's spreads set up when it comes and freed once
+/// composited, and cuts what is composited by the holdout in front of each
+/// layer up to the next. False with `error`.
+bool composite_layers(ImageBuf& frame, const LayeredScene& scene, FrameSpreads& layers,
+                      size_t back, const ROI& window, const ROI& reach, double lateral_ca,
+                      const Imath::V2d& centre, std::string& error, int nthreads)
 {
     bool composited = false;
-    for (size_t i = 0; i < scene.layers.size(); ++i) {
+    for (size_t i = 0; i < layers.size(); ++i) {
+        if (!layers.set_up(i, error))
+            return false;
+        const LayerPass* onto_black = i == back ? storable_pass(layers[i]) : nullptr;
         // A layer's passes write different channels of the frame, so their
         // order does not matter.
         for (LayerPass& p : layers[i].passes)
-            composite_pass(frame, p, &p == back, scene.spec, window, reach, lateral_ca, centre,
-                           nthreads);
+            composite_pass(frame, p, &p == onto_black, scene.spec, window, reach, lateral_ca,
+                           centre, nthreads);
         // Until the back-most layer lands, the frame is not set.
         composited |= !layers[i].passes.empty();
         if (composited && scene.holdout)
             hold_out(frame, *scene.holdout, layer_depth(scene, i + 1), layer_depth(scene, i),
                      window, nthreads);
-        layers[i] = LayerSpreads();
+        layers.release(i);
     }
+    return true;
 }
 
 /// The part of `window` a layer's spreads light (all of it, magnified);
@@ -428,7 +366,7 @@ ROI lit_window(const LayerSpreads& layer, const ROI& window)
 /// Composites each layer's passes onto a black frame of its own over the
 /// part of `window` it lights, back to front, and hands it to `sink`, each
 /// layer's spreads freed once composited.
-bool composite_apart(const LayeredScene& scene, std::vector<LayerSpreads>& layers,
+bool composite_apart(const LayeredScene& scene, FrameSpreads& layers,
                      const ROI& window, const ROI& reach,
                      double lateral_ca, const Imath::V2d& centre, const LayerSink& sink,
                      int nthreads)
@@ -436,8 +374,8 @@ bool composite_apart(const LayeredScene& scene, std::vector<LayerSpreads>& layer
     // One buffer, as large as the largest layer's frame, holds each in
     // turn: a fresh one per layer faulted in a 4K frame's pages again.
     size_t largest = 0;
-    for (const LayerSpreads& l : layers)
-        largest = std::max(largest, size_t(lit_window(l, window).npixels()));
+    for (size_t i = 0; i < layers.size(); ++i)
+        largest = std::max(largest, size_t(lit_window(layers[i], window).npixels()));
     std::unique_ptr<float[]> pixels(new float[4 * largest]);
     for (size_t i = 0; i < scene.layers.size(); ++i) {
         const ROI lit = lit_window(layers[i], window);
@@ -449,7 +387,7 @@ bool composite_apart(const LayeredScene& scene, std::vector<LayerSpreads>& layer
         for (LayerPass& p : layers[i].passes)
             composite_pass(frame, p, &p == alone, scene.spec, lit, reach, lateral_ca, centre,
                            nthreads);
-        layers[i] = LayerSpreads();
+        layers.release(i);
         if (!sink(i, frame, window))
             return false;
     }
@@ -460,52 +398,35 @@ bool composite_apart(const LayeredScene& scene, std::vector<LayerSpreads>& layer
 bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
                           const SpreadOptions& spread, const ApertureImages& images,
                           OutputWindow output_window, std::vector<LayerReport>* report,
-                          SpreadTimings& timings, const LayerSink* apart, int nthreads)
+                          SpreadTimings& timings, const LayerSink* apart,
+                          std::vector<Layer>* freeing, int nthreads)
 {
     Timer spread_timer;
-    const CircleOfConfusion coc(camera, scene.spec.roi_full());
-    std::vector<LayerReport> depths = scene.reports;
     const ROI display(scene.spec.full_x, scene.spec.full_x + scene.spec.full_width,
                       scene.spec.full_y, scene.spec.full_y + scene.spec.full_height, 0, 1, 0, 4);
     SpreadPlan plan;
     std::string error;
-    if (!plan_spread(spread, images, camera, display, depths, scene.luma, plan, error)) {
+    if (!plan_spread(spread, images, camera, display, scene.reports, scene.luma, plan, error)) {
         dst.errorfmt("{}", error);
         return false;
     }
     const Imath::V2d centre = plan.cateye.centre;
+    FrameSpreads layers(scene, camera, plan, freeing, nthreads);
 
-    // Every layer's radii, and its spread (set up in the engine, or done
-    // apart), so that the frame's window is known before it is made.
+    // The frame's window, and where magnified light comes from, depend on
+    // how far the layers' spreads light: then every layer is set up first.
+    const bool magnified = camera.lateral_ca != 0.0;
+    const bool extents_first = output_window == OutputWindow::Grown || magnified || apart;
     ROI grown = display;
-    const std::vector<ChannelPass> passes = channel_passes(camera);
-    std::vector<LayerSpreads> layers(scene.layers.size());
-    for (size_t i = 0; i < scene.layers.size(); ++i) {
-        const Layer& layer = scene.layers[i];
-        if (depths[i].pixels == 0)
-            continue;
-        LayerSpreads& l = layers[i];
-        if (plan.in_engine)
-            l.color_pixels = FloatPixels(layer.color, layer.color.roi());
-        for (const ChannelPass& channels : passes) {
-            LayerPass& p = l.passes.emplace_back();
-            p.channels = channels;
-            ImageBuf radius;
-            if (!coc_radius(radius, layer.depth, coc, {}, nthreads, channels.coc)) {
-                dst.errorfmt("layer '{}': {}", layer.name, radius.geterror());
-                return false;
-            }
-            if (!spread_pass(plan, layer, l.color_pixels, depths[i], std::move(radius), p.spread,
-                             error, nthreads)) {
-                dst.errorfmt("layer '{}': {}", layer.name, error);
-                return false;
-            }
-            if (channels.alpha && !plan.in_engine)
-                depths[i].psf_pixels = p.spread.psf_pixels;
-            grown = roi_union(grown, p.spread.extent());
+    if (extents_first) {
+        if (!layers.set_up_all(error)) {
+            dst.errorfmt("{}", error);
+            return false;
         }
+        for (size_t i = 0; i < layers.size(); ++i)
+            for (const LayerPass& p : layers[i].passes)
+                grown = roi_union(grown, p.spread.extent());
     }
-
     ROI window = output_window == OutputWindow::Display ? display
                  : output_window == OutputWindow::Grown ? grown
                                                           : scene.spec.roi();
@@ -513,23 +434,36 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
     window.chend = 4;
     const ImageSpec frame_spec = result_spec(scene.spec, window, TypeFloat);
     const ROI reach = magnified_reach(window, grown, centre, camera.lateral_ca);
-    if (report)
-        report->insert(report->end(), depths.begin(), depths.end());
     if (apart) {
         const bool done = composite_apart(scene, layers, window, reach, camera.lateral_ca,
                                           centre, *apart, nthreads);
+        if (report)
+            report->insert(report->end(), layers.reports.begin(), layers.reports.end());
         timings.spread += spread_timer();
         return done;
     }
-    const LayerPass* back = pass_onto_black(layers);
+    // The back-most layer is stored onto the frame rather than composited,
+    // so only the frame beyond its reach is cleared first.
+    size_t back = 0;
+    if (!layers.set_up_back(back, error)) {
+        dst.errorfmt("{}", error);
+        return false;
+    }
+    const LayerPass* stored = back < layers.size() ? storable_pass(layers[back]) : nullptr;
     // dst's pixels, when it has them in the frame's layout, are reused
     // (swapped, not moved: dst stays valid for an error).
     ImageBuf frame;
     if (holds_pixels_like(dst, frame_spec))
         frame.swap(dst);
-    reset_zeroed_except(frame, frame_spec, back ? back->spread.engine->extent() : ROI(), nthreads);
-    composite_layers(frame, scene, layers, back, window, reach, camera.lateral_ca, centre,
-                     nthreads);
+    reset_zeroed_except(frame, frame_spec, stored ? stored->spread.engine->extent() : ROI(),
+                        nthreads);
+    if (!composite_layers(frame, scene, layers, back, window, reach, camera.lateral_ca, centre,
+                          error, nthreads)) {
+        dst.errorfmt("{}", error);
+        return false;
+    }
+    if (report)
+        report->insert(report->end(), layers.reports.begin(), layers.reports.end());
     timings.spread += spread_timer();
     dst = std::move(frame);
     return true;
@@ -565,14 +499,15 @@ namespace {
 bool spread_guarded(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
                     const SpreadOptions& spread, const ApertureImages& images,
                     OutputWindow window, std::vector<LayerReport>* report,
-                    SpreadTimings* timings, const LayerSink* apart, int nthreads)
+                    SpreadTimings* timings, const LayerSink* apart, std::vector<Layer>* freeing,
+                    int nthreads)
 {
     SpreadTimings unused;
     // Errors are reported, never thrown through the API; running out of
     // memory on a huge blur is the one exception the filters can raise.
     try {
         return spread_and_composite(dst, scene, camera, spread, images, window, report,
-                                    timings ? *timings : unused, apart, nthreads);
+                                    timings ? *timings : unused, apart, freeing, nthreads);
     } catch (const std::bad_alloc&) {
         dst.errorfmt("out of memory (the layers and the blur are too large)");
         return false;
@@ -587,7 +522,16 @@ bool defocus_layers(ImageBuf& dst, const LayeredScene& scene, const Camera& came
                     SpreadTimings* timings, int nthreads)
 {
     return spread_guarded(dst, scene, camera, spread, images, window, report, timings, nullptr,
-                          nthreads);
+                          nullptr, nthreads);
+}
+
+bool defocus_layers_freeing(ImageBuf& dst, LayeredScene& scene, const Camera& camera,
+                            const SpreadOptions& spread, const ApertureImages& images,
+                            OutputWindow window, std::vector<LayerReport>* report,
+                            SpreadTimings* timings, int nthreads)
+{
+    return spread_guarded(dst, scene, camera, spread, images, window, report, timings, nullptr,
+                          &scene.layers, nthreads);
 }
 
 bool spread_layers_apart(const LayeredScene& scene, const Camera& camera,
@@ -598,7 +542,7 @@ bool spread_layers_apart(const LayeredScene& scene, const Camera& camera,
 {
     ImageBuf errors;
     if (spread_guarded(errors, scene, camera, spread, images, window, report, timings, &sink,
-                       nthreads))
+                       nullptr, nthreads))
         return true;
     if (errors.has_error())
         error = errors.geterror();
