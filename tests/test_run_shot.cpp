@@ -2,13 +2,17 @@
 // sequences.
 #include <catch2/catch.hpp>
 
+#include <chrono>
+#include <cstdio>
 #include <map>
+#include <thread>
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/strutil.h>
 
 #include <defocus/run_shot.h>
+#include <defocus/stage_timeline.h>
 
 #include "test_support.h"
 
@@ -137,6 +141,7 @@ TEST_CASE("a sequence: keyframes per frame, each frame's metadata, and frames sh
     RunCallbacks callbacks;
     callbacks.written = [&](int frame, const std::string&, const FrameResult& result, double) {
         written[frame] = result.image.spec();
+        CHECK(result.overlap.empty());  // one thread: one frame at a time
         if (frame == 1003)
             last_frame.copy(result.image);
     };
@@ -156,4 +161,44 @@ TEST_CASE("a sequence: keyframes per frame, each frame's metadata, and frames sh
                                                                   { "fstop", "4" },
                                                                   { "focus", "4" } });
     CHECK(OIIO::ImageBufAlgo::compare(last_frame, alone, 0.0f, 0.0f).maxerror == 0.0);
+}
+
+TEST_CASE("the stages of frames side by side, and how long each overlapped others (-v)")
+{
+    using std::this_thread::sleep_for;
+    const auto step = std::chrono::milliseconds(40);
+    StageTimeline timeline;
+    // Frame 1 reads alone, then beside frame 2's read; it renders beside
+    // frame 2's read, then alone; frame 2 renders after it is done.
+    timeline.enter(1, "read");
+    sleep_for(step);
+    timeline.enter(2, "read");
+    sleep_for(step);
+    timeline.enter(1, "render");
+    sleep_for(step);
+    timeline.enter(2, "render");
+    sleep_for(step);
+    const std::string first = timeline.finish(1);
+    sleep_for(step);
+    const std::string second = timeline.finish(2);
+    INFO(first);
+    INFO(second);
+    CHECK(OIIO::Strutil::starts_with(first, "read 0.0"));
+    CHECK(OIIO::Strutil::contains(first, "s beside 2 read), render 0."));
+    CHECK(OIIO::Strutil::contains(first, "s beside 2 read, 2 render)"));
+    CHECK(OIIO::Strutil::contains(second, "s beside 1 read, 1 render), render 0."));
+    CHECK(OIIO::Strutil::contains(second, "s beside 1 render)"));
+    // The seconds beside: frame 2's render overlapped frame 1 for one step
+    // of its two.
+    const size_t at = second.rfind("render ");
+    float took = 0.0f, beside = 0.0f;
+    REQUIRE(std::sscanf(second.c_str() + at, "render %f s (%f s beside", &took, &beside) == 2);
+    CHECK(took >= 0.08f);
+    CHECK(beside >= 0.04f);
+    CHECK(beside < took - 0.035f);
+
+    // A frame alone afterwards met nobody: the others' stages are gone.
+    timeline.enter(3, "read");
+    sleep_for(step);
+    CHECK(timeline.finish(3).empty());
 }

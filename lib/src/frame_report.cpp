@@ -55,6 +55,8 @@ std::string frame_report(const FrameResult& frame, const Shot& shot, const std::
                 frame.fixed.transparent_light, frame.fixed.edge_depth);
     for (const auto& [stage, seconds] : frame.timings)
         r += format("  {:<10} {:7.3f} s\n", stage, seconds);
+    if (!frame.overlap.empty())
+        r += "  side by side: " + frame.overlap + "\n";
     const ImageSpec& spec = frame.image.spec();
     r += format("  wrote {} ({}x{} data window, {})\n", output, spec.width, spec.height,
                 frame.pixel_type);

@@ -8,6 +8,7 @@
 #include <defocus/io/image_output.h>
 #include <defocus/io/scene_io.h>
 #include <defocus/io/settings_hash.h>
+#include <defocus/stage_timeline.h>
 
 namespace defocus {
 
@@ -108,11 +109,13 @@ ScheduleResult run_plan(const Shot& shot, const ShotAssets& assets, const RunPla
                         bool* cancelled)
 {
     std::atomic<bool> stop { false };
+    StageTimeline timeline;
     auto render_one = [&](int i) {
         if (stop)
             return false;
         const int frame = plan.frames[i];
         auto stage = [&](const char* name) {
+            timeline.enter(frame, name);
             if (!stop && (!callbacks.stage || callbacks.stage(frame, name)))
                 return true;
             stop = true;
@@ -143,6 +146,7 @@ ScheduleResult run_plan(const Shot& shot, const ShotAssets& assets, const RunPla
             result.timings.emplace_back("write", write_timer());
             return true;
         }();
+        result.overlap = timeline.finish(frame);
         if (ok && callbacks.written)
             callbacks.written(frame, plan.outputs[i], result, timer());
         else if (!ok && !stop && callbacks.failed)

@@ -43,6 +43,9 @@ struct FrameResult {
     /// Seconds per stage: read, colour, slice, spread, composite (or focus
     /// map), colour out.
     std::vector<std::pair<std::string, double>> timings;
+    /// In a run of frames side by side, how its stages overlapped other
+    /// frames' (StageTimeline::finish); empty when none ran beside it.
+    std::string overlap;
 };
 
 /// Called as each stage of a frame starts ("read", "colour", "slice",
