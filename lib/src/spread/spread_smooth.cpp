@@ -22,6 +22,8 @@
 
 #include "spread/row_bands.h"
 #include "spread/spread_common.h"
+#include "util/fresh_array.h"
+#include "util/fresh_image.h"
 #include "util/parallel_rows.h"
 
 namespace defocus {
@@ -161,9 +163,9 @@ struct SmoothAccumulator {
     std::unique_ptr<Fixed[]> acc;
     int binomials[4];  ///< of `order` (at most 3), by k: made once, they divide
 
-    SmoothAccumulator(const ROI& ext, int nc, int order)
+    SmoothAccumulator(const ROI& ext, int nc, int order, int nthreads)
         : ext(ext), nc(nc), order(order), row_len(size_t(ext.width()) * nc)
-        , acc(new Fixed[row_len * ext.height()])
+        , acc(fresh_array<Fixed>(row_len * ext.height(), nthreads))
     {
         for (int k = 0; k <= order; ++k)
             binomials[k] = binomial(order, k);
@@ -313,7 +315,7 @@ bool spread_smooth(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, i
     const int reach = half_support(order, smooth_widths(order, in.max_radius).w[1]);
     SmoothAccumulator acc(ROI(roi.xbegin - reach, roi.xend + reach, roi.ybegin - reach,
                               roi.yend + reach, 0, 1, 0, nc),
-                          nc, order);
+                          nc, order, nthreads);
     const ROI& ext = acc.ext;
 
     // Scatter, then integrate each row `order` times, band by band. Deltas
@@ -362,7 +364,7 @@ bool spread_smooth(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, i
         acc.integrate_rows(r0, r1);
     });
 
-    dst.reset(output_spec(src, ext), OIIO::InitializePixels::No);  // every pixel is written below
+    reset_for_overwrite(dst, output_spec(src, ext), nthreads);  // every pixel is written below
     acc.integrate_columns(static_cast<float*>(dst.localpixels()), nthreads);
     return true;
 }
