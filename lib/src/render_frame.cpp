@@ -449,13 +449,13 @@ bool deep_frame(const Shot& shot, int frame, const ApertureImages& images,
 }
 
 /// Spreads and composites the frame's layers into `out.image`, freeing
-/// them as it goes unless an AOV or data channels (`data`) read them after.
+/// them as it goes unless an AOV or data channels read them after.
 bool spread_frame(const Shot& shot, const ApertureImages& images, LayeredScene& layered,
-                  bool data, FrameResult& out, std::string& error, int nthreads)
+                  bool data_channels, FrameResult& out, std::string& error, int nthreads)
 {
     SpreadTimings timings;
     const bool spread
-        = shot.aov != Aov::None || data
+        = shot.aov != Aov::None || data_channels
               ? defocus_layers(out.image, layered, out.camera, shot.spread, images, shot.window,
                                &out.layers, &timings, nthreads)
               : defocus_layers_freeing(out.image, layered, out.camera, shot.spread, images,
