@@ -24,6 +24,7 @@
 
 #include "cli_options.h"
 #include "defocus_help.h"
+#include "process_memory.h"
 #include "progress.h"
 
 using namespace OIIO;
@@ -246,6 +247,7 @@ int render(const CommandLine& cl, const ShotAssets& assets, const RunRequest& re
 
 int main(int argc, const char* argv[])
 {
+    keep_freed_memory();
     remove_temporaries_on_interrupt("defocus");
     Filesystem::convert_native_arguments(argc, argv);
     CommandLine cl;

@@ -20,6 +20,7 @@
 #include <defocus/render_frame.h>
 
 #include "cli_options.h"
+#include "process_memory.h"
 
 using namespace OIIO;
 using namespace defocus;
@@ -38,6 +39,7 @@ int fail(const char* fmt, const Args&... args)
 
 int main(int argc, const char* argv[])
 {
+    keep_freed_memory();
     remove_temporaries_on_interrupt("layerize");
     Filesystem::convert_native_arguments(argc, argv);
     std::vector<std::string> inputs;
