@@ -247,7 +247,6 @@ int render(const CommandLine& cl, const ShotAssets& assets, const RunRequest& re
 
 int main(int argc, const char* argv[])
 {
-    keep_freed_memory();
     remove_temporaries_on_interrupt("defocus");
     Filesystem::convert_native_arguments(argc, argv);
     CommandLine cl;
@@ -264,6 +263,8 @@ int main(int argc, const char* argv[])
     if (!parsed)
         return fail(error);
     const Shot& shot = cl.shot;
+    if (!shot.deep)
+        keep_freed_memory();
     // Read once, for every frame.
     ShotAssets assets;
     if (!read_shot_assets(shot, assets, error))
