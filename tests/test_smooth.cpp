@@ -43,8 +43,11 @@ TEST_CASE("tent and smooth spreading equal the direct reference")
 {
     const ROI roi(-3, 41, 5, 37);
     for (int order : { 2, 3 })
+        // Constant radii (rows filtered as runs), radii of one pair of box
+        // widths but varying blends (runs too), and radii all different
+        // (pixels spread by their corners, and short runs).
         for (auto [rmin, rmax] : { std::pair { 0.0, 0.0 }, { 4.0, 4.0 }, { 2.3, 2.3 },
-                                   { 0.0, 9.0 } }) {
+                                   { 8.6, 8.9 }, { 0.0, 9.0 } }) {
             INFO("order " << order << " radii " << rmin << ".." << rmax);
             ImageBuf color, radius, fast, direct;
             random_layer(roi, 0.01, 10.0, rmin, rmax, 1, unsigned(order * 100 + rmax * 7), color,
@@ -69,6 +72,33 @@ TEST_CASE("smooth spreading stays exact at radius 200 on HDR data")
     REQUIRE(spread_direct(direct, color, radius,
                           [](double r) { return smooth_footprint(3, r); }));
     CHECK(worst_relative_error(fast, direct, 1e-4, 1e-6) <= 1.0);
+}
+
+TEST_CASE("rows of HDR pixels filtered as runs stay exact at radius 200")
+{
+    // Long runs of one radius, so that their rows are filtered along x and
+    // rounded as profiles: a run of 1e4 sets the fixed point's scale, and
+    // runs of 1e-3 and 1 must keep their precision under it, to the
+    // tolerance of the direct reference test above.
+    const ROI roi(0, 900, 0, 260);
+    ImageBuf color = zero_image(roi, 4);
+    ImageBuf radius = constant_radius(roi, 200.0f);
+    const struct { int y, x0, x1; float value; } runs[] = {
+        { 30, 100, 420, 1e4f }, { 120, 380, 800, 1e-3f }, { 200, 0, 900, 1.0f },
+        { 201, 50, 700, 1e-3f } };
+    for (const auto& run : runs)
+        for (int x = run.x0; x < run.x1; ++x) {
+            const float v[4] = { run.value, 0.5f * run.value, 2.0f * run.value, 1.0f };
+            color.setpixel(x, run.y, v);
+        }
+    for (int order : { 2, 3 }) {
+        INFO("order " << order);
+        ImageBuf fast, direct;
+        REQUIRE(spread_smooth(fast, color, radius, order));
+        REQUIRE(spread_direct(direct, color, radius,
+                              [order](double r) { return smooth_footprint(order, r); }));
+        CHECK(worst_relative_error(fast, direct, 1e-5, 1e-7) <= 1.0);
+    }
 }
 
 TEST_CASE("the smooth PSF grows continuously with the radius and peaks in the middle")

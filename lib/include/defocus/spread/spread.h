@@ -64,8 +64,10 @@ bool spread_aperture(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
 /// tent (two boxes convolved), order 3 a quadratic B-spline (three boxes),
 /// close to a Gaussian. The box width matches the CoC disc's variance,
 /// blended between two integer widths so that the PSF grows continuously.
-/// Integration is exact (128-bit fixed point), whatever the radius. At most
-/// 8 channels.
+/// The integration down the columns is exact (64-bit fixed point, and
+/// 128-bit for pixels in short runs), whatever the radius: rows filtered
+/// as runs are within about 2^-31 of the layer's largest value at radius
+/// 200. At most 8 channels.
 bool spread_smooth(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, int order,
                    ROI roi = {}, int nthreads = 0);
 
