@@ -230,7 +230,7 @@ DEFOCUS_KERNEL void running_box(const double* src, int len, int w, double* dst, 
 /// (len pixels of NC channels): len + order (w - 1) pixels, by `order`
 /// running sums.
 template<int NC>
-DEFOCUS_CLONES void add_box_power(const double* values, int len, int order, int w,
+DEFOCUS_KERNEL void add_box_power(const double* values, int len, int order, int w,
                                   double* profile, std::vector<double>& work)
 {
     const size_t most = size_t(len + order * (w - 1)) * NC;
@@ -244,6 +244,7 @@ DEFOCUS_CLONES void add_box_power(const double* values, int len, int order, int 
     }
 }
 
+DEFOCUS_CLONES
 void add_box_power(const double* values, int len, int nc, int order, int w, double* profile,
                    std::vector<double>& work)
 {
