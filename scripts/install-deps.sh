@@ -9,7 +9,8 @@ packages=(
     libopenimageio-dev openimageio-tools   # image I/O, ImageBuf, ArgParse, threads
     python3-openimageio                    # tests: Python opens .dof scenes via the plugin
     libopenexr-dev openexr                 # EXR reading (decode and damage checks in one pass)
-    libdeflate-dev                         # faster inflating of zip-compressed EXR chunks
+    libdeflate-dev                         # faster inflating and deflating of zip-compressed EXR chunks
+    zlib1g-dev                             # zlib.h: the tools answer zlib's compress2 with libdeflate
     libopencolorio-dev opencolorio-tools   # colour management, ociocheck
     nlohmann-json3-dev                     # .dof scene files (JSON)
     catch2                                 # tests
