@@ -260,22 +260,25 @@ void add_box_power(const double* values, int len, int nc, int order, int w, doub
     }
 }
 
-/// out = the `len` pixels of nc channels at v, each times its piece
-/// (a, b)'s amplitude for its radius. Whether any piece has weight.
+/// Pixels [begin, end) of a run, of one radius, and how that radius spreads.
+struct RadiusSegment {
+    int begin, end;
+    SmoothPieces pieces;
+};
+
+/// out = the pixels of nc channels at v, each times its piece (a, b)'s
+/// amplitude for its radius (`segments` cover them). Whether any piece
+/// has weight.
 DEFOCUS_CLONES
-bool weigh(const float* v, const float* radii, int len, int nc, int order, int a, int b,
+bool weigh(const float* v, const std::vector<RadiusSegment>& segments, int nc, int a, int b,
            double* out)
 {
     bool weighed = false;
-    for (int i = 0; i < len;) {
-        int end = i + 1;
-        while (end < len && radii[end] == radii[i])
-            ++end;
-        const double piece_scale = SmoothPieces(order, radii[i]).scale[a][b];
+    for (const RadiusSegment& segment : segments) {
+        const double piece_scale = segment.pieces.scale[a][b];
         weighed |= piece_scale != 0.0;
-        for (size_t k = size_t(i) * nc; k < size_t(end) * nc; ++k)
+        for (size_t k = size_t(segment.begin) * nc; k < size_t(segment.end) * nc; ++k)
             out[k] = double(v[k]) * piece_scale;
-        i = end;
     }
     return weighed;
 }
@@ -324,6 +327,7 @@ constexpr int profile_stretch = 64;
 
 /// Scratch of one thread for a run's row profiles.
 struct RunScratch {
+    std::vector<RadiusSegment> segments;
     std::vector<double> amplitudes, work, profile;
     std::vector<uint64_t> fixed;
 };
@@ -409,14 +413,23 @@ struct SmoothAccumulator {
             }
     }
 
-    /// Pixels [x0, x1) of source row y, all of one pair of widths: for each
+    /// Pixels [x0, x1) of source row y, all of the pair of widths `ws`: for each
     /// vertical piece b, the row profile of both horizontal pieces (each
     /// pixel's amplitude filtered by its box power), rounded once to fixed
     /// point and added to the piece's delta rows that lie in `band`.
-    void add_run(int x0, int x1, int y, const SpreadInputs& in, Band& band, RunScratch& s) const
+    void add_run(int x0, int x1, int y, const SpreadInputs& in, const Widths& ws, Band& band,
+                 RunScratch& s) const
     {
         const int len = x1 - x0;
-        const Widths ws = smooth_widths(order, *in.radii(x0, y));
+        const float* radii = in.radii(x0, y);
+        s.segments.clear();
+        for (int i = 0; i < len;) {
+            int end = i + 1;
+            while (end < len && radii[end] == radii[i])
+                ++end;
+            s.segments.push_back({ i, end, SmoothPieces(order, radii[i]) });
+            i = end;
+        }
         const int widest = half_support(order, ws.w[1]);
         const size_t values = size_t(len + 2 * widest) * nc;
         const size_t first = size_t(x0 - ext.xbegin - widest) * nc;
@@ -429,8 +442,7 @@ struct SmoothAccumulator {
             s.amplitudes.resize(size_t(len) * nc);
             bool lit = false;
             for (int a = 0; a < 2; ++a) {
-                if (!weigh(in.pixels(x0, y), in.radii(x0, y), len, nc, order, a, b,
-                           s.amplitudes.data()))
+                if (!weigh(in.pixels(x0, y), s.segments, nc, a, b, s.amplitudes.data()))
                     continue;
                 lit = true;
                 add_box_power(s.amplitudes.data(), len, nc, order, ws.w[a],
@@ -562,7 +574,7 @@ bool spread_smooth(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, i
                            || smooth_widths(order, *in.radii(end, y)).w[0] == w0))
                     ++end;
                 if (half_support(order, pieces.ws.w[1]) <= profile_stretch * (end - x)) {
-                    acc.add_run(x, end, y, in, band, scratch);
+                    acc.add_run(x, end, y, in, pieces.ws, band, scratch);
                     x = end;
                     continue;
                 }
