@@ -88,7 +88,7 @@ void add_footprint(const Footprint& fp, int x, int y, const float* v, int nc, Ro
         if (double* out = row(y + fp.y0 + j))
             for (int i = 0; i < fp.width; ++i)
                 for (int c = 0; c < nc; ++c)
-                    out[size_t(x + fp.x0 + i) * nc + c] += fp.at(i, j) * v[c];
+                    out[ptrdiff_t(x + fp.x0 + i) * nc + c] += fp.at(i, j) * v[c];
 }
 
 }  // namespace defocus

@@ -96,7 +96,7 @@ void add_interval(double* row, int nc, double a, double b, const float* v, doubl
     const int at[4] = { ia, ia + 1, ib, ib + 1 };
     for (int t = 0; t < 4; ++t)
         for (int c = 0; c < nc; ++c)
-            row[size_t(at[t]) * nc + c] += taps[t] * v[c];
+            row[ptrdiff_t(at[t]) * nc + c] += taps[t] * v[c];
 }
 
 }  // namespace
