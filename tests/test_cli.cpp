@@ -32,7 +32,6 @@ using Strutil::fmt::format;
 
 namespace {
 
-const std::string defocus_bin = DEFOCUS_BIN;
 const std::string camera = " --focal 50 --fstop 1.8 --focus 4";
 
 /// Runs defocus; the output and exit status.
@@ -731,13 +730,6 @@ std::vector<std::string> folder(const std::string& dir)
         names.push_back(Filesystem::filename(e));
     std::sort(names.begin(), names.end());
     return names;
-}
-
-std::string this_host()
-{
-    char name[256] = {};
-    gethostname(name, sizeof name - 1);
-    return Strutil::replace(name, ".", "_", true);
 }
 
 }  // namespace

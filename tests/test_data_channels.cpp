@@ -21,7 +21,7 @@ using namespace OIIO;
 
 namespace {
 
-constexpr int width = 160, height = 100;
+constexpr int frame_width = 160, frame_height = 100;
 constexpr uint32_t front_hash = 0x3f123456u, back_hash = 0x40abcdefu;
 
 float hash_float(uint32_t bits)
@@ -51,7 +51,7 @@ const ROI front_card(20, 70, 35, 65), back_card(40, 140, 20, 80);
 
 ImageSpec scene_spec()
 {
-    ImageSpec spec(width, height, int(channels.size()), TypeFloat);
+    ImageSpec spec(frame_width, frame_height, int(channels.size()), TypeFloat);
     spec.channelnames = channels;
     spec.alpha_channel = 3;
     spec.z_channel = 4;
@@ -108,14 +108,14 @@ std::string deep_scene(const std::string& dir, bool with_front, bool with_back)
     ImageSpec spec = scene_spec();
     spec.deep = true;
     DeepData data(spec);
-    for (int y = 0; y < height; ++y)
-        for (int x = 0; x < width; ++x) {
+    for (int y = 0; y < frame_height; ++y)
+        for (int x = 0; x < frame_width; ++x) {
             std::vector<std::vector<float>> samples;
             if (with_front && front_card.contains(x, y))
                 samples.push_back(object_pixel(true));
             if (with_back && back_card.contains(x, y))
                 samples.push_back(object_pixel(false));
-            const int64_t p = int64_t(y) * width + x;
+            const int64_t p = int64_t(y) * frame_width + x;
             data.set_samples(p, int(samples.size()));
             for (int k = 0; k < int(samples.size()); ++k)
                 for (int c = 0; c < int(channels.size()); ++c)
@@ -165,8 +165,8 @@ void check_mattes(const ImageBuf& result, const ImageBuf& front_alone, const Ima
 {
     float worst_front = 0.0f, worst_back = 0.0f, worst_sum = 0.0f;
     int front_only = 0, back_only = 0;
-    for (int y = 0; y < height; ++y)
-        for (int x = 0; x < width; ++x) {
+    for (int y = 0; y < frame_height; ++y)
+        for (int x = 0; x < frame_width; ++x) {
             const float front = matte(result, front_hash, x, y);
             const float back = matte(result, back_hash, x, y);
             const float front_alpha = front_alone.getchannel(x, y, 0, 3);
@@ -238,8 +238,8 @@ TEST_CASE("IDs, P and N after defocus are one contributor's, never a mix")
     const int id = spec.channelindex("objectId");
     REQUIRE(id >= 0);
     int mixed_alpha = 0;
-    for (int y = 0; y < height; ++y)
-        for (int x = 0; x < width; ++x) {
+    for (int y = 0; y < frame_height; ++y)
+        for (int x = 0; x < frame_width; ++x) {
             const float value = out.getchannel(x, y, 0, id);
             INFO(x << "," << y);
             REQUIRE((value == 0.0f || value == 1.0f || value == 2.0f));
@@ -278,8 +278,8 @@ TEST_CASE("Z is the coverage-weighted depth, ZFront the front-most layer's")
     REQUIRE(z >= 0);
     REQUIRE(front >= 0);
     int edges = 0;
-    for (int y = 0; y < height; ++y)
-        for (int x = 0; x < width; ++x) {
+    for (int y = 0; y < frame_height; ++y)
+        for (int x = 0; x < frame_width; ++x) {
             const float a = matte(out, front_hash, x, y), b = matte(out, back_hash, x, y);
             if (a + b < 0.01f)
                 continue;
@@ -357,7 +357,7 @@ TEST_CASE("bad data values never reach the output, and integer IDs come out whol
     std::vector<float> sky(channels.size(), 0.0f);  // opaque, infinitely far
     sky[2] = sky[3] = 1.0f;
     sky[4] = inf;
-    ImageBufAlgo::fill(image, sky, ROI(0, width, 0, 6));
+    ImageBufAlgo::fill(image, sky, ROI(0, frame_width, 0, 6));
     const int id = 9, coverage = 6, px = 10;
     for (int y = 40; y < 60; ++y) {
         image.setpixel(50, y, std::vector<float> { 0.9f, 0.3f, 0.1f, 1.0f, 2.0f, nan, nan, 0.0f,
@@ -384,7 +384,7 @@ TEST_CASE("bad data values never reach the output, and integer IDs come out whol
     ImageBufAlgo::fill(source, object_pixel(false), back_card);
     ImageBufAlgo::fill(source, object_pixel(true), front_card);
     // Native pixels: the ID as an unsigned integer, not a scaled float.
-    std::vector<uint32_t> native(size_t(width) * height * channels.size());
+    std::vector<uint32_t> native(size_t(frame_width) * frame_height * channels.size());
     const float* from = static_cast<const float*>(source.localpixels());
     for (size_t i = 0; i < native.size(); ++i) {
         if (i % channels.size() == size_t(id))

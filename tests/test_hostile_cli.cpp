@@ -18,8 +18,6 @@ using Strutil::fmt::format;
 
 namespace {
 
-const std::string defocus_bin = DEFOCUS_BIN;
-
 std::string file_bytes(const std::string& path)
 {
     std::string bytes;
@@ -129,13 +127,6 @@ TEST_CASE("a sequence with a frame missing is refused, or skips or holds it when
 }
 
 namespace {
-
-std::string this_host()
-{
-    char name[256] = {};
-    gethostname(name, sizeof name - 1);
-    return Strutil::replace(name, ".", "_", true);
-}
 
 /// Runs `argv` in `dir` as a process that first plants, where a temporary
 /// file of `target` was once named (".TARGET.HOST.PID.tmp.EXT", which its

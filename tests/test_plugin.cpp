@@ -1,6 +1,6 @@
 // The OpenImageIO plugin, through the real programs: oiiotool and Python's
 // OpenImageIO open a .dof scene as the image defocus renders from it.
-#define CATCH_CONFIG_RUNNER
+#define CATCH_CONFIG_EXTERNAL_INTERFACES  // listeners
 #include <catch2/catch.hpp>
 
 #include <unistd.h>
@@ -562,9 +562,18 @@ TEST_CASE("a deep result's rows and channels read through the plugin as the whol
     CHECK_FALSE(in->read_native_deep_scanlines(0, 0, spec.y - 1, spec.y + 1, 0, 0, 6, rows));
 }
 
-int main(int argc, char* argv[])
-{
-    // In this process the plugin is found through the searchpath attribute.
-    OIIO::attribute("plugin_searchpath", PLUGIN_DIR);
-    return Catch::Session().run(argc, argv);
-}
+namespace {
+
+/// In this process the plugin is found through the searchpath attribute,
+/// set before any image is opened.
+struct PluginSearchPath : Catch::TestEventListenerBase {
+    using TestEventListenerBase::TestEventListenerBase;
+    void testRunStarting(const Catch::TestRunInfo&) override
+    {
+        OIIO::attribute("plugin_searchpath", PLUGIN_DIR);
+    }
+};
+
+}  // namespace
+
+CATCH_REGISTER_LISTENER(PluginSearchPath)

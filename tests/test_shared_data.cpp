@@ -2,7 +2,7 @@
 // (scored with the metric in its README), the OpenEXR project's deep,
 // stereo and multi-part images, and its corpus of damaged files. Skips
 // when the data is absent.
-#define CATCH_CONFIG_RUNNER
+#define CATCH_CONFIG_EXTERNAL_INTERFACES  // listeners
 #include <catch2/catch.hpp>
 
 #include <unistd.h>
@@ -93,7 +93,7 @@ bool finite_with_alpha_in_unit_range(const ImageBuf& image)
 
 }  // namespace
 
-TEST_CASE("box aperture on layers.exr scores against the path-traced truths")
+TEST_CASE("box aperture on layers.exr scores against the path-traced truths", "[garden]")
 {
     const double focus3 = score(garden("layers.exr"), 3.0);
     const double focus125 = score(garden("layers.exr"), 1.25);
@@ -103,7 +103,7 @@ TEST_CASE("box aperture on layers.exr scores against the path-traced truths")
     CHECK(focus125 >= 35.9);
 }
 
-TEST_CASE("the disc aperture on layers.exr scores close to exact disc spreading")
+TEST_CASE("the disc aperture on layers.exr scores close to exact disc spreading", "[garden]")
 {
     // The default, bounded-time disc merges large blurs in blocks; exact
     // scanline spreading is what it must stay close to. (Antialiased edges
@@ -120,7 +120,7 @@ TEST_CASE("the disc aperture on layers.exr scores close to exact disc spreading"
     CHECK(focus125 >= exact125 - 0.05);
 }
 
-TEST_CASE("the hybrid method beats the box alone, taking few pixels the slow way")
+TEST_CASE("the hybrid method beats the box alone, taking few pixels the slow way", "[garden]")
 {
     const std::string disc_psf = std::string(EXAMPLES_DIR) + "/psf/disc_rim.exr";
     for (double focus : { 3.0, 1.25 }) {
@@ -143,7 +143,7 @@ TEST_CASE("the hybrid method beats the box alone, taking few pixels the slow way
     }
 }
 
-TEST_CASE("the garden focus map at 3 m: the torus green, the pole red")
+TEST_CASE("the garden focus map at 3 m: the torus green, the pole red", "[garden]")
 {
     const std::string out = scratch_dir("focusmap") + "/map.exr";
     run_ok(DEFOCUS_BIN, garden("layers.exr") + " -o " + out + garden_camera
@@ -161,7 +161,7 @@ TEST_CASE("the garden focus map at 3 m: the torus green, the pole red")
     CHECK(wall[1] == 0.0f);
 }
 
-TEST_CASE("flat renders score above plain hard slicing, directly and through layerize")
+TEST_CASE("flat renders score above plain hard slicing, directly and through layerize", "[garden]")
 {
     // Hard slicing into 8 layers uniform in 1/z reaches 29.3 and 27.5 dB;
     // flat.exr scored 33.55 and 33.75 dB before its mixed pixels were
@@ -184,7 +184,7 @@ TEST_CASE("flat renders score above plain hard slicing, directly and through lay
           == Approx(blender125).margin(0.01));
 }
 
-TEST_CASE("deep.exr scores close to the layers and no lower than flat.exr")
+TEST_CASE("deep.exr scores close to the layers and no lower than flat.exr", "[garden]")
 {
     // deep.exr is occlusion-culled: the surfaces hidden behind opaque ones
     // are not in it, so its hidden background has to be filled like a flat
@@ -205,7 +205,7 @@ TEST_CASE("deep.exr scores close to the layers and no lower than flat.exr")
     CHECK(score_via_layerize(garden("deep.exr"), 3.0) == Approx(deep3).margin(0.01));
 }
 
-TEST_CASE("flat and deep input come close to the layers with the disc aperture")
+TEST_CASE("flat and deep input come close to the layers with the disc aperture", "[garden]")
 {
     // The fidelity issue's bars (disc, the garden README's metric): 38.4 /
     // 37.6 dB for both. flat.exr scored 37.83 / 35.05 dB before its mixed
@@ -226,7 +226,7 @@ TEST_CASE("flat and deep input come close to the layers with the disc aperture")
     CHECK(deep125 >= flat125);
 }
 
-TEST_CASE("automatic layering of flat.exr at f/4 comes close to the given layers")
+TEST_CASE("automatic layering of flat.exr at f/4 comes close to the given layers", "[garden]")
 {
     // At f/4 the whole blur range fits in one 24 px span of CoC: cut by
     // CoC alone, the blurred pole, the in-focus torus and the background
@@ -241,7 +241,7 @@ TEST_CASE("automatic layering of flat.exr at f/4 comes close to the given layers
     CHECK(psnr >= 43.0);
 }
 
-TEST_CASE("an sRGB-encoded render is spread in linear light")
+TEST_CASE("an sRGB-encoded render is spread in linear light", "[garden]")
 {
     // An sRGB-encoded copy of flat.exr, made with the shipped config:
     // un-premultiplied, encoded, premultiplied again; Z untouched.
@@ -277,7 +277,7 @@ TEST_CASE("an sRGB-encoded render is spread in linear light")
     }
 }
 
-TEST_CASE("Weta's deep passes, alone and together, give sane images in depth order")
+TEST_CASE("Weta's deep passes, alone and together, give sane images in depth order", "[openexr]")
 {
     const std::string v = openexr("v2/LowResLeftView/");
     const std::vector<std::string> inputs = {
@@ -358,7 +358,7 @@ TEST_CASE("Weta's deep passes, alone and together, give sane images in depth ord
     CHECK(diff / (3.0 * in_focus) < 0.01);
 }
 
-TEST_CASE("the Beachball stereo sequence's views defocus to sane images")
+TEST_CASE("the Beachball stereo sequence's views defocus to sane images", "[openexr]")
 {
     const std::string dir = scratch_dir("beachball");
     for (const char* view : { "left", "right" }) {
@@ -374,7 +374,7 @@ TEST_CASE("the Beachball stereo sequence's views defocus to sane images")
     }
 }
 
-TEST_CASE("the Beachball sequence: 8 frames of the left view, the input's windows")
+TEST_CASE("the Beachball sequence: 8 frames of the left view, the input's windows", "[sequences]")
 {
     const std::string dir = scratch_dir("beachball_sequence");
     std::string log;
@@ -401,7 +401,7 @@ TEST_CASE("the Beachball sequence: 8 frames of the left view, the input's window
     }
 }
 
-TEST_CASE("a damaged frame in the Beachball sequence: the 7 good frames are written")
+TEST_CASE("a damaged frame in the Beachball sequence: the 7 good frames are written", "[sequences]")
 {
     const std::string dir = scratch_dir("beachball_bad_frame");
     std::vector<std::string> damaged;
@@ -425,7 +425,7 @@ TEST_CASE("a damaged frame in the Beachball sequence: the 7 good frames are writ
         CHECK(OIIO::Filesystem::exists(format("{}/out.{:04}.exr", dir, frame)) == (frame != 5));
 }
 
-TEST_CASE("a focus pull over 24 frames changes the image smoothly, without popping")
+TEST_CASE("a focus pull over 24 frames changes the image smoothly, without popping", "[sequences]")
 {
     // Focus from 1.25 m to 3 m, linear in 1/z: the CoC moves 2.8 px a frame.
     for (const char* input : { "layers.exr", "flat.exr" }) {
@@ -453,7 +453,7 @@ TEST_CASE("a focus pull over 24 frames changes the image smoothly, without poppi
     }
 }
 
-TEST_CASE("every damaged file ends in a one-line error, quickly, with no output")
+TEST_CASE("every damaged file ends in a one-line error, quickly, with no output", "[damaged]")
 {
     const std::string damaged = openexr("Damaged");
     std::vector<std::string> files;
@@ -475,12 +475,42 @@ TEST_CASE("every damaged file ends in a one-line error, quickly, with no output"
     }
 }
 
-int main(int argc, char* argv[])
+namespace {
+
+/// CTest runs the test cases by group, a test each (tests/CMakeLists.txt
+/// names the groups): a test case outside every group would never run.
+bool every_test_case_in_a_group()
 {
-    if (shared_data().empty()) {
-        std::printf("SKIPPED: no shared data at %s (set DEFOCUS_SHARED_DATA)\n",
-                    DEFOCUS_SHARED_DATA);
-        return skip_status;
+    const std::vector<std::string> groups = OIIO::Strutil::splits(SHARED_DATA_GROUPS, ",");
+    for (const Catch::TestCase& test :
+         Catch::getRegistryHub().getTestCaseRegistry().getAllTests()) {
+        const std::vector<std::string>& tags = test.getTestCaseInfo().tags;
+        if (std::find_first_of(tags.begin(), tags.end(), groups.begin(), groups.end())
+            == tags.end()) {
+            std::printf("test case \"%s\" has no group tag of %s\n", test.name.c_str(),
+                        SHARED_DATA_GROUPS);
+            return false;
+        }
     }
-    return Catch::Session().run(argc, argv);
+    return true;
 }
+
+/// Before any test: every test case in a group, and a skip (CTest's
+/// SKIP_RETURN_CODE, with the reason it matches) without the data.
+struct GroupsAndData : Catch::TestEventListenerBase {
+    using TestEventListenerBase::TestEventListenerBase;
+    void testRunStarting(const Catch::TestRunInfo&) override
+    {
+        if (!every_test_case_in_a_group())
+            std::exit(1);
+        if (shared_data().empty()) {
+            std::printf("SKIPPED: no shared data at %s (set DEFOCUS_SHARED_DATA)\n",
+                        DEFOCUS_SHARED_DATA);
+            std::exit(skip_status);
+        }
+    }
+};
+
+}  // namespace
+
+CATCH_REGISTER_LISTENER(GroupsAndData)

@@ -253,6 +253,15 @@ int run(const std::string& command, std::string& output)
     return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
+const std::string defocus_bin = DEFOCUS_BIN;
+
+std::string this_host()
+{
+    char name[256] = {};
+    gethostname(name, sizeof name - 1);
+    return OIIO::Strutil::replace(name, ".", "_", true);
+}
+
 ImageSpec rgbaz_spec(int width, int height)
 {
     ImageSpec spec(width, height, 5, TypeFloat);

@@ -96,6 +96,12 @@ double garden_psnr(const ImageBuf& result, const ImageBuf& truth, int dx = 0, in
 /// Runs a shell command, returns its exit status; stdout+stderr into `output`.
 int run(const std::string& command, std::string& output);
 
+/// The defocus command under test.
+extern const std::string defocus_bin;
+
+/// This machine's name as the tools write it into temporary files' names.
+std::string this_host();
+
 /// Settings by name and value, as set_shot_setting() takes them:
 /// { "focal", "50" }.
 using Settings = std::vector<std::pair<std::string, std::string>>;
