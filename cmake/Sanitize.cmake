@@ -22,15 +22,18 @@ if(DEFOCUS_SANITIZE OR DEFOCUS_FUZZ)
         # clang links its runtime statically into executables by default; a
         # shared runtime lets the plugin share it with its host. (libFuzzer
         # wants the static one, and the fuzz build runs no host programs.)
-        if(NOT DEFOCUS_FUZZ)
-            add_link_options(-shared-libasan)
-        endif()
         set(_runtime libclang_rt.asan-x86_64.so)
     else()
         set(_runtime libasan.so)
     endif()
     execute_process(COMMAND ${CMAKE_CXX_COMPILER} -print-file-name=${_runtime}
                     OUTPUT_VARIABLE DEFOCUS_SANITIZER_PRELOAD OUTPUT_STRIP_TRAILING_WHITESPACE)
+    if(CMAKE_CXX_COMPILER_ID STREQUAL "Clang" AND NOT DEFOCUS_FUZZ)
+        # The shared runtime is not where the loader looks: the programs
+        # are told where it is.
+        get_filename_component(_runtime_dir ${DEFOCUS_SANITIZER_PRELOAD} DIRECTORY)
+        add_link_options(-shared-libasan -Wl,-rpath,${_runtime_dir})
+    endif()
     # With the runtime loaded before libstdc++ (python3 does not link it),
     # ASan cannot find the __cxa_throw it intercepts and aborts at the first
     # exception: libstdc++ goes in front too.

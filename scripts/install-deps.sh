@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages defocus builds and tests with, if missing.
 #   scripts/install-deps.sh        the build and the tests
-#   scripts/install-deps.sh fuzz   also clang and its libFuzzer runtime
+#   scripts/install-deps.sh clang  also clang and its sanitizer and libFuzzer
+#                                  runtimes (the sanitizer and fuzz builds)
 set -euo pipefail
 
 packages=(
@@ -20,8 +21,8 @@ packages=(
     bash-completion                        # tests: completion as bash runs it
     slurm-wlm munge                        # tests: defocus-submit on a one-node Slurm cluster
 )
-if [ "${1:-}" = fuzz ]; then
-    packages+=(clang libclang-rt-14-dev)   # libFuzzer harnesses (scripts/fuzz.sh)
+if [ "${1:-}" = clang ]; then
+    packages+=(clang libclang-rt-14-dev)   # scripts/sanitize.sh and scripts/fuzz.sh
 fi
 
 missing=()
