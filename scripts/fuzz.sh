@@ -1,28 +1,33 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer harnesses (clang, with ASan + UBSan) in build-fuzz/
 # and runs each on its seed corpus in tests/fuzz/corpus for SECONDS
-# (default 60). Inputs that grow coverage collect in build-fuzz/corpus; a
-# crash, hang, leak or over-budget allocation stops the run, is saved in
+# (default 60), as many at once as there are cores (each harness runs on
+# one). Inputs that grow coverage collect in build-fuzz/corpus; a crash,
+# hang, leak or over-budget allocation stops the run, is saved in
 # build-fuzz/findings/ and fails the script.
 #   scripts/fuzz.sh [SECONDS] [HARNESS...]   harnesses: shot_file settings scene read
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source scripts/step_times.sh
 seconds="${1:-60}"
 shift || true
 harnesses=("$@")
 [ ${#harnesses[@]} -gt 0 ] || harnesses=(shot_file settings scene read)
-bash scripts/install-deps.sh fuzz
+timed packages bash scripts/install-deps.sh clang
 cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DDEFOCUS_FUZZ=ON -DBUILD_TESTING=OFF -DDEFOCUS_BUILD_BENCHMARKS=OFF
-cmake --build build-fuzz -j"$(nproc)" --target "${harnesses[@]/#/fuzz_}"
+timed build cmake --build build-fuzz -j"$(nproc)" --target "${harnesses[@]/#/fuzz_}"
 data="${DEFOCUS_SHARED_DATA:-$(cd .. && pwd)/shared/data}"
 export ASAN_OPTIONS="detect_leaks=1"
 export LSAN_OPTIONS="suppressions=$PWD/tests/sanitizer/lsan.supp:print_suppressions=0"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 mkdir -p build-fuzz/findings
-status=0
-for harness in "${harnesses[@]}"; do
-    seeds=(tests/fuzz/corpus/"$harness")
+
+# Runs one harness: its log in build-fuzz/fuzz_HARNESS.log, its exit status
+# in build-fuzz/fuzz_HARNESS.status.
+fuzz() {
+    local harness=$1
+    local seeds=(tests/fuzz/corpus/"$harness")
     # The readers alone start from every file and scene file the others do.
     [ "$harness" = read ] && seeds+=(tests/fuzz/corpus/scene tests/fuzz/corpus/shot_file)
     # The whole Damaged corpus, when the shared data is here (the
@@ -31,14 +36,40 @@ for harness in "${harnesses[@]}"; do
         seeds+=("$data/openexr-images/Damaged")
     fi
     mkdir -p build-fuzz/corpus/"$harness"
-    echo "== fuzz_$harness for ${seconds} s"
     # -timeout: one input taking 10 s is a hang. -rss_limit_mb: the memory
     # the harness may use, above the 1 GB --memory-limit the scene harness
     # sets.
+    local status=0
     build-fuzz/bin/fuzz_"$harness" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2560 \
         -max_len=65536 -print_final_stats=1 -artifact_prefix=build-fuzz/findings/"$harness"- \
-        build-fuzz/corpus/"$harness" "${seeds[@]}" 2>build-fuzz/fuzz_"$harness".log \
-        || { status=1; tail -n 60 build-fuzz/fuzz_"$harness".log; }
-    grep -E "^stat::(number_of_executed_units|peak_rss_mb)|^Done" build-fuzz/fuzz_"$harness".log || true
+        build-fuzz/corpus/"$harness" "${seeds[@]}" 2>build-fuzz/fuzz_"$harness".log || status=$?
+    echo $status >build-fuzz/fuzz_"$harness".status
+}
+
+# Every harness, as many at once as there are cores.
+fuzz_all() {
+    local running=0
+    for harness in "${harnesses[@]}"; do
+        if [ $running -ge "$(nproc)" ]; then
+            wait -n
+            running=$((running - 1))
+        fi
+        echo "== fuzz_$harness for ${seconds} s"
+        fuzz "$harness" &
+        running=$((running + 1))
+    done
+    wait
+}
+
+timed fuzzing fuzz_all
+status=0
+for harness in "${harnesses[@]}"; do
+    echo "== fuzz_$harness"
+    if [ "$(cat build-fuzz/fuzz_"$harness".status)" = 0 ]; then
+        grep -E "^stat::(number_of_executed_units|peak_rss_mb)|^Done" build-fuzz/fuzz_"$harness".log || true
+    else
+        status=1
+        tail -n 60 build-fuzz/fuzz_"$harness".log
+    fi
 done
 exit $status
