@@ -80,12 +80,12 @@ TEST_CASE("rows of HDR pixels filtered as runs stay exact at radius 200")
     // rounded as profiles: a run of 1e4 sets the fixed point's scale, and
     // runs of 1e-3 and 1 must keep their precision under it, to the
     // tolerance of the direct reference test above.
-    const ROI roi(0, 900, 0, 260);
+    const ROI roi(0, 450, 0, 260);
     ImageBuf color = zero_image(roi, 4);
     ImageBuf radius = constant_radius(roi, 200.0f);
     const struct { int y, x0, x1; float value; } runs[] = {
-        { 30, 100, 420, 1e4f }, { 120, 380, 800, 1e-3f }, { 200, 0, 900, 1.0f },
-        { 201, 50, 700, 1e-3f } };
+        { 30, 50, 210, 1e4f }, { 120, 190, 400, 1e-3f }, { 200, 0, 450, 1.0f },
+        { 201, 25, 350, 1e-3f } };
     for (const auto& run : runs)
         for (int x = run.x0; x < run.x1; ++x) {
             const float v[4] = { run.value, 0.5f * run.value, 2.0f * run.value, 1.0f };
