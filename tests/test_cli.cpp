@@ -48,8 +48,6 @@ size_t count_of(const std::string& text, const std::string& what)
     return n;
 }
 
-
-
 }  // namespace
 
 TEST_CASE("defocus renders a generated multi-part scene")
@@ -60,6 +58,14 @@ TEST_CASE("defocus renders a generated multi-part scene")
     REQUIRE(run_defocus(example_scene() + " -o " + out + camera + " -v", log) == 0);
     CHECK(Strutil::contains(log, "leaves"));
     CHECK(Strutil::contains(log, "layers, back to front"));
+    // Only compositing per part of the lens reports its tiles.
+    CHECK_FALSE(Strutil::contains(log, "sub-aperture"));
+    std::string cells;
+    REQUIRE(run_defocus(example_scene() + " -o " + scratch_dir("cli_cells") + "/out.exr" + camera
+                            + " --aperture-cells 0 -v",
+                        cells)
+            == 0);
+    CHECK(Strutil::contains(cells, "composited per part of the lens, in up to 16 cells"));
 
     const ImageSpec spec = read_spec(out), input = read_spec(example_scene());
     // The display window and metadata of the input, the camera recorded.

@@ -289,9 +289,13 @@ TEST_CASE("merged deep results of two elements are the two elements defocused to
     // Focus between them: the card's CoC is -18.5 px, the wall's 14, so
     // that the deep input is cut into the same two layers. (Focused
     // beyond both, their CoCs differ by less than a layer holds, and one
-    // layer would spread them together.)
+    // layer would spread them together.) Composited per cell of the
+    // aperture, an element alone cannot know what the other hides from
+    // each part of the lens; compositing the whole aperture at once, the
+    // merge is exact.
     const Settings camera = { { "focal", "100" }, { "fstop", "0.5" }, { "focus", "3" },
-                              { "pixel-type", "float" }, { "window", "display" } };
+                              { "pixel-type", "float" }, { "window", "display" },
+                              { "aperture-cells", "1" } };
     Settings deep = camera;
     deep.push_back({ "deep", "on" });
     const ImageBuf card_out = rendered(card_file, deep), wall_out = rendered(wall_file, deep);

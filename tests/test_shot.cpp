@@ -285,7 +285,8 @@ TEST_CASE(".dof files: every setting round-trips, paths relative to the file")
              { "fstop", "1:1.4,24:2.8" }, { "sensor", "24.89" }, { "lens", "optical" },
              { "max-blur", "100" }, { "aperture", "polygon" }, { "blades", "7" },
              { "rotation", "15" }, { "roundness", "0.25" }, { "aspect", "0.5" },
-             { "hybrid-threshold", "6" }, { "iscolorspace", "ACEScg" },
+             { "hybrid-threshold", "6" }, { "aperture-cells", "25" },
+             { "iscolorspace", "ACEScg" },
              { "tocolorspace", "srgb_tx" }, { "output", "focusmap" },
              { "pixel-type", "float" }, { "compression", "dwaa" }, { "window", "grown" },
              { "memory-limit", "1536M" } })

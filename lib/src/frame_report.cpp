@@ -46,6 +46,12 @@ std::string frame_report(const FrameResult& frame, const Shot& shot, const std::
     if (!shot.spread.psf_image.empty())
         r += format("  hybrid: {} of {} pixels ({:.2f}%) spread with the PSF image\n", slow,
                     covered, covered ? 100.0 * slow / covered : 0.0);
+    const SubApertureReport& cells = frame.cells;
+    if (cells.tiles > 0)
+        r += format("  sub-aperture: {} of {} tiles ({:.1f}%) composited per part of the lens, "
+                    "in up to {} cells\n",
+                    cells.tiles_with_cells, cells.tiles,
+                    100.0 * cells.tiles_with_cells / cells.tiles, cells.most_cells);
     r += format("  pixels fixed: {} with NaN/inf colour dropped, {} with colour beyond 1e30 "
                 "clamped, {} with alpha above 1 clamped to 1, {} with bad depth taken as "
                 "infinitely far, {} transparent with colour cleared, {} edge pixels without "

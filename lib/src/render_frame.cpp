@@ -412,12 +412,13 @@ bool deep_frame(const Shot& shot, int frame, const ApertureImages& images,
                 LayeredScene& layered, FrameResult& out, std::string& error, int nthreads)
 {
     Timer timer;
-    SpreadTimings timings;
+    SpreadStats stats;
     DeepResult deep;
     if (!defocus_deep(deep, layered, out.camera, shot.spread, images, shot.window, error,
-                      &out.layers, &timings, nthreads))
+                      &out.layers, &stats, nthreads))
         return false;
-    out.timings.emplace_back("spread and composite", timings.spread);
+    out.timings.emplace_back("spread and composite", stats.spread);
+    out.cells = stats.cells;
     timer.lap();
     // The deep image is the largest allocation of the frame: its size is
     // known once the layers are spread, before it is made.
@@ -453,18 +454,19 @@ bool deep_frame(const Shot& shot, int frame, const ApertureImages& images,
 bool spread_frame(const Shot& shot, const ApertureImages& images, LayeredScene& layered,
                   bool data_channels, FrameResult& out, std::string& error, int nthreads)
 {
-    SpreadTimings timings;
+    SpreadStats stats;
     const bool spread
         = shot.aov != Aov::None || data_channels
               ? defocus_layers(out.image, layered, out.camera, shot.spread, images, shot.window,
-                               &out.layers, &timings, nthreads)
+                               &out.layers, &stats, nthreads)
               : defocus_layers_freeing(out.image, layered, out.camera, shot.spread, images,
-                                       shot.window, &out.layers, &timings, nthreads);
+                                       shot.window, &out.layers, &stats, nthreads);
     if (!spread) {
         error = out.image.geterror();
         return false;
     }
-    out.timings.emplace_back("spread and composite", timings.spread);
+    out.timings.emplace_back("spread and composite", stats.spread);
+    out.cells = stats.cells;
     return true;
 }
 

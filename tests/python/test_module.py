@@ -71,6 +71,19 @@ def test_render_gives_the_commands_float_pixels(example, tmp_path):
     assert np.array_equal(defocus.render(tmp_path / "shot.dof"), theirs)
 
 
+def test_aperture_cells_composite_per_part_of_the_lens_as_the_command(example, tmp_path):
+    assert cli(example, "-o", tmp_path / "cells.exr", *CAMERA_ARGS, "-d", "float",
+               "--aperture-cells", "9") == (0, "")
+    theirs, _ = pixels(tmp_path / "cells.exr")
+    ours = defocus.render(defocus.Shot(inputs=[example], aperture_cells=9, **CAMERA))
+    assert np.array_equal(ours, theirs)
+    # The leaves in front hide parts of the hills from parts of the lens.
+    whole = defocus.render(defocus.Shot(inputs=[example], **CAMERA))
+    assert np.abs(ours - whole).max() > 1e-3
+    with pytest.raises(defocus.Error, match="aperture_cells"):
+        defocus.Shot(aperture_cells=1000)
+
+
 def test_crop_gives_the_display_window(example):
     shot = defocus.Shot(inputs=[example], **CAMERA)
     whole, cropped = defocus.render(shot), defocus.render(shot, crop=True)

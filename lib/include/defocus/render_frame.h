@@ -40,6 +40,8 @@ struct FrameResult {
     std::string slicing;  ///< how flat or deep input was cut into layers ("" = not)
     std::string edges;    ///< how the layers were extended past the data window ("" = not)
     std::vector<LayerReport> layers;
+    /// How much of the frame was composited per part of the aperture.
+    SubApertureReport cells;
     /// Seconds per stage: read, colour, slice, spread, composite (or focus
     /// map), colour out.
     std::vector<std::pair<std::string, double>> timings;

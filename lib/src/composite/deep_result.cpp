@@ -60,7 +60,7 @@ ROI unlit_window(const ImageSpec& scene, OutputWindow window)
 bool defocus_deep(DeepResult& dst, const LayeredScene& scene, const Camera& camera,
                   const SpreadOptions& spread, const ApertureImages& images,
                   OutputWindow window, std::string& error, std::vector<LayerReport>* report,
-                  SpreadTimings* timings, int nthreads)
+                  SpreadStats* stats, int nthreads)
 {
     if (camera.axial_ca != 0.0 || camera.lateral_ca != 0.0) {
         error = "a deep result cannot hold chromatic aberration: each colour has its own alpha";
@@ -79,7 +79,7 @@ bool defocus_deep(DeepResult& dst, const LayeredScene& scene, const Camera& came
         indices.push_back(layer);
         return true;
     };
-    if (!spread_layers_apart(scene, camera, spread, images, window, keep, error, report, timings,
+    if (!spread_layers_apart(scene, camera, spread, images, window, keep, error, report, stats,
                              nthreads))
         return false;
     // Back to front as spread; front to back as deep samples run.

@@ -16,6 +16,7 @@
 
 #include "composite/frame_spreads.h"
 #include "composite/magnified_axis.h"
+#include "composite/sub_aperture.h"
 #include "spread/spread_engine.h"
 #include "spread/spread_plan.h"
 #include "util/float_pixels.h"
@@ -61,18 +62,25 @@ namespace {
 using Lanes = int64_t __attribute__((vector_size(32)));
 
 /// "Over" (see Over) of n spread pixels onto the frame's, in the channels
-/// `written`; `onto_black`: the frame's pixels count as black.
+/// `written`; `onto_black`: the frame's pixels count as black. `change`,
+/// when given, is added to each spread pixel first (sub-aperture
+/// compositing, see SubApertureLayers), its alpha kept within [0, 1].
 DEFOCUS_CLONES
 void composite_over(float* out, const double* rgba, int n, const Lanes& written,
-                    bool onto_black)
+                    bool onto_black, const float* change)
 {
     for (int x = 0; x < n; ++x, rgba += 4, out += 4) {
         d4 spread = load4(rgba);
         const double a = spread[3];
         const double scale = a > 1.0 ? 1.0 / a : 1.0;
-        const double alpha = a > 1.0 ? 1.0 : std::max(0.0, a);
+        double alpha = a > 1.0 ? 1.0 : std::max(0.0, a);
         spread *= splat(scale);
         spread.v[3] = alpha;
+        if (change) {
+            spread += load4(change + x * 4);
+            alpha = std::clamp(spread[3], 0.0, 1.0);
+            spread.v[3] = alpha;
+        }
         const d4 under = onto_black ? splat(0.0) : load4(out);
         store4(out, d4 { written ? (spread + splat(1.0 - alpha) * under).v : under.v });
     }
@@ -89,17 +97,26 @@ void composite_over(float* out, const double* rgba, int n, const Lanes& written,
 /// cleared here.
 class Over final : public RowSink {
 public:
-    Over(ImageBuf& frame, const ChannelPass& pass, bool onto_black)
+    /// With `cells`, layer `layer`'s changes (see SubApertureLayers) are
+    /// composited with it.
+    Over(ImageBuf& frame, const ChannelPass& pass, bool onto_black,
+         const SubApertureLayers* cells = nullptr, size_t layer = 0)
         : m_frame(frame)
         , m_written { pass.colour[0] ? -1 : 0, pass.colour[1] ? -1 : 0, pass.colour[2] ? -1 : 0,
                       pass.alpha ? -1 : 0 }
         , m_onto_black(onto_black)
+        , m_cells(cells)
+        , m_layer(layer)
     {
     }
     void row(int y, int x_begin, int x_end, const double* rgba) override
     {
-        composite_over(static_cast<float*>(m_frame.pixeladdr(x_begin, y)), rgba,
-                       x_end - x_begin, m_written, m_onto_black);
+        for (int x = x_begin, end = x_end; x < x_end; rgba += size_t(end - x) * 4, x = end) {
+            const float* change = m_cells ? m_cells->change(m_layer, x, y, end) : nullptr;
+            end = std::min(end, x_end);
+            composite_over(static_cast<float*>(m_frame.pixeladdr(x, y)), rgba, end - x,
+                           m_written, m_onto_black, change);
+        }
     }
     void dark(int y, int x_begin, int x_end) override
     {
@@ -116,6 +133,8 @@ private:
     ImageBuf& m_frame;
     const Lanes m_written;  ///< the channels the pass writes
     const bool m_onto_black;
+    const SubApertureLayers* m_cells;
+    size_t m_layer;
 };
 
 /// Keeps spread rows as an image, for a pass composited later.
@@ -238,12 +257,12 @@ void composite_magnified(ImageBuf& frame, const ImageBuf& spread, int c, double 
 }
 
 /// Composites a layer spread apart over the frame, within the frame's
-/// window, in the channels of `pass`.
+/// window, in the channels of `pass`, with its changes in `cells`.
 void composite_image(ImageBuf& frame, const ImageBuf& layer, const ChannelPass& pass,
-                     int nthreads)
+                     const SubApertureLayers& cells, size_t index, int nthreads)
 {
     const ROI both = roi_intersection(frame.roi(), layer.roi());
-    Over over(frame, pass, false);
+    Over over(frame, pass, false, &cells, index);
     parallel_for(both.ybegin, both.yend, [&](int y) {
         std::vector<double> row(size_t(std::max(0, both.width())) * 4);
         for (int x = both.xbegin; x < both.xend; ++x)
@@ -289,7 +308,8 @@ double layer_depth(const LayeredScene& scene, size_t i)
 /// `reach` (light from just outside the window lands inside it).
 void composite_pass(ImageBuf& frame, LayerPass& p, bool onto_black, const ImageSpec& scene,
                     const ROI& window, const ROI& reach, double lateral_ca,
-                    const Imath::V2d& centre, int nthreads)
+                    const Imath::V2d& centre, const SubApertureLayers& cells, size_t layer,
+                    int nthreads)
 {
     if (p.channels.magnified) {
         const ChannelPass& c = p.channels;
@@ -307,44 +327,16 @@ void composite_pass(ImageBuf& frame, LayerPass& p, bool onto_black, const ImageS
             p.spread.engine->run(lit, direct ? static_cast<RowSink&>(keep_and_over) : keep,
                                  nthreads);
         } else if (direct) {
-            composite_image(frame, p.spread.apart, c, nthreads);
+            composite_image(frame, p.spread.apart, c, cells, layer, nthreads);
         }
         composite_magnified(frame, p.spread.apart, 0, 1.0 + lateral_ca, centre, nthreads);
         composite_magnified(frame, p.spread.apart, 2, 1.0 - lateral_ca, centre, nthreads);
     } else if (p.spread.engine) {
-        Over over(frame, p.channels, onto_black);
+        Over over(frame, p.channels, onto_black, &cells, layer);
         p.spread.engine->run(window, over, nthreads);
     } else if (p.spread.apart.initialized()) {
-        composite_image(frame, p.spread.apart, p.channels, nthreads);
+        composite_image(frame, p.spread.apart, p.channels, cells, layer, nthreads);
     }
-}
-
-/// Composites the layers' passes into the frame over `window`, back to
-/// front, each layer's spreads set up when it comes and freed once
-/// composited, and cuts what is composited by the holdout in front of each
-/// layer up to the next. False with `error`.
-bool composite_layers(ImageBuf& frame, const LayeredScene& scene, FrameSpreads& layers,
-                      size_t back, const ROI& window, const ROI& reach, double lateral_ca,
-                      const Imath::V2d& centre, std::string& error, int nthreads)
-{
-    bool composited = false;
-    for (size_t i = 0; i < layers.size(); ++i) {
-        if (!layers.set_up(i, error))
-            return false;
-        const LayerPass* onto_black = i == back ? storable_pass(layers[i]) : nullptr;
-        // A layer's passes write different channels of the frame, so their
-        // order does not matter.
-        for (LayerPass& p : layers[i].passes)
-            composite_pass(frame, p, &p == onto_black, scene.spec, window, reach, lateral_ca,
-                           centre, nthreads);
-        // Until the back-most layer lands, the frame is not set.
-        composited |= !layers[i].passes.empty();
-        if (composited && scene.holdout)
-            hold_out(frame, *scene.holdout, layer_depth(scene, i + 1), layer_depth(scene, i),
-                     window, nthreads);
-        layers.release(i);
-    }
-    return true;
 }
 
 /// The part of `window` a layer's spreads light (all of it, magnified);
@@ -363,10 +355,40 @@ ROI lit_window(const LayerSpreads& layer, const ROI& window)
     return layer.passes.empty() || lit.npixels() <= 0 ? ROI(0, 0, 0, 0, 0, 1, 0, 4) : lit;
 }
 
+/// Composites the layers' passes into the frame over `window`, back to
+/// front, each layer's spreads set up when it comes and freed once
+/// composited, and cuts what is composited by the holdout in front of each
+/// layer up to the next. False with `error`.
+bool composite_layers(ImageBuf& frame, const LayeredScene& scene, FrameSpreads& layers,
+                      const SubApertureLayers& cells, size_t back, const ROI& window, const ROI& reach,
+                      double lateral_ca, const Imath::V2d& centre, std::string& error,
+                      int nthreads)
+{
+    bool composited = false;
+    for (size_t i = 0; i < layers.size(); ++i) {
+        if (!layers.set_up(i, error))
+            return false;
+        const LayerPass* onto_black = i == back ? storable_pass(layers[i]) : nullptr;
+        // A layer's passes write different channels of the frame, so their
+        // order does not matter.
+        for (LayerPass& p : layers[i].passes)
+            composite_pass(frame, p, &p == onto_black, scene.spec, window, reach, lateral_ca,
+                           centre, cells, i, nthreads);
+        // Until the back-most layer lands, the frame is not set.
+        composited |= !layers[i].passes.empty();
+        if (composited && scene.holdout)
+            hold_out(frame, *scene.holdout, layer_depth(scene, i + 1), layer_depth(scene, i),
+                     window, nthreads);
+        layers.release(i);
+    }
+    return true;
+}
+
 /// Composites each layer's passes onto a black frame of its own over the
 /// part of `window` it lights, back to front, and hands it to `sink`, each
 /// layer's spreads freed once composited.
 bool composite_apart(const LayeredScene& scene, FrameSpreads& layers,
+                     const SubApertureLayers& cells,
                      const ROI& window, const ROI& reach,
                      double lateral_ca, const Imath::V2d& centre, const LayerSink& sink,
                      int nthreads)
@@ -386,7 +408,7 @@ bool composite_apart(const LayeredScene& scene, FrameSpreads& layers,
         zero_except(frame, alone ? alone->spread.engine->extent() : ROI(), nthreads);
         for (LayerPass& p : layers[i].passes)
             composite_pass(frame, p, &p == alone, scene.spec, lit, reach, lateral_ca, centre,
-                           nthreads);
+                           cells, i, nthreads);
         layers.release(i);
         if (!sink(i, frame, window))
             return false;
@@ -394,11 +416,34 @@ bool composite_apart(const LayeredScene& scene, FrameSpreads& layers,
     return true;
 }
 
+/// The layers' changes from compositing per cell of the aperture, with its
+/// shape (a disc, polygon, mask or box; the soft PSFs of tent and smooth
+/// take none): over the frame's window, or for a grown one, known only
+/// once the layers are spread, over the data and display windows, its
+/// margin composited whole.
+void compute_cells(SubApertureLayers& cells, const LayeredScene& scene, const Camera& camera,
+                   const SpreadOptions& spread, const SpreadPlan& plan, OutputWindow window,
+                   const ROI& display, int nthreads)
+{
+    const BoxProfile box;
+    const RowProfile* shape = plan.profile ? plan.profile.get()
+                              : spread.aperture.shape == ApertureShape::Box ? &box
+                                                                             : nullptr;
+    if (!shape || spread.aperture_cells == 1)
+        return;
+    cells.compute(scene, CircleOfConfusion(camera, scene.spec.roi_full()), *shape,
+                  spread.aperture_cells,
+                  window == OutputWindow::Display ? display
+                  : window == OutputWindow::Input ? scene.spec.roi()
+                                                  : roi_union(display, scene.spec.roi()),
+                  nthreads);
+}
+
 /// defocus_layers(), or with `apart` spread_layers_apart().
 bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
                           const SpreadOptions& spread, const ApertureImages& images,
                           OutputWindow output_window, std::vector<LayerReport>* report,
-                          SpreadTimings& timings, const LayerSink* apart,
+                          SpreadStats& stats, const LayerSink* apart,
                           std::vector<Layer>* freeing, int nthreads)
 {
     Timer spread_timer;
@@ -411,11 +456,17 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
         return false;
     }
     const Imath::V2d centre = plan.cateye.centre;
+    const bool magnified = camera.lateral_ca != 0.0;
+    // The cells are made from the layers before they are spread, and
+    // perhaps freed.
+    SubApertureLayers cells;
+    if (!magnified)
+        compute_cells(cells, scene, camera, spread, plan, output_window, display, nthreads);
+    stats.cells = cells.report();
     FrameSpreads layers(scene, camera, plan, freeing, nthreads);
 
     // The frame's window, and where magnified light comes from, depend on
     // how far the layers' spreads light: then every layer is set up first.
-    const bool magnified = camera.lateral_ca != 0.0;
     const bool extents_first = output_window == OutputWindow::Grown || magnified || apart;
     ROI grown = display;
     if (extents_first) {
@@ -435,11 +486,11 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
     const ImageSpec frame_spec = result_spec(scene.spec, window, TypeFloat);
     const ROI reach = magnified_reach(window, grown, centre, camera.lateral_ca);
     if (apart) {
-        const bool done = composite_apart(scene, layers, window, reach, camera.lateral_ca,
-                                          centre, *apart, nthreads);
+        const bool done = composite_apart(scene, layers, cells, window, reach,
+                                          camera.lateral_ca, centre, *apart, nthreads);
         if (report)
             report->insert(report->end(), layers.reports.begin(), layers.reports.end());
-        timings.spread += spread_timer();
+        stats.spread += spread_timer();
         return done;
     }
     // The back-most layer is stored onto the frame rather than composited,
@@ -457,14 +508,14 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
         frame.swap(dst);
     reset_zeroed_except(frame, frame_spec, stored ? stored->spread.engine->extent() : ROI(),
                         nthreads);
-    if (!composite_layers(frame, scene, layers, back, window, reach, camera.lateral_ca, centre,
-                          error, nthreads)) {
+    if (!composite_layers(frame, scene, layers, cells, back, window, reach, camera.lateral_ca,
+                          centre, error, nthreads)) {
         dst.errorfmt("{}", error);
         return false;
     }
     if (report)
         report->insert(report->end(), layers.reports.begin(), layers.reports.end());
-    timings.spread += spread_timer();
+    stats.spread += spread_timer();
     dst = std::move(frame);
     return true;
 }
@@ -499,15 +550,15 @@ namespace {
 bool spread_guarded(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
                     const SpreadOptions& spread, const ApertureImages& images,
                     OutputWindow window, std::vector<LayerReport>* report,
-                    SpreadTimings* timings, const LayerSink* apart, std::vector<Layer>* freeing,
+                    SpreadStats* stats, const LayerSink* apart, std::vector<Layer>* freeing,
                     int nthreads)
 {
-    SpreadTimings unused;
+    SpreadStats unused;
     // Errors are reported, never thrown through the API; running out of
     // memory on a huge blur is the one exception the filters can raise.
     try {
         return spread_and_composite(dst, scene, camera, spread, images, window, report,
-                                    timings ? *timings : unused, apart, freeing, nthreads);
+                                    stats ? *stats : unused, apart, freeing, nthreads);
     } catch (const std::bad_alloc&) {
         dst.errorfmt("out of memory (the layers and the blur are too large)");
         return false;
@@ -519,29 +570,29 @@ bool spread_guarded(ImageBuf& dst, const LayeredScene& scene, const Camera& came
 bool defocus_layers(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
                     const SpreadOptions& spread, const ApertureImages& images,
                     OutputWindow window, std::vector<LayerReport>* report,
-                    SpreadTimings* timings, int nthreads)
+                    SpreadStats* stats, int nthreads)
 {
-    return spread_guarded(dst, scene, camera, spread, images, window, report, timings, nullptr,
+    return spread_guarded(dst, scene, camera, spread, images, window, report, stats, nullptr,
                           nullptr, nthreads);
 }
 
 bool defocus_layers_freeing(ImageBuf& dst, LayeredScene& scene, const Camera& camera,
                             const SpreadOptions& spread, const ApertureImages& images,
                             OutputWindow window, std::vector<LayerReport>* report,
-                            SpreadTimings* timings, int nthreads)
+                            SpreadStats* stats, int nthreads)
 {
-    return spread_guarded(dst, scene, camera, spread, images, window, report, timings, nullptr,
+    return spread_guarded(dst, scene, camera, spread, images, window, report, stats, nullptr,
                           &scene.layers, nthreads);
 }
 
 bool spread_layers_apart(const LayeredScene& scene, const Camera& camera,
                          const SpreadOptions& spread, const ApertureImages& images,
                          OutputWindow window, const LayerSink& sink, std::string& error,
-                         std::vector<LayerReport>* report, SpreadTimings* timings,
+                         std::vector<LayerReport>* report, SpreadStats* stats,
                          int nthreads)
 {
     ImageBuf errors;
-    if (spread_guarded(errors, scene, camera, spread, images, window, report, timings, &sink,
+    if (spread_guarded(errors, scene, camera, spread, images, window, report, stats, &sink,
                        nullptr, nthreads))
         return true;
     if (errors.has_error())

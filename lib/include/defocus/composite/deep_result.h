@@ -47,7 +47,7 @@ struct DeepResult {
 bool defocus_deep(DeepResult& dst, const LayeredScene& scene, const Camera& camera,
                   const SpreadOptions& spread, const ApertureImages& images,
                   OutputWindow window, std::string& error,
-                  std::vector<LayerReport>* report = nullptr, SpreadTimings* timings = nullptr,
+                  std::vector<LayerReport>* report = nullptr, SpreadStats* stats = nullptr,
                   int nthreads = 0);
 
 /// The spec of a deep result over `window`: R, G, B, A of `color_type` and

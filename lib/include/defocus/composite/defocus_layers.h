@@ -28,9 +28,19 @@ bool coc_radius(OIIO::ImageBuf& dst, const OIIO::ImageBuf& depth,
 OIIO::ImageSpec result_spec(const OIIO::ImageSpec& scene, const OIIO::ROI& window,
                             OIIO::TypeDesc format);
 
-/// Where defocus_layers() spends its time, in seconds.
-struct SpreadTimings {
-    double spread = 0.0;  ///< CoC radii, spreading and compositing, all layers
+/// How much of a frame was composited per part of the aperture (see
+/// SpreadOptions::aperture_cells): its tiles, those that took cells, and
+/// the most cells one took.
+struct SubApertureReport {
+    int64_t tiles = 0;
+    int64_t tiles_with_cells = 0;
+    int most_cells = 0;
+};
+
+/// What defocus_layers() reports beside the image.
+struct SpreadStats {
+    double spread = 0.0;  ///< seconds: CoC radii, spreading and compositing, all layers
+    SubApertureReport cells;
 };
 
 /// Spreads each layer of a sanitized (see sanitize()), layered scene as
@@ -46,7 +56,7 @@ bool defocus_layers(OIIO::ImageBuf& dst, const LayeredScene& scene, const Camera
                     const SpreadOptions& spread = {}, const ApertureImages& images = {},
                     OutputWindow window = OutputWindow::Input,
                     std::vector<LayerReport>* report = nullptr,
-                    SpreadTimings* timings = nullptr, int nthreads = 0);
+                    SpreadStats* stats = nullptr, int nthreads = 0);
 
 /// defocus_layers() for a caller done with the layers' pixels: each
 /// layer's depth is freed once its CoC radii are made, and its colour (and
@@ -58,7 +68,7 @@ bool defocus_layers_freeing(OIIO::ImageBuf& dst, LayeredScene& scene, const Came
                             const SpreadOptions& spread = {}, const ApertureImages& images = {},
                             OutputWindow window = OutputWindow::Input,
                             std::vector<LayerReport>* report = nullptr,
-                            SpreadTimings* timings = nullptr, int nthreads = 0);
+                            SpreadStats* stats = nullptr, int nthreads = 0);
 
 /// Receives one layer's spread, composited alone onto black: its index in
 /// the scene, and float RGBA over the part of the result's `window` it
@@ -79,7 +89,7 @@ bool spread_layers_apart(const LayeredScene& scene, const Camera& camera,
                          const SpreadOptions& spread, const ApertureImages& images,
                          OutputWindow window, const LayerSink& sink, std::string& error,
                          std::vector<LayerReport>* report = nullptr,
-                         SpreadTimings* timings = nullptr, int nthreads = 0);
+                         SpreadStats* stats = nullptr, int nthreads = 0);
 
 /// A layer's spread reaches a pixel where its coverage there is above
 /// this: below it, float noise of the spread is too large a part of a

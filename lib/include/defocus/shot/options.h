@@ -21,6 +21,13 @@ struct SpreadOptions {
     /// it, the others with the aperture's fast filter.
     std::string psf_image;
     double hybrid_threshold = 4.0;
+    /// Sub-aperture compositing: the aperture is cut into about this many
+    /// cells, and where a near layer hides different parts of a far one
+    /// from different points of the lens, the layers are composited within
+    /// each cell and the cells added (composite/sub_aperture.h). 1 = one
+    /// composite of the whole aperture; 0 = as many as each place needs.
+    /// 1 by default until automatic cells cost what the layered model does.
+    int aperture_cells = 1;
 };
 
 /// How the readers take the input files.

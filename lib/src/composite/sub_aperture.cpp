@@ -1,0 +1,269 @@
+#include "composite/sub_aperture.h"
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <map>
+
+#include "spread/aperture_cells.h"
+#include "util/float_pixels.h"
+#include "util/parallel_rows.h"
+#include "util/simd.h"
+
+namespace defocus {
+
+using namespace OIIO;
+
+namespace {
+
+/// A layer's pixels as the cells spread them, with their signed radii.
+void make_source(const Layer& layer, const CircleOfConfusion& coc, double extent,
+                 FloatPixels& color, SignedLayer& signed_layer)
+{
+    ROI roi = roi_intersection(layer.color.roi(), layer.depth.roi());
+    roi.chbegin = 0;
+    roi.chend = 4;
+    color = FloatPixels(layer.color, roi);
+    ROI depth_roi = roi;
+    depth_roi.chend = layer.depth.nchannels();
+    const FloatPixels depth(layer.depth, depth_roi);
+    std::vector<float> radius(size_t(roi.npixels()));
+    for (int y = roi.ybegin; y < roi.yend; ++y)
+        for (int x = roi.xbegin; x < roi.xend; ++x)
+            radius[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)]
+                = float(0.5 * coc.diameter(*depth(x, y), x, y));
+    signed_layer.set(roi, roi.npixels() > 0 ? color(roi.xbegin, roi.ybegin) : nullptr,
+                     radius.data(), float(extent));
+}
+
+/// Whether `layer`'s light can reach `window`.
+bool reaches(const SignedLayer& layer, const ROI& window)
+{
+    const int r = int(std::ceil(layer.reach)) + 1;
+    const ROI grown(window.xbegin - r, window.xend + r, window.ybegin - r, window.yend + r);
+    return layer.color && roi_intersection(grown, layer.roi).npixels() > 0;
+}
+
+/// A spread pixel as "over" takes it, as the engine composites: where a
+/// layer's own pixels overlap past full coverage, scaled back to it.
+DEFOCUS_KERNEL d4 covering(d4 light)
+{
+    const double a = light[3];
+    light *= splat(a > 1.0 ? 1.0 / a : 1.0);
+    light.v[3] = std::clamp(a, 0.0, 1.0);
+    return light;
+}
+
+/// One layer's row of light through a cell of share `weight`, taken front
+/// to back: adds it to the layer's light through the whole aperture, adds
+/// what of it reaches the camera (`reaching`: RGB, and in the 4th lane the
+/// share of the lens that the layers in front let through), and lets
+/// `passing` (what the layers in front let through) through this one.
+DEFOCUS_CLONES
+void take_row(const double* light, double weight, double* whole, double* reaching,
+              double* passing, int pixels)
+{
+    for (int x = 0; x < pixels; ++x) {
+        const d4 raw = load4(light + x * 4);
+        store4(whole + x * 4, load4(whole + x * 4) + splat(weight) * raw);
+        d4 seen = covering(raw);
+        const double alpha = seen[3];
+        seen.v[3] = 1.0;
+        store4(reaching + x * 4, load4(reaching + x * 4) + splat(weight * passing[x]) * seen);
+        passing[x] *= 1.0 - alpha;
+    }
+}
+
+}  // namespace
+
+/// Where the cells change a band, layer by layer: for each layer that
+/// reaches it (back to front), its light through the whole aperture and
+/// what of it reaches the camera; and what passes through every layer.
+struct BandSums {
+    std::vector<size_t> layers;   ///< the layers that reach the band, back to front
+    std::vector<double> whole;    ///< RGBA a pixel, per layer
+    std::vector<double> reaching; ///< E_l (RGB) and T_{l+1} a pixel, per layer
+    std::vector<double> passing;  ///< through the layers so far, this cell
+    std::vector<double> through;  ///< T_0: through every layer, all cells
+
+    void sum(const std::vector<SignedLayer>& all, const std::vector<ApertureCell>& cells,
+             const ROI& band, CellBand& spread);
+
+    /// Layer i's (of `layers`) change at pixel p of the band.
+    void change(size_t i, size_t p, float* out) const;
+};
+
+void BandSums::sum(const std::vector<SignedLayer>& all, const std::vector<ApertureCell>& cells,
+                   const ROI& band, CellBand& spread)
+{
+    layers.clear();
+    for (size_t l = 0; l < all.size(); ++l)
+        if (reaches(all[l], band))
+            layers.push_back(l);
+    const size_t n = size_t(band.npixels()), row = size_t(band.width());
+    whole.assign(layers.size() * n * 4, 0.0);
+    reaching.assign(layers.size() * n * 4, 0.0);
+    passing.assign(n, 1.0);
+    through.assign(n, 0.0);
+    spread.reset(band);
+    for (const ApertureCell& cell : cells) {
+        for (size_t i = layers.size(); i-- > 0;) {
+            spread.spread(all[layers[i]], cell);
+            spread.integrate([&](int y, const double* light) {
+                const size_t at = size_t(y - band.ybegin) * row;
+                take_row(light, cell.weight, &whole[(i * n + at) * 4],
+                         &reaching[(i * n + at) * 4], &passing[at], band.width());
+            });
+        }
+        for (size_t p = 0; p < n; ++p) {
+            through[p] += cell.weight * passing[p];
+            passing[p] = 1.0;
+        }
+    }
+}
+
+void BandSums::change(size_t i, size_t p, float* out) const
+{
+    const size_t n = passing.size();
+    const double* w = &whole[(i * n + p) * 4];
+    const double* e = &reaching[(i * n + p) * 4];
+    const double front = e[3];
+    const double back = i == 0 ? through[p] : reaching[((i - 1) * n + p) * 4 + 3];
+    // Where the layers in front hide it from the whole lens, the layer's
+    // light counts for nothing, whatever its colour.
+    if (front <= 1e-12) {
+        std::fill(out, out + 4, 0.0f);
+        return;
+    }
+    const double a = w[3];
+    const double scale = a > 1.0 ? 1.0 / a : 1.0;
+    for (int c = 0; c < 3; ++c)
+        out[c] = float(e[c] / front - w[c] * scale);
+    out[3] = float((1.0 - back / front) - std::clamp(a, 0.0, 1.0));
+}
+
+
+void SubApertureLayers::compute(const LayeredScene& scene, const CircleOfConfusion& coc,
+                                const RowProfile& profile, int cells, const ROI& window,
+                                int nthreads)
+{
+    std::vector<FloatPixels> colors(scene.layers.size());
+    std::vector<SignedLayer> layers(scene.layers.size());
+    for (size_t l = 0; l < scene.layers.size(); ++l)
+        if (scene.reports[l].pixels > 0)
+            make_source(scene.layers[l], coc, profile.extent(), colors[l], layers[l]);
+    m_tiles = plan_cell_tiles(layers, window, cells);
+    allocate(layers);
+    std::map<int, std::vector<ApertureCell>> cuts;
+    for (uint8_t across : m_tiles.across)
+        if (across > 1 && !cuts.count(across))
+            cuts[across] = cut_aperture(profile, across);
+    m_most_cells = 0;
+    for (const auto& [across, cut] : cuts)
+        m_most_cells = std::max(m_most_cells, int(cut.size()));
+
+    // Bands of a few tile rows: a pixel's light reaches the bands of the
+    // rows its blur spans, so taller bands spread each pixel fewer times.
+    // A band is cut where its tiles with cells are far enough apart that
+    // no pixel's light reaches both sides.
+    float reach = 0.0f;
+    for (const SignedLayer& layer : layers)
+        reach = std::max(reach, layer.reach);
+    const int gap = int(std::ceil(2.0 * reach / CellTiles::size)) + 1;
+    const int band_rows = 4;
+    parallel_for_each_item(0, (m_tiles.rows + band_rows - 1) / band_rows, [&](int64_t b) {
+        const int first_row = int(b) * band_rows,
+                  end_row = std::min(m_tiles.rows, first_row + band_rows);
+        CellBand spread;
+        BandSums sums;
+        for (const auto& entry : cuts) {
+            const int across = entry.first;
+            auto used_in = [&](int column) {
+                for (int row = first_row; row < end_row; ++row)
+                    if (m_tiles.at(column, row) == across)
+                        return true;
+                return false;
+            };
+            for (int first = 0; first < m_tiles.columns;) {
+                if (!used_in(first)) {
+                    ++first;
+                    continue;
+                }
+                int last = first;
+                for (int column = first + 1; column < m_tiles.columns && column <= last + gap;
+                     ++column)
+                    if (used_in(column))
+                        last = column;
+                const ROI band = roi_union(m_tiles.tile(first, first_row),
+                                           m_tiles.tile(last, end_row - 1));
+                sums.sum(layers, entry.second, band, spread);
+                for (int row = first_row; row < end_row; ++row)
+                    for (int column = first; column <= last; ++column)
+                        if (m_tiles.at(column, row) == across)
+                            keep(sums, band, column, row);
+                first = last + 1;
+            }
+        }
+    }, nthreads);
+}
+
+void SubApertureLayers::allocate(const std::vector<SignedLayer>& layers)
+{
+    const size_t tiles = size_t(m_tiles.count());
+    m_offset.assign(layers.size(), std::vector<int64_t>(tiles, -1));
+    int64_t used = 0;
+    for (size_t t = 0; t < tiles; ++t) {
+        if (m_tiles.across[t] <= 1)
+            continue;
+        const ROI tile = m_tiles.tile(int(t % m_tiles.columns), int(t / m_tiles.columns));
+        for (size_t l = 0; l < layers.size(); ++l)
+            if (reaches(layers[l], tile))
+                m_offset[l][t] = (used++) * int64_t(tile_floats);
+    }
+    m_pixels.assign(size_t(used) * tile_floats, 0.0f);
+}
+
+void SubApertureLayers::keep(const BandSums& sums, const ROI& band, int column, int row)
+{
+    const size_t t = size_t(row) * m_tiles.columns + column;
+    const ROI tile = m_tiles.tile(column, row);
+    for (size_t i = 0; i < sums.layers.size(); ++i) {
+        const int64_t at = offset(sums.layers[i], t);
+        if (at < 0)
+            continue;
+        for (int y = tile.ybegin; y < tile.yend; ++y)
+            for (int x = tile.xbegin; x < tile.xend; ++x)
+                sums.change(i, size_t(y - band.ybegin) * band.width() + size_t(x - band.xbegin),
+                            &m_pixels[size_t(at)
+                                      + ((y - tile.ybegin) * CellTiles::size + (x - tile.xbegin))
+                                            * 4]);
+    }
+}
+
+const float* SubApertureLayers::change(size_t l, int x, int y, int& end) const
+{
+    const ROI& window = m_tiles.window;
+    if (l >= m_offset.size() || y < window.ybegin || y >= window.yend || x >= window.xend) {
+        end = INT_MAX;
+        return nullptr;
+    }
+    if (x < window.xbegin) {
+        end = window.xbegin;
+        return nullptr;
+    }
+    const int column = (x - window.xbegin) / CellTiles::size,
+              row = (y - window.ybegin) / CellTiles::size;
+    const ROI tile = m_tiles.tile(column, row);
+    end = tile.xend;
+    const int64_t at = offset(l, size_t(row) * m_tiles.columns + column);
+    return at < 0 ? nullptr
+                  : &m_pixels[size_t(at)
+                              + ((y - tile.ybegin) * CellTiles::size + (x - tile.xbegin)) * 4];
+}
+
+SubApertureReport SubApertureLayers::report() const
+{
+    return { m_tiles.count(), m_tiles.with_cells(), m_most_cells };
+}
+
+}  // namespace defocus

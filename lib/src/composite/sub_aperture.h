@@ -1,0 +1,83 @@
+// Internal: compositing per part of the aperture (sub-aperture compositing).
+//
+// Blurring each layer and compositing the blurred layers with "over" gives
+//     Σ_l ⟨C_l⟩ · Π_{m nearer} (1 − ⟨α_m⟩),
+// the average ⟨·⟩ being over the aperture; the thin lens gives
+//     ⟨ Σ_l C_l(x + c_l·u) · Π_{m nearer} (1 − α_m(x + c_m·u)) ⟩
+// over aperture points u, c the signed CoC radius. They differ where a
+// nearer layer's alpha varies over what a farther layer's light crosses: a
+// near branch cuts its shadow into the bokeh of a far light. Cutting the
+// aperture into cells k of shares w_k, compositing the layers within each
+// cell and adding the cells converges to the second.
+//
+// The sum over cells is itself a stack of layers: layer l's light that
+// reaches the camera is E_l = Σ_k w_k C_l^k Π_{m>l} (1 − α_m^k), and what
+// passes through the layers from l to the front is
+// T_l = Σ_k w_k Π_{m≥l} (1 − α_m^k). Layer l as one sample of colour
+// E_l / T_{l+1} and alpha 1 − T_l / T_{l+1} gives, composited with "over",
+// exactly the sum over cells. So each layer's spread keeps its place in
+// every compositing that follows (a holdout between layers, a deep result's
+// one sample per layer), and only its value changes, by
+//     Δ_l = (E_l / T_{l+1}, 1 − T_l / T_{l+1}) − (its spread through the
+//           whole aperture),
+// added to its spread where "over" composites it (the alpha kept within
+// [0, 1]), whatever it is composited onto.
+//
+// The engine spreads each layer whole, with every filter and lens effect;
+// the cells are spread as rectangles only in the tiles where the plan
+// (spread/cell_plan.h) says they change anything, and Δ_l is taken from
+// those same rectangles, so that it is nothing where cells change nothing,
+// and one cell leaves the engine's frame as it was.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <OpenImageIO/imagebuf.h>
+
+#include <defocus/composite/defocus_layers.h>
+#include <defocus/layers/layered_scene.h>
+#include <defocus/optics/camera.h>
+#include <defocus/spread/aperture_profile.h>
+
+#include "spread/cell_plan.h"
+
+namespace defocus {
+
+struct BandSums;
+
+/// What compositing per cell of the aperture changes in each layer's
+/// spread: made from the layers before they are spread (and freed), and
+/// applied to each as it is composited.
+class SubApertureLayers {
+public:
+    /// The changes over `window` for the layers of `scene` through `coc`,
+    /// with the aperture's shape `profile`; `cells` is the setting (0
+    /// automatic, 1 none, else about that many).
+    void compute(const LayeredScene& scene, const CircleOfConfusion& coc,
+                 const RowProfile& profile, int cells, const OIIO::ROI& window, int nthreads);
+
+    /// Layer `l`'s change at pixel (x, y): RGBA, then the next pixels' of
+    /// its row up to column `end`; null where it has none, up to `end`.
+    const float* change(size_t l, int x, int y, int& end) const;
+
+    SubApertureReport report() const;
+
+private:
+    static constexpr size_t tile_floats = size_t(CellTiles::size) * CellTiles::size * 4;
+
+    /// Room for each layer's change in each tile with cells that its light
+    /// reaches.
+    void allocate(const std::vector<SignedLayer>& layers);
+    /// Keeps the changes `sums` found over `band` in tile (column, row).
+    void keep(const BandSums& sums, const OIIO::ROI& band, int column, int row);
+    /// Where tile t's pixels for layer l start in m_pixels, or -1.
+    int64_t offset(size_t l, size_t t) const { return m_offset[l][t]; }
+
+    CellTiles m_tiles;
+    std::vector<std::vector<int64_t>> m_offset;  ///< per layer, per tile
+    std::vector<float> m_pixels;  ///< RGBA, CellTiles::size² a tile and layer
+    int m_most_cells = 0;
+};
+
+}  // namespace defocus

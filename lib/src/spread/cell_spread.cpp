@@ -1,0 +1,274 @@
+#include "spread/cell_spread.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "util/simd.h"
+
+namespace defocus {
+
+namespace {
+
+/// Narrower than this, a rectangle is taken this wide about its centre:
+/// its density stays finite.
+constexpr double narrowest = 1e-3;
+
+/// An interval's corner deltas along one axis: after a prefix sum, pixel i
+/// holds the length of [i, i + 1] the interval covers over its length.
+struct AxisDeltas {
+    int at[4];
+    double weight[4];
+};
+
+/// The deltas of [a, b] (narrower than `narrowest`: that wide about its
+/// centre), cut to [lo, hi]: the part outside adds nothing.
+DEFOCUS_KERNEL AxisDeltas axis_deltas(double a, double b, double lo, double hi)
+{
+    if (b - a < narrowest) {
+        const double centre = 0.5 * (a + b);
+        a = centre - 0.5 * narrowest;
+        b = centre + 0.5 * narrowest;
+    }
+    const double scale = 1.0 / (b - a);
+    a = std::clamp(a, lo, hi);
+    b = std::clamp(b, lo, hi);
+    const double fa = std::floor(a), fb = std::floor(b);
+    return { { int(fa), int(fa) + 1, int(fb), int(fb) + 1 },
+             { (1.0 - (a - fa)) * scale, (a - fa) * scale, -(1.0 - (b - fb)) * scale,
+               -(b - fb) * scale } };
+}
+
+/// How much a pixel's footprint through the part of the lens about (ux, uy)
+/// scales the area of the surface it is on, whose radius has `gradient`.
+DEFOCUS_KERNEL double area_scale(double ux, double uy, const float* gradient)
+{
+    return std::max(0.0, 1.0 + ux * gradient[0] + uy * gradient[1]);
+}
+
+/// Adds one pixel's light `value` through cell `s` at (cx, cy), window
+/// coordinates, radius r.
+DEFOCUS_KERNEL void spread_pixel(const ApertureCell& s, double cx, double cy, double r,
+                                 const d4& value, int w, int h, double* deltas, size_t stride)
+{
+    const double xa = cx + r * s.u0, xb = cx + r * s.u1;
+    const double ya = cy + r * s.v0, yb = cy + r * s.v1;
+    const AxisDeltas xs = axis_deltas(std::min(xa, xb), std::max(xa, xb), 0.0, w);
+    const AxisDeltas ys = axis_deltas(std::min(ya, yb), std::max(ya, yb), 0.0, h);
+    for (int j = 0; j < 4; ++j) {
+        const double wy = ys.weight[j];
+        if (wy == 0.0)
+            continue;
+        double* out = deltas + size_t(ys.at[j]) * stride;
+        for (int k = 0; k < 4; ++k) {
+            double* p = out + size_t(xs.at[k]) * 4;
+            store4(p, load4(p) + splat(xs.weight[k] * wy) * value);
+        }
+    }
+}
+
+/// Adds a run of pixels of one radius r, window columns [x0, x1), through
+/// cell `s`: their x deltas are the same taps at every pixel, so the run is
+/// filtered along the row once into `line`, and the line added to the
+/// cell's rows. Deltas left of the window add up at its first column (the
+/// rectangles cut there), and those right of it are dropped.
+DEFOCUS_KERNEL void spread_run(const ApertureCell& s, int x0, int x1, double cy, double r,
+                               const float* rgba, const float* gradient, int w, int h,
+                               double* deltas, size_t stride, std::vector<double>& line)
+{
+    const double ux = 0.5 * (s.u0 + s.u1), uy = 0.5 * (s.v0 + s.v1);
+    const double ua = 0.5 + r * s.u0, ub = 0.5 + r * s.u1;
+    const AxisDeltas taps = axis_deltas(std::min(ua, ub), std::max(ua, ub), -INFINITY, INFINITY);
+    const int span = taps.at[3] - taps.at[0];
+    const double ya = cy + r * s.v0, yb = cy + r * s.v1;
+    const AxisDeltas ys = axis_deltas(std::min(ya, yb), std::max(ya, yb), 0.0, h);
+    const int n = x1 - x0 + span + 1;
+    line.assign(size_t(n) * 4, 0.0);
+    double* l = line.data();
+    for (int x = x0; x < x1; ++x, rgba += 4, gradient += 2) {
+        const d4 value = load4(rgba) * splat(area_scale(ux, uy, gradient));
+        double* p = l + size_t(x - x0) * 4;
+        for (int k = 0; k < 4; ++k) {
+            double* q = p + size_t(taps.at[k] - taps.at[0]) * 4;
+            store4(q, load4(q) + splat(taps.weight[k]) * value);
+        }
+    }
+    // Line entry i lands at window column base + i.
+    const int base = x0 + taps.at[0];
+    const int cut = std::clamp(-base, 0, n), end = std::clamp(w + 2 - base, cut, n);
+    d4 left = splat(0.0);
+    for (int i = 0; i < cut; ++i)
+        left += load4(l + size_t(i) * 4);
+    for (int j = 0; j < 4; ++j) {
+        const double wy = ys.weight[j];
+        if (wy == 0.0)
+            continue;
+        double* out = deltas + size_t(ys.at[j]) * stride;
+        const d4 weight = splat(wy);
+        if (cut > 0)
+            store4(out, load4(out) + weight * left);
+        for (int i = cut; i < end; ++i) {
+            double* o = out + size_t(base + i) * 4;
+            store4(o, load4(o) + weight * load4(l + size_t(i) * 4));
+        }
+    }
+}
+
+DEFOCUS_CLONES
+void spread_pixels(const SignedLayer& layer, const ApertureCell& cell, const OIIO::ROI& window,
+                   double* deltas, size_t stride, std::vector<double>& line)
+{
+    const int reach = int(std::ceil(layer.reach)) + 1;
+    const int y_begin = std::max(layer.roi.ybegin, window.ybegin - reach),
+              y_end = std::min(layer.roi.yend, window.yend + reach);
+    const int x_begin = std::max(layer.roi.xbegin, window.xbegin - reach),
+              x_end = std::min(layer.roi.xend, window.xend + reach);
+    const int w = window.width(), h = window.height();
+    const size_t width = size_t(layer.roi.width());
+    const double ux = 0.5 * (cell.u0 + cell.u1), uy = 0.5 * (cell.v0 + cell.v1);
+    for (int y = y_begin; y < y_end; ++y) {
+        const size_t row = size_t(y - layer.roi.ybegin);
+        const double cy = y + 0.5 - window.ybegin;
+        for (size_t k = layer.row_runs[row]; k < layer.row_runs[row + 1]; ++k) {
+            const PixelRun& run = layer.runs[k];
+            const double r = run.radius;
+            const double far = std::abs(r) * layer.extent + 1.0;
+            const int begin = std::max(run.x_begin, x_begin), end = std::min(run.x_end, x_end);
+            if (begin >= end || cy + far < 0.0 || cy - far > h)
+                continue;
+            const size_t first = row * width + size_t(begin - layer.roi.xbegin);
+            const float* rgba = layer.color + first * 4;
+            const float* slope = layer.gradient.data() + first * 2;
+            const int wx0 = begin - window.xbegin, wx1 = end - window.xbegin;
+            // A run costs its length plus its footprint's width, a pixel
+            // alone 4 times its length.
+            const double footprint = std::abs(r * (cell.u1 - cell.u0));
+            if (wx1 - wx0 >= 4 && 4.0 * (wx1 - wx0) > footprint) {
+                spread_run(cell, wx0, wx1, cy, r, rgba, slope, w, h, deltas, stride, line);
+                continue;
+            }
+            for (int px = wx0; px < wx1; ++px) {
+                const size_t i = size_t(px - wx0);
+                spread_pixel(cell, px + 0.5, cy, r,
+                             load4(rgba + i * 4) * splat(area_scale(ux, uy, slope + i * 2)), w,
+                             h, deltas, stride);
+            }
+        }
+    }
+}
+
+/// Adds a row of deltas into the column sums, clearing it, and sums the
+/// column sums along the row into `light`.
+DEFOCUS_CLONES
+void integrate_deltas(double* deltas, double* running, double* light, int width, int pixels)
+{
+    d4 sum = splat(0.0);
+    for (int x = 0; x < pixels; ++x) {
+        d4 column = load4(running + x * 4) + load4(deltas + x * 4);
+        store4(running + x * 4, column);
+        store4(deltas + x * 4, splat(0.0));
+        if (x < width) {
+            sum += column;
+            store4(light + x * 4, sum);
+        }
+    }
+}
+
+bool is_lit(const float* rgba)
+{
+    return rgba[0] != 0.0f || rgba[1] != 0.0f || rgba[2] != 0.0f || rgba[3] != 0.0f;
+}
+
+/// The radius changes by more than this from one pixel to the next only
+/// across a step in depth, which is no slope of one surface.
+constexpr float step_in_radius = 1.0f;
+
+/// The radius's slope at pixel i from its neighbours before and after it
+/// (i itself where there is none), among those lit and on its surface.
+float slope(const float* rgba, const float* radius, size_t i, size_t before, size_t after)
+{
+    auto on_surface = [&](size_t j) {
+        return j != i && is_lit(rgba + j * 4) && std::abs(radius[j] - radius[i]) < step_in_radius;
+    };
+    const bool b = on_surface(before), a = on_surface(after);
+    if (a && b)
+        return 0.5f * (radius[after] - radius[before]);
+    if (a)
+        return radius[after] - radius[i];
+    if (b)
+        return radius[i] - radius[before];
+    return 0.0f;
+}
+
+}  // namespace
+
+void SignedLayer::set(const OIIO::ROI& pixels, const float* rgba, const float* radius,
+                      float aperture_extent)
+{
+    roi = pixels;
+    color = rgba;
+    extent = aperture_extent;
+    runs.clear();
+    row_runs.assign(size_t(roi.height()) + 1, 0);
+    float largest = 0.0f;
+    const size_t width = size_t(roi.width());
+    for (int y = roi.ybegin; y < roi.yend; ++y) {
+        const size_t row = size_t(y - roi.ybegin) * width;
+        row_runs[size_t(y - roi.ybegin)] = runs.size();
+        auto lit = [&](size_t i) { return is_lit(rgba + (row + i) * 4); };
+        for (size_t x = 0; x < width;) {
+            if (!lit(x)) {
+                ++x;
+                continue;
+            }
+            const float r = radius[row + x];
+            size_t end = x + 1;
+            while (end < width && radius[row + end] == r && lit(end))
+                ++end;
+            runs.push_back({ roi.xbegin + int(x), roi.xbegin + int(end), r });
+            largest = std::max(largest, std::abs(r));
+            x = end;
+        }
+    }
+    row_runs.back() = runs.size();
+    reach = largest * extent;
+    gradient.assign(size_t(roi.npixels()) * 2, 0.0f);
+    const size_t height = size_t(roi.height());
+    for (size_t y = 0; y < height; ++y)
+        for (size_t x = 0; x < width; ++x) {
+            const size_t i = y * width + x;
+            if (!is_lit(rgba + i * 4))
+                continue;
+            gradient[i * 2] = slope(rgba, radius, i, x > 0 ? i - 1 : i, x + 1 < width ? i + 1 : i);
+            gradient[i * 2 + 1] = slope(rgba, radius, i, y > 0 ? i - width : i,
+                                        y + 1 < height ? i + width : i);
+        }
+}
+
+void CellBand::reset(const OIIO::ROI& window)
+{
+    m_window = window;
+    m_stride = (size_t(window.width()) + 2) * 4;
+    m_deltas.assign(m_stride * (size_t(window.height()) + 2), 0.0);
+    m_running.assign(m_stride, 0.0);
+    m_row.assign(size_t(window.width()) * 4, 0.0);
+}
+
+void CellBand::spread(const SignedLayer& layer, const ApertureCell& cell)
+{
+    spread_pixels(layer, cell, m_window, m_deltas.data(), m_stride, m_line);
+}
+
+const double* CellBand::integrate_row(int row)
+{
+    integrate_deltas(&m_deltas[size_t(row) * m_stride], m_running.data(), m_row.data(),
+                     m_window.width(), m_window.width() + 2);
+    return m_row.data();
+}
+
+void CellBand::clear_rows(int first, int end)
+{
+    std::fill(m_deltas.begin() + ptrdiff_t(first) * ptrdiff_t(m_stride),
+              m_deltas.begin() + ptrdiff_t(end) * ptrdiff_t(m_stride), 0.0);
+}
+
+}  // namespace defocus

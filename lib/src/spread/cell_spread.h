@@ -1,0 +1,86 @@
+// Internal: a layer's light through one cell of the aperture, over a band of
+// rows: each pixel's footprint through the cell is a rectangle, written as
+// corner deltas and integrated (Kosloff, Tao & Barsky 2009), so
+// that the cost does not grow with the blur.
+#pragma once
+
+#include <vector>
+
+#include <OpenImageIO/imagebuf.h>
+
+#include "spread/aperture_cells.h"
+
+namespace defocus {
+
+/// Lit pixels of one row and one signed radius, columns [x_begin, x_end).
+struct PixelRun {
+    int x_begin, x_end;
+    float radius;
+};
+
+/// A layer as sub-aperture spreading reads it: premultiplied RGBA of each
+/// pixel of `roi` (rows of roi.width()), and its lit pixels as runs of one
+/// signed CoC radius (negative in front of the focus), row by row.
+///
+/// Where the radius changes along a surface, the pixels' footprints through
+/// one part of the lens crowd or spread apart: through aperture point u,
+/// pixel s lands at s + ρ(s)·u, which scales area by 1 + u·∇ρ. Spreading
+/// keeps each pixel's light, so a tilted opaque surface would come out
+/// denser than opaque through one side of the lens and see-through on the
+/// other, and "over" per cell would cut seams into it; each pixel's light
+/// through a cell is weighted by that scale instead (`gradient`, ∇ρ), which
+/// leaves the whole aperture's light as it was.
+struct SignedLayer {
+    OIIO::ROI roi;
+    const float* color = nullptr;    ///< 4 floats a pixel
+    std::vector<PixelRun> runs;      ///< row by row, left to right
+    std::vector<size_t> row_runs;    ///< row y's runs start at row_runs[y - roi.ybegin]; one past
+    std::vector<float> gradient;     ///< ∂ρ/∂x, ∂ρ/∂y a pixel, 0 across a step in depth
+    float extent = 1.0f;             ///< how far the aperture reaches per unit of radius
+    float reach = 0.0f;              ///< how far any pixel's light lands from it
+
+    /// `roi`'s pixels of colour `color` and signed radius `radius` (a float
+    /// a pixel), as runs.
+    void set(const OIIO::ROI& roi, const float* color, const float* radius, float extent);
+};
+
+/// The light of layers through a cell over a window of pixels, in double:
+/// spread() adds a layer's footprints as corner deltas, and integrate()
+/// turns them into each row's light, leaving the band clear for the next.
+class CellBand {
+public:
+    /// Sets the window, clear.
+    void reset(const OIIO::ROI& window);
+
+    const OIIO::ROI& window() const { return m_window; }
+
+    /// Adds the light of `layer`'s pixels through `cell` that falls in the
+    /// window: each pixel's light is spread evenly over its footprint
+    /// through the cell, so that it keeps its sum.
+    void spread(const SignedLayer& layer, const ApertureCell& cell);
+
+    /// Calls use(y, light) for each row y of the window, top to bottom,
+    /// light being premultiplied RGBA, 4 doubles a pixel from the window's
+    /// first column; then the band is clear.
+    template<typename Use>
+    void integrate(Use&& use)
+    {
+        std::fill(m_running.begin(), m_running.end(), 0.0);
+        for (int y = m_window.ybegin; y < m_window.yend; ++y)
+            use(y, integrate_row(y - m_window.ybegin));
+        clear_rows(m_window.height(), m_window.height() + 2);
+    }
+
+private:
+    const double* integrate_row(int row);
+    void clear_rows(int first, int end);
+
+    OIIO::ROI m_window;
+    size_t m_stride = 0;            ///< doubles a row: 4 a pixel, two past the window's end
+    std::vector<double> m_deltas;   ///< rows of the window and two past its end
+    std::vector<double> m_running;  ///< the deltas summed down the columns so far
+    std::vector<double> m_row;      ///< a row's light
+    std::vector<double> m_line;     ///< a run's light filtered along its row
+};
+
+}  // namespace defocus

@@ -1,0 +1,176 @@
+// Sub-aperture compositing against the thin lens by brute force: a near
+// object hides different parts of a far one from different points of the
+// lens.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <functional>
+
+#include <OpenImageIO/imagebufalgo.h>
+
+#include <defocus/composite/defocus_layers.h>
+
+#include "test_support.h"
+#include "thin_lens.h"
+
+using namespace defocus;
+using namespace defocus_test;
+using OIIO::ImageBuf;
+using OIIO::ROI;
+
+namespace {
+
+/// 85 mm f/1.4 focused at 3 m over a 600 px wide frame: a point at 1 m has
+/// a CoC 57 px across, one at 10 m 20 px.
+Camera lens_camera()
+{
+    Camera camera;
+    camera.focal_length_mm = 85;
+    camera.fstop = 1.4;
+    camera.sensor_width_mm = 36;
+    camera.focus_distance = 3;
+    return camera;
+}
+
+/// The frame: a 96 × 96 data window in the middle of a 600 × 400 display.
+const ROI frame(252, 348, 152, 248, 0, 1, 0, 4);
+const int centre_x = 300, centre_y = 200;
+
+using Shade = std::function<void(int x, int y, float* rgba)>;
+
+/// Planar layers over the frame, as the engine and the thin lens take them.
+struct Stack {
+    LayeredScene scene;
+    std::vector<LensLayer> lens;
+
+    Stack()
+    {
+        scene.source = "synthetic";
+        scene.spec = OIIO::ImageSpec(frame.width(), frame.height(), 4, OIIO::TypeFloat);
+        scene.spec.x = frame.xbegin;
+        scene.spec.y = frame.ybegin;
+        scene.spec.full_x = scene.spec.full_y = 0;
+        scene.spec.full_width = 600;
+        scene.spec.full_height = 400;
+    }
+
+    /// Adds a layer at `depth` (add them back to front).
+    void add(const char* name, float depth, const Shade& shade)
+    {
+        const CircleOfConfusion coc(lens_camera(), scene.spec.roi_full());
+        Layer layer { name, zero_image(frame, 4), zero_image(frame, 1) };
+        LensLayer seen { zero_image(frame, 4), zero_image(frame, 1) };
+        layer.color.specmod().alpha_channel = 3;
+        for (int y = frame.ybegin; y < frame.yend; ++y)
+            for (int x = frame.xbegin; x < frame.xend; ++x) {
+                float rgba[4] = { 0, 0, 0, 0 };
+                shade(x, y, rgba);
+                const float radius = float(0.5 * coc.diameter(depth, x, y));
+                layer.color.setpixel(x, y, rgba);
+                layer.depth.setpixel(x, y, &depth);
+                seen.color.setpixel(x, y, rgba);
+                seen.radius.setpixel(x, y, &radius);
+            }
+        scene.layers.push_back(std::move(layer));
+        lens.push_back(std::move(seen));
+        order_layers(scene, coc);
+    }
+
+    ImageBuf engine(int cells) const
+    {
+        SpreadOptions spread;
+        spread.aperture_cells = cells;
+        ImageBuf out;
+        REQUIRE(defocus_layers(out, scene, lens_camera(), spread));
+        return out;
+    }
+};
+
+/// A light 20 times brighter than the wall around it, at 10 m, behind
+/// vertical bars at 1 m, 4 px wide every 16 px; `bars` says which columns
+/// of bars there are (by index from the centre).
+Stack fence(const std::function<bool(int bar)>& bars)
+{
+    Stack stack;
+    stack.add("light", 10.0f, [](int x, int y, float* rgba) {
+        const bool light = std::hypot(x + 0.5 - centre_x, y + 0.5 - centre_y) < 3.0;
+        rgba[0] = rgba[1] = rgba[2] = light ? 1.0f : 0.05f;
+        rgba[3] = 1.0f;
+    });
+    stack.add("bars", 1.0f, [&](int x, int, float* rgba) {
+        const int from_centre = x - centre_x + 8;  // bar 0 covers the centre
+        const int bar = from_centre >= 0 ? from_centre / 16 : -((-from_centre + 15) / 16);
+        if (bars(bar) && from_centre - bar * 16 >= 6 && from_centre - bar * 16 < 10) {
+            rgba[0] = rgba[1] = rgba[2] = 0.01f;
+            rgba[3] = 1.0f;
+        }
+    });
+    return stack;
+}
+
+/// The light's bokeh: its 20 px CoC around the centre.
+const ROI bokeh(centre_x - 12, centre_x + 12, centre_y - 12, centre_y + 12, 0, 1, 0, 4);
+
+}  // namespace
+
+TEST_CASE("a fence before a far light cuts its shadow into the light's bokeh")
+{
+    const Stack stack = fence([](int) { return true; });
+    const ImageBuf exact = thin_lens(stack.lens, bokeh);
+    const double cells = psnr_over(stack.engine(0), exact, bokeh);
+    const double one = psnr_over(stack.engine(1), exact, bokeh);
+    WARN("fence, against the thin lens over the light's bokeh: " << cells
+         << " dB with cells, " << one << " dB with one cell");
+    CHECK(cells >= 35.0);
+    CHECK(one < cells - 5.0);
+}
+
+TEST_CASE("a near bar cuts the far light's bokeh on the side the thin lens says")
+{
+    // One bar right of the light: the parts of the lens that see the bar in
+    // front of the light are on one side, so it shades one side of the
+    // bokeh; which one is the thin lens's answer. One cell shows only the
+    // bar's blur, not its shadow.
+    const Stack stack = fence([](int bar) { return bar == 1; });
+    const ImageBuf exact = thin_lens(stack.lens, bokeh);
+    auto sides = [&](const ImageBuf& image) {
+        double left = 0.0, right = 0.0;
+        for (int y = bokeh.ybegin; y < bokeh.yend; ++y)
+            for (int x = bokeh.xbegin; x < bokeh.xend; ++x) {
+                float p[4];
+                image.getpixel(x, y, p);
+                (x < centre_x ? left : right) += p[1];
+            }
+        return right / left;
+    };
+    const double truth = sides(exact), cells = sides(stack.engine(0)),
+                 one = sides(stack.engine(1));
+    INFO("right over left: thin lens " << truth << ", cells " << cells << ", one cell " << one);
+    REQUIRE(std::abs(truth - 1.0) > 0.05);
+    CHECK((cells - 1.0) * (truth - 1.0) > 0.0);
+    CHECK(std::abs(cells - truth) < 0.3 * std::abs(truth - 1.0));
+    CHECK(std::abs(one - truth) > std::abs(cells - truth));
+}
+
+TEST_CASE("a blurred opaque edge over sharp stripes is what the thin lens sees")
+{
+    Stack stack;
+    // Stripes in focus (3 m), an opaque edge at 1.25 m: its CoC is 40 px.
+    stack.add("stripes", 3.0f, [](int x, int, float* rgba) {
+        rgba[0] = rgba[1] = rgba[2] = (x / 3) % 2 ? 1.0f : 0.05f;
+        rgba[3] = 1.0f;
+    });
+    stack.add("edge", 1.25f, [](int x, int, float* rgba) {
+        if (x < centre_x) {
+            rgba[0] = 0.3f;
+            rgba[1] = 0.2f;
+            rgba[2] = 0.1f;
+            rgba[3] = 1.0f;
+        }
+    });
+    const ROI band(centre_x - 20, centre_x + 20, centre_y - 20, centre_y + 20, 0, 1, 0, 4);
+    const ImageBuf exact = thin_lens(stack.lens, band);
+    const double cells = psnr_over(stack.engine(0), exact, band);
+    WARN("blurred edge over stripes, against the thin lens: " << cells << " dB");
+    CHECK(cells >= 35.0);
+}
