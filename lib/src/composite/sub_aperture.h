@@ -31,6 +31,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <OpenImageIO/imagebuf.h>
@@ -69,14 +70,14 @@ private:
     /// Room for each layer's change in each tile with cells that its light
     /// reaches.
     void allocate(const std::vector<SignedLayer>& layers);
-    /// Keeps the changes `sums` found over `band` in tile (column, row).
-    void keep(const BandSums& sums, const OIIO::ROI& band, int column, int row);
+    /// Keeps the changes `sums` found over its band in tile (column, row).
+    void keep(const BandSums& sums, int column, int row);
     /// Where tile t's pixels for layer l start in m_pixels, or -1.
     int64_t offset(size_t l, size_t t) const { return m_offset[l][t]; }
 
     CellTiles m_tiles;
     std::vector<std::vector<int64_t>> m_offset;  ///< per layer, per tile
-    std::vector<float> m_pixels;  ///< RGBA, CellTiles::size² a tile and layer
+    std::unique_ptr<float[]> m_pixels;  ///< RGBA, CellTiles::size² a tile and layer
     int m_most_cells = 0;
 };
 

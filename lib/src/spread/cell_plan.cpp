@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "util/parallel_rows.h"
+
 namespace defocus {
 
 namespace {
@@ -68,7 +70,7 @@ struct Runs {
     }
 };
 
-TileStats layer_stats(const SignedLayer& layer, const TileGrid& grid)
+TileStats layer_stats(const SignedLayer& layer, const TileGrid& grid, int nthreads)
 {
     const size_t n = size_t(grid.columns) * grid.rows;
     TileStats stats { std::vector<float>(n * 4, 0.0f), std::vector<float>(n * 4, 0.0f),
@@ -80,45 +82,49 @@ TileStats layer_stats(const SignedLayer& layer, const TileGrid& grid)
     std::vector<Runs> runs(n);
     const int size = CellTiles::size;
     const OIIO::ROI& roi = layer.roi;
-    for (int y = roi.ybegin; y < roi.yend; ++y) {
-        const int ty = floor_div(y - grid.anchor_y, size);
-        const float* rgba = layer.color + size_t(y - roi.ybegin) * roi.width() * 4;
-        const float* above = y > roi.ybegin ? rgba - size_t(roi.width()) * 4 : nullptr;
-        for (int x = roi.xbegin; x < roi.xend; ++x, rgba += 4) {
-            const int tx = floor_div(x - grid.anchor_x, size);
-            const size_t t = grid.index(tx, ty);
-            const bool opaque = rgba[3] >= 0.5f;
-            Runs& r = runs[t];
-            (opaque ? r.opaque : r.clear) += 1;
-            r.along_rows += x > roi.xbegin && (rgba[-1] >= 0.5f) != opaque;
-            r.along_columns += above && (above[(x - roi.xbegin) * 4 + 3] >= 0.5f) != opaque;
-            float* low = &stats.low[t * 4];
-            float* high = &stats.high[t * 4];
-            if (!seen[t]) {
-                seen[t] = 1;
-                const int tile_x = grid.anchor_x + tx * size, tile_y = grid.anchor_y + ty * size;
-                if (tile_x >= roi.xbegin && tile_x + size <= roi.xend && tile_y >= roi.ybegin
-                    && tile_y + size <= roi.yend)
-                    for (int c = 0; c < 4; ++c)
-                        low[c] = high[c] = rgba[c];
-            }
-            for (int c = 0; c < 4; ++c) {
-                low[c] = std::min(low[c], rgba[c]);
-                high[c] = std::max(high[c], rgba[c]);
-            }
-        }
-        const size_t row = size_t(y - roi.ybegin);
-        for (size_t k = layer.row_runs[row]; k < layer.row_runs[row + 1]; ++k) {
-            const PixelRun& run = layer.runs[k];
-            for (int x = run.x_begin; x < run.x_end;) {
+    // Each row of tiles is its own task: its pixels write only its tiles.
+    parallel_for_each_item(grid.y0, grid.y0 + grid.rows, [&](int64_t tile_row) {
+        const int ty = int(tile_row);
+        const int tile_top = grid.anchor_y + ty * size;
+        for (int y = std::max(roi.ybegin, tile_top); y < std::min(roi.yend, tile_top + size); ++y) {
+            const float* rgba = layer.color + size_t(y - roi.ybegin) * roi.width() * 4;
+            const float* above = y > roi.ybegin ? rgba - size_t(roi.width()) * 4 : nullptr;
+            for (int x = roi.xbegin; x < roi.xend; ++x, rgba += 4) {
                 const int tx = floor_div(x - grid.anchor_x, size);
                 const size_t t = grid.index(tx, ty);
-                stats.lit[t] = 1;
-                stats.radius[t] = std::max(stats.radius[t], std::abs(run.radius));
-                x = grid.anchor_x + (tx + 1) * size;
+                const bool opaque = rgba[3] >= 0.5f;
+                Runs& r = runs[t];
+                (opaque ? r.opaque : r.clear) += 1;
+                r.along_rows += x > roi.xbegin && (rgba[-1] >= 0.5f) != opaque;
+                r.along_columns += above && (above[(x - roi.xbegin) * 4 + 3] >= 0.5f) != opaque;
+                float* low = &stats.low[t * 4];
+                float* high = &stats.high[t * 4];
+                if (!seen[t]) {
+                    seen[t] = 1;
+                    const int tile_x = grid.anchor_x + tx * size;
+                    if (tile_x >= roi.xbegin && tile_x + size <= roi.xend
+                        && tile_top >= roi.ybegin && tile_top + size <= roi.yend)
+                        for (int c = 0; c < 4; ++c)
+                            low[c] = high[c] = rgba[c];
+                }
+                for (int c = 0; c < 4; ++c) {
+                    low[c] = std::min(low[c], rgba[c]);
+                    high[c] = std::max(high[c], rgba[c]);
+                }
+            }
+            const size_t row = size_t(y - roi.ybegin);
+            for (size_t k = layer.row_runs[row]; k < layer.row_runs[row + 1]; ++k) {
+                const PixelRun& run = layer.runs[k];
+                for (int x = run.x_begin; x < run.x_end;) {
+                    const int tx = floor_div(x - grid.anchor_x, size);
+                    const size_t t = grid.index(tx, ty);
+                    stats.lit[t] = 1;
+                    stats.radius[t] = std::max(stats.radius[t], std::abs(run.radius));
+                    x = grid.anchor_x + (tx + 1) * size;
+                }
             }
         }
-    }
+    }, nthreads);
     for (size_t t = 0; t < n; ++t)
         stats.width[t] = runs[t].width();
     return stats;
@@ -182,7 +188,7 @@ int automatic_cells_across(double radius, double width)
 }
 
 CellTiles plan_cell_tiles(const std::vector<SignedLayer>& layers, const OIIO::ROI& window,
-                          int cells)
+                          int cells, int nthreads)
 {
     const int size = CellTiles::size;
     CellTiles tiles;
@@ -213,7 +219,7 @@ CellTiles plan_cell_tiles(const std::vector<SignedLayer>& layers, const OIIO::RO
     // tile and its neighbours.
     std::vector<float> behind(n, 0.0f), needed(n, 0.0f);
     for (size_t l = 0; l < layers.size(); ++l) {
-        const TileStats stats = layer_stats(layers[l], grid);
+        const TileStats stats = layer_stats(layers[l], grid, nthreads);
         std::vector<float> occluded(n, 0.0f), varied(n, 0.0f);
         for (int ty = grid.y0; ty < grid.y0 + grid.rows; ++ty)
             for (int tx = grid.x0; tx < grid.x0 + grid.columns; ++tx) {

@@ -41,6 +41,6 @@ int automatic_cells_across(double radius, double width);
 /// layer lights. `cells` is the setting: 0 automatic, else about that many
 /// cells (a grid of ⌈√cells⌉ across); 1 marks none.
 CellTiles plan_cell_tiles(const std::vector<SignedLayer>& layers, const OIIO::ROI& window,
-                          int cells);
+                          int cells, int nthreads);
 
 }  // namespace defocus

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
+#include "util/parallel_rows.h"
 #include "util/simd.h"
 
 namespace defocus {
@@ -202,38 +204,60 @@ float slope(const float* rgba, const float* radius, size_t i, size_t before, siz
 }  // namespace
 
 void SignedLayer::set(const OIIO::ROI& pixels, const float* rgba, const float* radius,
-                      float aperture_extent)
+                      float aperture_extent, int nthreads)
 {
     roi = pixels;
     color = rgba;
     extent = aperture_extent;
-    runs.clear();
-    row_runs.assign(size_t(roi.height()) + 1, 0);
-    float largest = 0.0f;
-    const size_t width = size_t(roi.width());
-    for (int y = roi.ybegin; y < roi.yend; ++y) {
-        const size_t row = size_t(y - roi.ybegin) * width;
-        row_runs[size_t(y - roi.ybegin)] = runs.size();
-        auto lit = [&](size_t i) { return is_lit(rgba + (row + i) * 4); };
-        for (size_t x = 0; x < width;) {
-            if (!lit(x)) {
-                ++x;
-                continue;
+    const size_t width = size_t(roi.width()), height = size_t(roi.height());
+    // Blocks of rows find their runs side by side; row_runs first counts
+    // each row's, and the blocks are then joined in order.
+    constexpr size_t block_rows = 32;
+    const size_t blocks = (height + block_rows - 1) / block_rows;
+    std::vector<std::vector<PixelRun>> found(blocks);
+    std::vector<float> largest(blocks, 0.0f);
+    row_runs.assign(height + 1, 0);
+    parallel_for_each_item(0, int64_t(blocks), [&](int64_t b) {
+        for (size_t y = size_t(b) * block_rows; y < std::min(height, (size_t(b) + 1) * block_rows);
+             ++y) {
+            const size_t row = y * width, before = found[b].size();
+            auto lit = [&](size_t i) { return is_lit(rgba + (row + i) * 4); };
+            for (size_t x = 0; x < width;) {
+                if (!lit(x)) {
+                    ++x;
+                    continue;
+                }
+                const float r = radius[row + x];
+                size_t end = x + 1;
+                while (end < width && radius[row + end] == r && lit(end))
+                    ++end;
+                found[b].push_back({ roi.xbegin + int(x), roi.xbegin + int(end), r });
+                largest[b] = std::max(largest[b], std::abs(r));
+                x = end;
             }
-            const float r = radius[row + x];
-            size_t end = x + 1;
-            while (end < width && radius[row + end] == r && lit(end))
-                ++end;
-            runs.push_back({ roi.xbegin + int(x), roi.xbegin + int(end), r });
-            largest = std::max(largest, std::abs(r));
-            x = end;
+            row_runs[y] = found[b].size() - before;
         }
-    }
-    row_runs.back() = runs.size();
-    reach = largest * extent;
-    gradient.assign(size_t(roi.npixels()) * 2, 0.0f);
-    const size_t height = size_t(roi.height());
+    }, nthreads);
+    runs.clear();
+    size_t total = 0;
     for (size_t y = 0; y < height; ++y)
+        total += std::exchange(row_runs[y], total);
+    row_runs.back() = total;
+    runs.reserve(total);
+    for (const std::vector<PixelRun>& block : found)
+        runs.insert(runs.end(), block.begin(), block.end());
+    lit = OIIO::ROI();
+    for (size_t y = 0; y < height; ++y)
+        if (row_runs[y + 1] > row_runs[y]) {
+            const int row = roi.ybegin + int(y);
+            const OIIO::ROI line(runs[row_runs[y]].x_begin, runs[row_runs[y + 1] - 1].x_end, row,
+                                 row + 1);
+            lit = lit.defined() ? OIIO::roi_union(lit, line) : line;
+        }
+    reach = (blocks > 0 ? *std::max_element(largest.begin(), largest.end()) : 0.0f) * extent;
+    gradient.assign(size_t(roi.npixels()) * 2, 0.0f);
+    parallel_for_each_item(0, int64_t(height), [&](int64_t row) {
+        const size_t y = size_t(row);
         for (size_t x = 0; x < width; ++x) {
             const size_t i = y * width + x;
             if (!is_lit(rgba + i * 4))
@@ -242,6 +266,16 @@ void SignedLayer::set(const OIIO::ROI& pixels, const float* rgba, const float* r
             gradient[i * 2 + 1] = slope(rgba, radius, i, y > 0 ? i - width : i,
                                         y + 1 < height ? i + width : i);
         }
+    }, nthreads);
+}
+
+OIIO::ROI SignedLayer::lit_reach() const
+{
+    if (!lit.defined())
+        return lit;
+    // A footprint's corner deltas land up to a pixel past its edge.
+    const int r = int(std::ceil(reach)) + 2;
+    return OIIO::ROI(lit.xbegin - r, lit.xend + r, lit.ybegin - r, lit.yend + r);
 }
 
 void CellBand::reset(const OIIO::ROI& window)
@@ -255,13 +289,17 @@ void CellBand::reset(const OIIO::ROI& window)
 
 void CellBand::spread(const SignedLayer& layer, const ApertureCell& cell)
 {
+    m_box = OIIO::roi_intersection(layer.lit_reach(), m_window);
     spread_pixels(layer, cell, m_window, m_deltas.data(), m_stride, m_line);
 }
 
 const double* CellBand::integrate_row(int row)
 {
-    integrate_deltas(&m_deltas[size_t(row) * m_stride], m_running.data(), m_row.data(),
-                     m_window.width(), m_window.width() + 2);
+    // Columns left of the box hold no light of this layer, and the box
+    // ends at least two columns before the deltas' last column.
+    const size_t first = size_t(m_box.xbegin - m_window.xbegin) * 4;
+    integrate_deltas(&m_deltas[size_t(row) * m_stride + first], &m_running[first],
+                     &m_row[first], m_box.width(), m_box.width() + 2);
     return m_row.data();
 }
 

@@ -38,10 +38,15 @@ struct SignedLayer {
     std::vector<float> gradient;     ///< ∂ρ/∂x, ∂ρ/∂y a pixel, 0 across a step in depth
     float extent = 1.0f;             ///< how far the aperture reaches per unit of radius
     float reach = 0.0f;              ///< how far any pixel's light lands from it
+    OIIO::ROI lit;                   ///< the bounds of the lit pixels (undefined: none)
+
+    /// The pixels that this layer's light can land on.
+    OIIO::ROI lit_reach() const;
 
     /// `roi`'s pixels of colour `color` and signed radius `radius` (a float
     /// a pixel), as runs.
-    void set(const OIIO::ROI& roi, const float* color, const float* radius, float extent);
+    void set(const OIIO::ROI& roi, const float* color, const float* radius, float extent,
+             int nthreads);
 };
 
 /// The light of layers through a cell over a window of pixels, in double:
@@ -59,16 +64,23 @@ public:
     /// through the cell, so that it keeps its sum.
     void spread(const SignedLayer& layer, const ApertureCell& cell);
 
-    /// Calls use(y, light) for each row y of the window, top to bottom,
-    /// light being premultiplied RGBA, 4 doubles a pixel from the window's
-    /// first column; then the band is clear.
+    /// Calls use(y, x_begin, x_end, light) for each row y of the window
+    /// where the last spread layer's light lands, top to bottom: light is
+    /// premultiplied RGBA, 4 doubles a pixel from the window's first column,
+    /// and holds that row's light over columns [x_begin, x_end) (the window's
+    /// coordinates); elsewhere the light is nothing. Then the band is clear.
     template<typename Use>
     void integrate(Use&& use)
     {
-        std::fill(m_running.begin(), m_running.end(), 0.0);
-        for (int y = m_window.ybegin; y < m_window.yend; ++y)
-            use(y, integrate_row(y - m_window.ybegin));
-        clear_rows(m_window.height(), m_window.height() + 2);
+        if (m_box.width() <= 0 || m_box.height() <= 0)
+            return;
+        const int first = m_box.xbegin - m_window.xbegin;
+        std::fill(m_running.begin() + ptrdiff_t(first) * 4,
+                  m_running.begin() + ptrdiff_t(first + m_box.width() + 2) * 4, 0.0);
+        for (int y = m_box.ybegin; y < m_box.yend; ++y)
+            use(y, m_box.xbegin, m_box.xend, integrate_row(y - m_window.ybegin));
+        const int end = m_box.yend - m_window.ybegin;
+        clear_rows(end, std::min(end + 2, m_window.height() + 2));
     }
 
 private:
@@ -76,6 +88,7 @@ private:
     void clear_rows(int first, int end);
 
     OIIO::ROI m_window;
+    OIIO::ROI m_box;                ///< where the last spread layer's light lands
     size_t m_stride = 0;            ///< doubles a row: 4 a pixel, two past the window's end
     std::vector<double> m_deltas;   ///< rows of the window and two past its end
     std::vector<double> m_running;  ///< the deltas summed down the columns so far
