@@ -115,15 +115,30 @@ DEFOCUS_KERNEL void spread_run(const ApertureCell& s, int x0, int x1, double cy,
     }
 }
 
+/// How far light lands from its pixel along one axis, through the part of
+/// the lens [a, b] along it, for signed radii in `radii`.
+struct Offsets {
+    double low, high;
+};
+
+Offsets offsets(const float* radii, double a, double b)
+{
+    const double ends[4] = { radii[0] * a, radii[0] * b, radii[1] * a, radii[1] * b };
+    return { *std::min_element(ends, ends + 4), *std::max_element(ends, ends + 4) };
+}
+
 DEFOCUS_CLONES
 void spread_pixels(const SignedLayer& layer, const ApertureCell& cell, const OIIO::ROI& window,
                    double* deltas, size_t stride, std::vector<double>& line)
 {
-    const int reach = int(std::ceil(layer.reach)) + 1;
-    const int y_begin = std::max(layer.roi.ybegin, window.ybegin - reach),
-              y_end = std::min(layer.roi.yend, window.yend + reach);
-    const int x_begin = std::max(layer.roi.xbegin, window.xbegin - reach),
-              x_end = std::min(layer.roi.xend, window.xend + reach);
+    // Only pixels whose footprint through this cell can touch the window:
+    // the deltas of one wholly outside it cancel.
+    const Offsets ox = offsets(layer.radii, cell.u0, cell.u1),
+                  oy = offsets(layer.radii, cell.v0, cell.v1);
+    const int y_begin = std::max(layer.roi.ybegin, int(std::floor(window.ybegin - oy.high)) - 2),
+              y_end = std::min(layer.roi.yend, int(std::ceil(window.yend - oy.low)) + 2);
+    const int x_begin = std::max(layer.roi.xbegin, int(std::floor(window.xbegin - ox.high)) - 2),
+              x_end = std::min(layer.roi.xend, int(std::ceil(window.xend - ox.low)) + 2);
     const int w = window.width(), h = window.height();
     const size_t width = size_t(layer.roi.width());
     const double ux = 0.5 * (cell.u0 + cell.u1), uy = 0.5 * (cell.v0 + cell.v1);
@@ -215,7 +230,7 @@ void SignedLayer::set(const OIIO::ROI& pixels, const float* rgba, const float* r
     constexpr size_t block_rows = 32;
     const size_t blocks = (height + block_rows - 1) / block_rows;
     std::vector<std::vector<PixelRun>> found(blocks);
-    std::vector<float> largest(blocks, 0.0f);
+    std::vector<float> lowest(blocks, INFINITY), highest(blocks, -INFINITY);
     row_runs.assign(height + 1, 0);
     parallel_for_each_item(0, int64_t(blocks), [&](int64_t b) {
         for (size_t y = size_t(b) * block_rows; y < std::min(height, (size_t(b) + 1) * block_rows);
@@ -232,7 +247,8 @@ void SignedLayer::set(const OIIO::ROI& pixels, const float* rgba, const float* r
                 while (end < width && radius[row + end] == r && lit(end))
                     ++end;
                 found[b].push_back({ roi.xbegin + int(x), roi.xbegin + int(end), r });
-                largest[b] = std::max(largest[b], std::abs(r));
+                lowest[b] = std::min(lowest[b], r);
+                highest[b] = std::max(highest[b], r);
                 x = end;
             }
             row_runs[y] = found[b].size() - before;
@@ -254,7 +270,11 @@ void SignedLayer::set(const OIIO::ROI& pixels, const float* rgba, const float* r
                                  row + 1);
             lit = lit.defined() ? OIIO::roi_union(lit, line) : line;
         }
-    reach = (blocks > 0 ? *std::max_element(largest.begin(), largest.end()) : 0.0f) * extent;
+    radii[0] = blocks > 0 ? *std::min_element(lowest.begin(), lowest.end()) : 0.0f;
+    radii[1] = blocks > 0 ? *std::max_element(highest.begin(), highest.end()) : 0.0f;
+    if (radii[0] > radii[1])
+        radii[0] = radii[1] = 0.0f;
+    reach = std::max(std::abs(radii[0]), std::abs(radii[1])) * extent;
     gradient.assign(size_t(roi.npixels()) * 2, 0.0f);
     parallel_for_each_item(0, int64_t(height), [&](int64_t row) {
         const size_t y = size_t(row);

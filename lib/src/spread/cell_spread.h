@@ -37,6 +37,7 @@ struct SignedLayer {
     std::vector<size_t> row_runs;    ///< row y's runs start at row_runs[y - roi.ybegin]; one past
     std::vector<float> gradient;     ///< ∂ρ/∂x, ∂ρ/∂y a pixel, 0 across a step in depth
     float extent = 1.0f;             ///< how far the aperture reaches per unit of radius
+    float radii[2] = { 0.0f, 0.0f }; ///< the lowest and highest signed radius lit
     float reach = 0.0f;              ///< how far any pixel's light lands from it
     OIIO::ROI lit;                   ///< the bounds of the lit pixels (undefined: none)
 
