@@ -265,6 +265,24 @@ TEST_CASE("colour spaces and configs that cannot be used are one-line errors")
     }
 }
 
+TEST_CASE("an $OCIO that names no usable config is an error, never colour left unmanaged")
+{
+    const std::string dir = scratch_dir("color_env");
+    const std::string broken = dir + "/broken.ocio";
+    OIIO::Filesystem::write_text_file(broken, "not: [a config\n");
+    for (const std::string& env : { dir + "/gone.ocio", broken }) {
+        INFO(env);
+        setenv("OCIO", env.c_str(), 1);
+        FrameResult result;
+        std::string error;
+        const bool rendered = render_with(example_scene(), { { "focus", "4" } }, result, error);
+        unsetenv("OCIO");
+        CHECK_FALSE(rendered);
+        CHECK(one_line_error(error, env + ": colour config ($OCIO)"));
+        CHECK_THAT(error, Catch::Contains("unset OCIO"));
+    }
+}
+
 namespace {
 
 /// A 20x20 RGBA+Z render in `dir` that names its colour space only by its

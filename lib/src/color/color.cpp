@@ -86,6 +86,12 @@ ColorManagement::~ColorManagement() = default;
 ColorManagement::ColorManagement(ColorManagement&&) noexcept = default;
 ColorManagement& ColorManagement::operator=(ColorManagement&&) noexcept = default;
 
+bool ColorManagement::chosen(const std::string& explicit_file)
+{
+    const char* env = std::getenv("OCIO");
+    return !explicit_file.empty() || (env && *env);
+}
+
 bool ColorManagement::load(const std::string& explicit_file, std::string& error)
 {
     const char* env = std::getenv("OCIO");
@@ -106,24 +112,23 @@ bool ColorManagement::load(const std::string& explicit_file, std::string& error)
         if (m_path.empty())
             m_path = DEFOCUS_INSTALLED_OCIO_CONFIG;
     }
-    if (!Filesystem::exists(m_path)) {
-        error = format("{}: colour config ({}) not found", m_path, m_origin);
+    auto fail = [&](const std::string& problem) {
+        error = format("{}: colour config ({}) {}", m_path, m_origin, problem);
+        if (m_origin == "$OCIO")
+            error += " (unset OCIO to use the shipped config)";
         return false;
-    }
+    };
+    if (!Filesystem::exists(m_path))
+        return fail("not found");
     auto impl = std::make_unique<Impl>();
     try {
         impl->ocio = OCIO::Config::CreateFromFile(m_path.c_str());
         impl->ocio->validate();
     } catch (const OCIO::Exception& e) {
-        error = format("{}: colour config ({}) fails to load: {}", m_path, m_origin,
-                       Strutil::replace(e.what(), "\n", " ", true));
-        return false;
+        return fail("fails to load: " + Strutil::replace(e.what(), "\n", " ", true));
     }
-    if (!impl->oiio.reset(m_path)) {
-        error = format("{}: colour config ({}) fails to load: {}", m_path, m_origin,
-                       impl->oiio.geterror());
-        return false;
-    }
+    if (!impl->oiio.reset(m_path))
+        return fail("fails to load: " + impl->oiio.geterror());
     m_impl = std::move(impl);
     return true;
 }

@@ -47,6 +47,10 @@ public:
     /// False with `error` saying which file failed and why.
     bool load(const std::string& explicit_file, std::string& error);
 
+    /// Whether the user chose the config that load() takes (the argument
+    /// or $OCIO) rather than leaving it to the shipped one.
+    static bool chosen(const std::string& explicit_file);
+
     /// The file loaded, and how it was chosen ("--colorconfig", "$OCIO",
     /// "shipped").
     const std::string& path() const { return m_path; }
