@@ -450,6 +450,16 @@ TEST_CASE("colour: --preview writes an 8-bit image, and says once that the input
     CHECK(preview_spec.width == 320);
     CHECK(preview_spec.height == 180);
     CHECK(preview_spec.nchannels == 3);
+    // Tagged as the display encoding it holds, and read back so: not as the
+    // linear space the frame was in.
+    CHECK_FALSE(Strutil::icontains(preview_spec.get_string_attribute("oiio:ColorSpace"), "linear"));
+    CHECK(preview_spec.get_string_attribute("colorInteropID").empty());
+    write_uniform_image(dir + "/z.exr", { "Z" }, { 4.0f }, 320, 180);
+    std::string again;
+    REQUIRE(run_defocus(dir + "/preview.png --depth " + dir + "/z.exr -o " + dir
+                            + "/again.exr" + camera + " -v",
+                        again) == 0);
+    CHECK(Strutil::contains(again, "input 'sRGB - "));
     // OIIO tags the EXR input with its generic "Linear", taken as linear
     // Rec.709: a guess, said once.
     CHECK(count_of(log, "input colour space 'Linear Rec.709 (sRGB)' is a guess") == 1);

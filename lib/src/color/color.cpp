@@ -14,6 +14,7 @@
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/sysutil.h>
 
+#include <defocus/color/primaries.h>
 #include <defocus/shot/setting_words.h>
 
 namespace OCIO = OCIO_NAMESPACE;
@@ -289,6 +290,12 @@ bool ColorManagement::display(ImageBuf& dst, const ImageBuf& src, const std::str
         error = format("display {} / {}: {}", display, view, dst.geterror());
         return false;
     }
+    // The pixels are now the view's encoding, not the space of `src`,
+    // whose tags they were given.
+    const std::string encoding
+        = m_impl->ocio->getDisplayViewColorSpaceName(display.c_str(), view.c_str());
+    dst.specmod().attribute("oiio:ColorSpace", encoding);
+    record_color_space(dst.specmod(), *this, encoding);
     return true;
 }
 
