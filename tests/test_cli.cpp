@@ -159,6 +159,9 @@ TEST_CASE("every bad input ends in a one-line error and no output")
     write_uniform_image(no_colour, { "R", "G", "Z" }, { 1, 1, 2 });
     const std::string no_depth = dir + "/no_depth.exr";
     write_uniform_image(no_depth, { "R", "G", "B", "A" }, { 1, 1, 1, 1 });
+    const std::string with_coc = dir + "/with_coc.exr";
+    write_uniform_image(with_coc, { "R", "G", "B", "A", "Z", "ZFront", "coc" },
+                        { 1, 1, 1, 1, 3, 3, 2 });
 
     struct Case {
         std::string args, mentions;
@@ -223,6 +226,21 @@ TEST_CASE("every bad input ends in a one-line error and no output")
           "--data-channels auto,matId: the input has no channel matId" },
         { example_scene() + " -o " + out + camera + " --data-channels Z:sum",
           "--data-channels: unknown kind 'sum' for channel Z" },
+        // Channels of one name, and formats that cannot name channels:
+        // refused before rendering, never written as channelN or dropped.
+        { with_coc + " -o " + out + camera + " --aov coc --data-channels auto,coc:average",
+          "--data-channels auto,coc:average: the data channel coc and --aov coc would both be "
+          "written as channel coc" },
+        { with_coc + " -o " + out + camera + " --data-channels Z,ZFront:average",
+          "--data-channels Z,ZFront:average: the data channel ZFront and the data channel Z's "
+          "ZFront would both be written as channel ZFront" },
+        { example_scene() + " -o " + dir + "/out.tif" + camera + " --aov coc",
+          "out.tif: tiff files do not keep channel names, which --aov coc needs: write OpenEXR "
+          "(.exr)" },
+        { example_scene() + " -o " + dir + "/out.png" + camera + " --aov coc",
+          "out.png: png files do not keep channel names" },
+        { example_scene() + " -o " + dir + "/out.jpg" + camera + " --data-channels auto",
+          "out.jpg: jpeg files do not keep channel names, which --data-channels auto needs" },
         // Conflicting or unused options.
         { example_scene() + " -o " + out + camera + " --crop --grow",
           "--crop and --grow contradict each other" },
@@ -245,7 +263,7 @@ TEST_CASE("every bad input ends in a one-line error and no output")
     }
     std::vector<std::string> files;
     Filesystem::get_directory_entries(dir, files);
-    CHECK(files.size() == 3);  // only the inputs written above
+    CHECK(files.size() == 4);  // only the inputs written above
 }
 
 TEST_CASE("options take --option=value as well as --option value")

@@ -1,5 +1,7 @@
 #include <defocus/render_frame.h>
 
+#include <map>
+
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/timer.h>
@@ -244,12 +246,39 @@ bool spread_fits(const Shot& shot, int frame, std::string& error)
     return false;
 }
 
+/// Whether each channel the output gains has a name of its own: a second
+/// channel of one name would be written as "channelN".
+bool distinct_channel_names(const Shot& shot, const DataPlan& plan, std::string& error)
+{
+    std::map<std::string, std::string> owner
+        = { { "R", "the colour" }, { "G", "the colour" }, { "B", "the colour" },
+            { "A", "the colour" } };
+    if (shot.output == OutputKind::Image && shot.aov != Aov::None)
+        owner[aov_name(shot.aov)] = mention("aov", aov_name(shot.aov));
+    const std::vector<std::string> names = plan.output_channels();
+    for (size_t i = 0; i < names.size(); ++i) {
+        const std::string& name = names[i];
+        // The depth's two channels come first.
+        const std::string which = plan.depth && i == 1 ? "the data channel Z's ZFront"
+                                                       : "the data channel " + name;
+        const auto [it, added] = owner.emplace(name, which);
+        if (!added) {
+            error = format("{}: {} and {} would both be written as channel {}",
+                           mention("data-channels", shot.data_channels), which, it->second,
+                           name);
+            return false;
+        }
+    }
+    return true;
+}
+
 /// The data channels `shot` carries from the scene whose header is `input`;
 /// false with `error` naming the files.
 bool frame_data_plan(const Shot& shot, int frame, const ImageSpec& input, DataPlan& plan,
                      std::string& error)
 {
-    if (plan_data_channels(input, shot.data_channels, plan, error))
+    if (plan_data_channels(input, shot.data_channels, plan, error)
+        && distinct_channel_names(shot, plan, error))
         return true;
     error = format("{}: {}", Strutil::join(frame_inputs(shot, frame), " "), error);
     return false;

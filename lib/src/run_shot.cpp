@@ -40,8 +40,14 @@ std::vector<int> without_existing(const Shot& shot, const RunRequest& request,
 bool check_outputs(const Shot& shot, const RunRequest& request, const RunPlan& plan,
                    std::string& error)
 {
+    std::vector<std::string> named;
+    if (shot.output == OutputKind::Image && shot.aov != Aov::None)
+        named.push_back(mention("aov", aov_name(shot.aov)));
+    if (shot.data_channels != Shot().data_channels)
+        named.push_back(mention("data-channels", shot.data_channels));
+    const std::string named_channels = Strutil::join(named, " and ");
     for (size_t i = 0; i < plan.outputs.size(); ++i) {
-        if (!check_output(plan.outputs[i], shot.compression, error, shot.deep))
+        if (!check_output(plan.outputs[i], shot.compression, error, shot.deep, named_channels))
             return false;
         for (size_t s = 0; s < request.sides.size(); ++s) {
             const std::vector<std::string>& files = plan.side_files[s];

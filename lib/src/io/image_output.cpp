@@ -162,7 +162,7 @@ std::string deep_compression(const std::string& given, const std::string& inheri
 }
 
 bool check_output(const std::string& filename, const std::string& compression,
-                  std::string& error, bool deep)
+                  std::string& error, bool deep, const std::string& named_channels)
 {
     auto fail = [&](const std::string& why) {
         error = Strutil::fmt::format("{}: {}", filename, why);
@@ -187,6 +187,12 @@ bool check_output(const std::string& filename, const std::string& compression,
     if (deep && !out->supports("deepdata"))
         return fail(Strutil::fmt::format("a deep result is written as OpenEXR (.exr), not {}",
                                          format));
+    // TIFF writes no channel names, JPEG drops channels past the fourth,
+    // and PNG refuses them only once the frame is rendered.
+    if (!named_channels.empty() && format != "openexr")
+        return fail(Strutil::fmt::format(
+            "{} files do not keep channel names, which {} needs: write OpenEXR (.exr)", format,
+            named_channels));
     if (compression.empty())
         return true;
     const std::string name = Strutil::lower(compression.substr(0, compression.find(':')));

@@ -34,10 +34,12 @@ void remove_temporaries_on_interrupt(const char* program);
 /// is done: its folder exists and is writable, a format writes its
 /// extension, and `compression` ("" for the default) is one that format
 /// knows; for a `deep` image, the format is OpenEXR and the compression one
-/// of deep_compressions(). Otherwise `error` names the file and the
-/// problem.
+/// of deep_compressions(); where `named_channels` names the settings that
+/// add channels known by name ("" for none), the format keeps channel
+/// names. Otherwise `error` names the file and the problem.
 bool check_output(const std::string& filename, const std::string& compression,
-                  std::string& error, bool deep = false);
+                  std::string& error, bool deep = false,
+                  const std::string& named_channels = "");
 
 /// The compressions deep EXR files are written with.
 const std::set<std::string>& deep_compressions();
