@@ -208,6 +208,26 @@ bool sorted_and_disjoint(const ImageBuf& deep)
     return true;
 }
 
+/// The samples of `deep` that add less than 1e-6 to every channel of their
+/// pixel through the samples in front of them: the spreads' faint tails,
+/// and whatever lies behind an opaque sample.
+int64_t empty_samples(const ImageBuf& deep)
+{
+    const DeepData& data = *deep.deepdata();
+    int64_t empty = 0;
+    for (int64_t p = 0; p < data.pixels(); ++p) {
+        float through = 1.0f;
+        for (int s = 0; s < data.samples(p); ++s) {
+            float largest = 0.0f;
+            for (int c = 0; c < 4; ++c)
+                largest = std::max(largest, std::abs(data.deep_value(p, c, s)));
+            empty += through * largest < 1e-6f;
+            through *= 1.0f - std::clamp(data.deep_value(p, 3, s), 0.0f, 1.0f);
+        }
+    }
+    return empty;
+}
+
 /// The largest difference between two flat images over their union.
 float largest_difference(const ImageBuf& a, const ImageBuf& b)
 {
@@ -254,6 +274,7 @@ TEST_CASE("a deep result's samples are sorted and disjoint, and flatten to the f
         CHECK(out.spec().channelnames
               == std::vector<std::string> { "R", "G", "B", "A", "Z", "ZBack" });
         CHECK(sorted_and_disjoint(out));
+        CHECK(empty_samples(out) == 0);
         const ImageBuf expected = rendered(scene, flat);
         ROI window = out.roi();
         window.chend = 4;
