@@ -189,6 +189,11 @@ TEST_CASE("every bad input ends in a one-line error and no output")
         { no_colour + " -o " + out + camera, "no B channel" },
         { no_depth + " -o " + out + camera, "no Z channel" },
         { no_depth + " -o " + out + camera + " --depth depth.Z", "--depth depth.Z: no such channel" },
+        // --depth is the input's: a holdout without depths is told what a
+        // holdout takes.
+        { example_scene() + " -o " + out + camera + " --holdout " + no_depth,
+          "no_depth.exr: part 0 has no Z channel (channels: R,G,B,A): --holdout takes a deep "
+          "EXR or a flat render with a Z channel" },
         { example_scene() + " -o " + out + " --focal 50 --fstop abc --focus 4",
           "--fstop: 'abc' is not a number" },
         { example_scene() + " -o " + out + " --focal 50 --fstop 1.8 --focus -2",

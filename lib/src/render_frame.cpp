@@ -381,6 +381,10 @@ bool read_holdout(const Shot& shot, int frame, const ImageSpec& scene,
     ReadOptions options;
     options.depth_scale  = shot.read.depth_scale;
     options.memory_limit = shot.read.memory_limit;
+    // --depth is the input's: a holdout carries its own depths.
+    options.missing_depth_remedy = format(
+        "{} takes a deep EXR or a flat render with a Z channel, whose depths say what the "
+        "holdout hides", mention("holdout"));
     Scene read;
     if (!read_scene({ frame_path(shot.holdout, source_frame(shot, frame)) }, options, read,
                     error))

@@ -208,11 +208,14 @@ bool join_flat_render(const std::string& filename, const ReadOptions& options,
             const std::string missing =
                 options.depth.empty() ? missing_channel(first.spec, options.layer) : options.depth;
             const bool no_depth = first.channels.has_color();
+            const std::string remedy
+                = !options.missing_depth_remedy.empty()
+                      ? options.missing_depth_remedy
+                      : format("give its depth with {} or {}", mention("depth", "FILE"),
+                               mention("depth", "CHANNEL"));
             error = format("{}: {} has no {} channel (channels: {}){}", filename, first.label,
                            missing, Strutil::join(first.spec.channelnames, ","),
-                           no_depth ? format(": give its depth with {} or {}",
-                                             mention("depth", "FILE"), mention("depth", "CHANNEL"))
-                                    : "");
+                           no_depth ? ": " + remedy : "");
             return false;
         }
     }

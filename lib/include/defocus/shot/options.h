@@ -52,6 +52,9 @@ struct ReadOptions {
     std::vector<std::string> data_channels;
     /// What a file may ask to allocate (the shot's --memory-limit).
     MemoryLimit memory_limit;
+    /// What an error tells the user to do for a file of colour without
+    /// depth ("": give it with --depth, as for an input).
+    std::string missing_depth_remedy;
 };
 
 /// How flat renders and deep images are cut into depth layers.
