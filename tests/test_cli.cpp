@@ -301,6 +301,15 @@ TEST_CASE("options take --option=value as well as --option value")
     const ImageBuf equals = read_image(dir + "/equals.exr"),
                    polygon = read_image(dir + "/polygon.exr");
     CHECK(ImageBufAlgo::compare(equals, polygon, 0.0f, 0.0f).maxerror == 0.0);
+
+    // A lone "--" ends the options: what follows is a file, even "-x.exr".
+    REQUIRE(Filesystem::copy(example_scene(), dir + "/-scene.exr"));
+    REQUIRE(run(format("cd {} && {} -o ended.exr -d float{} --aperture polygon -- -scene.exr",
+                       dir, DEFOCUS_BIN, camera),
+                log)
+            == 0);
+    CHECK(ImageBufAlgo::compare(read_image(dir + "/ended.exr"), polygon, 0.0f, 0.0f).maxerror
+          == 0.0);
 }
 
 TEST_CASE("the help teaches the options")

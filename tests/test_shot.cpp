@@ -142,6 +142,11 @@ TEST_CASE("frame patterns in oiiotool's syntax")
     shot.inputs = { dir + "/none.#.exr" };
     CHECK_FALSE(shot_frames(shot, frames, error));
     CHECK(contains(error, "no files match"));
+    // '#' is four digits: one-digit files get a hint at '@'.
+    shot.inputs = { dir + "/seq.#.exr" };
+    CHECK_FALSE(shot_frames(shot, frames, error));
+    CHECK(one_line_error(error, dir + "/seq.#.exr: no files match, but " + dir
+                                    + "/seq.@.exr matches 3 (seq.3.exr to seq.6.exr)"));
 
     // Keyframes on a still need frames to be taken at.
     shot.inputs = { "still.exr" };

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <cstring>
 #include <iostream>
 #include <regex>
 #include <sstream>
@@ -180,8 +181,16 @@ int parse_arguments(ArgParse& ap, int argc, const char* argv[])
     static const std::regex option_value("(--[a-z][a-z0-9-]*)=(.*)");
     std::vector<std::string> args;
     std::cmatch m;
+    bool options_ended = false;
     for (int i = 0; i < argc; ++i) {
-        if (i > 0 && std::regex_match(argv[i], m, option_value)) {
+        // After a lone "--", as POSIX tools take it, every word is a file:
+        // ArgParse takes words that begin with '-' as options, and
+        // "./-name" is the same file.
+        if (i > 0 && !options_ended && std::strcmp(argv[i], "--") == 0) {
+            options_ended = true;
+        } else if (options_ended) {
+            args.emplace_back(argv[i][0] == '-' ? std::string("./") + argv[i] : argv[i]);
+        } else if (i > 0 && std::regex_match(argv[i], m, option_value)) {
             args.push_back(m[1]);
             args.push_back(m[2]);
         } else {

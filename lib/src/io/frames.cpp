@@ -263,6 +263,27 @@ std::vector<int> frames_on_disk(const std::string& pattern)
     return scan_frames(numbering).value_or(std::vector<int>());
 }
 
+/// What to say when no file matches `pattern`: its files may be numbered
+/// without the padding it asks for ('#' is four digits).
+std::string unpadded_hint(const std::string& pattern)
+{
+    FrameNumbering numbering;
+    if (parse_numbering(pattern, numbering) && numbering.width > 1) {
+        numbering.width = 1;
+        const std::vector<int> found = scan_frames(numbering).value_or(std::vector<int>());
+        if (!found.empty()) {
+            const std::string folder = Filesystem::parent_path(numbering.prefix);
+            auto name = [&](int frame) {
+                return numbering.path(frame).substr(folder.empty() ? 0 : folder.size() + 1);
+            };
+            return format(", but {}@{} matches {} ({} to {})", numbering.prefix,
+                          numbering.suffix, found.size(), name(found.front()),
+                          name(found.back()));
+        }
+    }
+    return format(" (give {} to name them)", mention("frames"));
+}
+
 /// A shot's frame patterns, and which of their files are on disk. A check
 /// of the whole shot asks about every frame (up to a million) of each
 /// pattern: one listing of the pattern's folder costs less than a lookup of
@@ -464,8 +485,7 @@ bool shot_frames(const Shot& shot, std::vector<int>& frames, std::string& error,
         if (range.empty()) {
             const std::vector<int> found = frames_on_disk(first);
             if (found.empty()) {
-                error = format("{}: no files match (give {} to name them)", first,
-                               mention("frames"));
+                error = format("{}: no files match{}", first, unpadded_hint(first));
                 return false;
             }
             range = found.front() == found.back() ? std::to_string(found.front())
