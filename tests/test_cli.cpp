@@ -121,6 +121,10 @@ TEST_CASE("a deep result is written as a deep EXR: half colour, float depths, zi
     CHECK(spec.channelformat(4) == TypeFloat);
     // The example's zip becomes zips, which deep files are written with.
     CHECK(spec.get_string_attribute("compression") == "zips");
+    // The deep image's making is a stage of its own, not "colour out".
+    REQUIRE(run_defocus(example_scene() + " -o " + dir + "/timed.exr" + camera + " --deep -v",
+                        log) == 0);
+    CHECK(count_of(log, "  deep image ") == 1);
     CHECK_THAT(spec.get_string_attribute("Exif:ImageHistory"), Catch::EndsWith(" --deep"));
     REQUIRE(run_defocus(example_scene() + " -o " + out + camera + " --deep --skip-existing",
                         log) == 0);
@@ -509,6 +513,8 @@ TEST_CASE("colour: --preview writes an 8-bit image, and says once that the input
                             + "/again.exr" + camera + " -v",
                         again) == 0);
     CHECK(Strutil::contains(again, "input 'sRGB - "));
+    // An 8-bit input's type does not fit OpenEXR: -v names the half written.
+    CHECK(Strutil::contains(again, "data window, half)"));
     // OIIO tags the EXR input with its generic "Linear", taken as linear
     // Rec.709: a guess, said once.
     CHECK(count_of(log, "input colour space 'Linear Rec.709 (sRGB)' is a guess") == 1);

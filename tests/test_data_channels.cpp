@@ -11,6 +11,7 @@
 #include <OpenImageIO/strutil.h>
 
 #include <defocus/composite/data_channels.h>
+#include <defocus/frame_report.h>
 #include <defocus/io/image_output.h>
 
 #include "test_support.h"
@@ -320,6 +321,13 @@ TEST_CASE("data channels leave the colour as it is, and only what is asked is ca
     };
     CHECK(noted(camera));
     CHECK_FALSE(noted(with_data("Z")));
+    // -v says what is carried, and as what.
+    FrameResult result;
+    std::string error;
+    const Settings carried = with_data("objectId:id,P.x:average");
+    REQUIRE(render_with(scene, carried, result, error));
+    CHECK_THAT(frame_report(result, shot_with({ scene }, carried), "out.exr"),
+               Catch::Contains("  data channels carried: objectId (id), P.x (average)\n"));
     const ImageBuf depth_only = rendered(scene, with_data("Z"));
     CHECK(depth_only.spec().channelnames == std::vector<std::string>({ "R", "G", "B", "A", "Z", "ZFront" }));
 }

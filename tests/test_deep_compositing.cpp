@@ -12,6 +12,8 @@
 #include <defocus/io/frames.h>
 #include <defocus/optics/camera.h>
 
+#include <defocus/frame_report.h>
+
 #include "test_support.h"
 
 using namespace defocus;
@@ -105,6 +107,12 @@ TEST_CASE("a deep card in front holds out the blurred wall behind it, its spread
     Settings behind = camera;
     behind.push_back({ "holdout", card(dir, 8.0f, 1.0f) });
     CHECK(worst(plain, 1.0f, rendered(scene, behind), 0, width) == 0.0f);
+    // -v names the holdout.
+    FrameResult result;
+    std::string error;
+    REQUIRE(render_with(scene, behind, result, error));
+    CHECK_THAT(frame_report(result, shot_with({ scene }, behind), "out.exr"),
+               Catch::Contains("  holdout: " + behind.back().second + " ("));
 }
 
 TEST_CASE("a holdout sequence is one of the shot's: a missing frame of it is missing, or held")

@@ -32,8 +32,9 @@ std::string frame_report(const FrameResult& frame, const Shot& shot, const std::
     r += "  " + frame.color.summary + "\n";
     if (!frame.slicing.empty())
         r += "  " + frame.slicing + "\n";
-    if (!frame.edges.empty())
-        r += "  " + frame.edges + "\n";
+    for (const std::string* line : { &frame.edges, &frame.holdout, &frame.data })
+        if (!line->empty())
+            r += "  " + *line + "\n";
     if (!frame.layers.empty())
         r += "  layers, back to front:\n";
     int64_t slow = 0, covered = 0;

@@ -1,7 +1,5 @@
 #include <defocus/render_frame.h>
 
-#include <map>
-
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/timer.h>
@@ -246,42 +244,24 @@ bool spread_fits(const Shot& shot, int frame, std::string& error)
     return false;
 }
 
-/// Whether each channel the output gains has a name of its own: a second
-/// channel of one name would be written as "channelN".
-bool distinct_channel_names(const Shot& shot, const DataPlan& plan, std::string& error)
-{
-    std::map<std::string, std::string> owner
-        = { { "R", "the colour" }, { "G", "the colour" }, { "B", "the colour" },
-            { "A", "the colour" } };
-    if (shot.output == OutputKind::Image && shot.aov != Aov::None)
-        owner[aov_name(shot.aov)] = mention("aov", aov_name(shot.aov));
-    const std::vector<std::string> names = plan.output_channels();
-    for (size_t i = 0; i < names.size(); ++i) {
-        const std::string& name = names[i];
-        // The depth's two channels come first.
-        const std::string which = plan.depth && i == 1 ? "the data channel Z's ZFront"
-                                                       : "the data channel " + name;
-        const auto [it, added] = owner.emplace(name, which);
-        if (!added) {
-            error = format("{}: {} and {} would both be written as channel {}",
-                           mention("data-channels", shot.data_channels), which, it->second,
-                           name);
-            return false;
-        }
-    }
-    return true;
-}
-
 /// The data channels `shot` carries from the scene whose header is `input`;
 /// false with `error` naming the files.
 bool frame_data_plan(const Shot& shot, int frame, const ImageSpec& input, DataPlan& plan,
                      std::string& error)
 {
-    if (plan_data_channels(input, shot.data_channels, plan, error)
-        && distinct_channel_names(shot, plan, error))
-        return true;
-    error = format("{}: {}", Strutil::join(frame_inputs(shot, frame), " "), error);
-    return false;
+    const std::string aov = shot.output == OutputKind::Image && shot.aov != Aov::None
+                                ? aov_name(shot.aov)
+                                : "";
+    const std::string files = Strutil::join(frame_inputs(shot, frame), " ");
+    if (!plan_data_channels(input, shot.data_channels, plan, error)) {
+        error = format("{}: {}", files, error);
+        return false;
+    }
+    if (!plan.distinct_names(aov, error)) {
+        error = format("{}: {}: {}", files, mention("data-channels", shot.data_channels), error);
+        return false;
+    }
+    return true;
 }
 
 /// How a frame's files are read, with the data channels its shot carries.
@@ -475,9 +455,10 @@ bool deep_frame(const Shot& shot, int frame, const ApertureImages& images,
         if (!color.config->convert(samples, color.working, color.output, error, nthreads))
             return false;
     }
+    out.timings.emplace_back("colour out", timer.lap());
     out.pixel_type = deep_color_type(shot, layered.spec);
     out.image = deep_buffer(std::move(deep), layered.spec, out.pixel_type, nthreads);
-    out.timings.emplace_back("colour out", timer.lap());
+    out.timings.emplace_back("deep image", timer.lap());
     describe_output(out.image.specmod(), layered.spec, shot, out.camera, color, frame);
     return true;
 }
@@ -527,6 +508,12 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
         if (!read_holdout(shot, frame, layered.spec, layered.holdout, error)
             || !frame_data_plan(shot, frame, layered.spec, plan, error))
             return false;
+        if (layered.holdout)
+            out.holdout = format("holdout: {} ({} samples in {} pixels)",
+                                 frame_path(shot.holdout, source_frame(shot, frame)),
+                                 layered.holdout->samples.size(),
+                                 layered.holdout->roi.npixels());
+        out.data = plan.summary();
         const double bytes = spread_bytes(layered);
         if (!shot.read.memory_limit.allows(bytes)) {
             error = shot.read.memory_limit.exceeded(

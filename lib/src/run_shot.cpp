@@ -147,7 +147,7 @@ ScheduleResult run_plan(const Shot& shot, const ShotAssets& assets, const RunPla
                     && !request.sides[s].write(result, plan.side_files[s][i], error))
                     return false;
             if (!write_image_atomic(result.image, plan.outputs[i], result.pixel_type, "", error,
-                                    result.data_channels))
+                                    result.data_channels, &result.pixel_type))
                 return false;
             result.timings.emplace_back("write", write_timer());
             return true;

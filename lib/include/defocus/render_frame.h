@@ -31,7 +31,7 @@ struct FrameResult {
     /// The result in the output colour space, with the input's metadata
     /// and the settings used (defocus:*, oiio:ColorSpace, compression).
     OIIO::ImageBuf image;
-    OIIO::TypeDesc pixel_type;  ///< to write it as
+    OIIO::TypeDesc pixel_type;  ///< to write it as; once written, the type the file took
     /// The last channels of `image` that are data (composite/data_channels.h),
     /// written as float whatever pixel_type is.
     int data_channels = 0;
@@ -39,6 +39,8 @@ struct FrameResult {
     std::vector<std::string> notes;  ///< how reading took what the files did not say
     std::string slicing;  ///< how flat or deep input was cut into layers ("" = not)
     std::string edges;    ///< how the layers were extended past the data window ("" = not)
+    std::string holdout;  ///< the holdout that cut the result ("" = none)
+    std::string data;     ///< the data channels carried, and as what ("" = none)
     std::vector<LayerReport> layers;
     /// How much of the frame was composited per part of the aperture.
     SubApertureReport cells;

@@ -102,6 +102,40 @@ std::vector<std::string> DataPlan::output_channels() const
     return names;
 }
 
+bool DataPlan::distinct_names(const std::string& aov, std::string& error) const
+{
+    std::map<std::string, std::string> owner
+        = { { "R", "the colour" }, { "G", "the colour" }, { "B", "the colour" },
+            { "A", "the colour" } };
+    if (!aov.empty())
+        owner[aov] = mention("aov", aov);
+    const std::vector<std::string> names = output_channels();
+    for (size_t i = 0; i < names.size(); ++i) {
+        // The depth's two channels come first.
+        const std::string which = depth && i == 1 ? "the data channel Z's ZFront"
+                                                  : "the data channel " + names[i];
+        const auto [it, added] = owner.emplace(names[i], which);
+        if (!added) {
+            error = format("{} and {} would both be written as channel {}", which, it->second,
+                           names[i]);
+            return false;
+        }
+    }
+    return true;
+}
+
+std::string DataPlan::summary() const
+{
+    std::vector<std::string> carried;
+    if (depth)
+        carried.push_back("Z (coverage-weighted) and ZFront (the front-most layer's)");
+    for (const DataChannel& channel : channels)
+        carried.push_back(format("{} ({})", channel.name, data_kind_name(channel.kind)));
+    for (const CryptoSet& set : crypto)
+        carried.push_back(format("{} (cryptomatte, {} ranks)", set.name, set.ranks()));
+    return carried.empty() ? "" : "data channels carried: " + Strutil::join(carried, ", ");
+}
+
 bool plan_data_channels(const ImageSpec& input, const std::string& setting, DataPlan& plan,
                         std::string& error)
 {

@@ -304,7 +304,7 @@ bool write_text_atomic(const std::string& filename, const std::string& text,
 
 bool write_image_atomic(const ImageBuf& image, const std::string& filename,
                         TypeDesc type, const std::string& compression,
-                        std::string& error, int float_channels)
+                        std::string& error, int float_channels, TypeDesc* written)
 {
     ImageSpec spec = image.spec();
     if (type != TypeUnknown && !spec.deep) {
@@ -319,12 +319,20 @@ bool write_image_atomic(const ImageBuf& image, const std::string& filename,
     if (!compression.empty())
         spec.attribute("compression", compression);
     return write_atomic(filename, [&](ImageOutput& out, const std::string& tmp) {
+        // A format takes the nearest type it has (OpenEXR: half for 8 bits).
+        auto open = [&](const ImageSpec& opened) {
+            if (!out.open(tmp, opened))
+                return false;
+            if (written)
+                *written = out.spec().format;
+            return true;
+        };
         if (out.supports("displaywindow")) {
             ImageBuf half;
             if (spec.format == TypeHalf && spec.channelformats.empty() && !spec.deep
                 && convert_to_half(image, half))
-                return out.open(tmp, spec) && half.write(&out);
-            return out.open(tmp, spec) && image.write(&out);
+                return open(spec) && half.write(&out);
+            return open(spec) && image.write(&out);
         }
         // Formats without a display window (PNG, JPEG, ...) get the picture
         // a viewer shows: the display window.
@@ -337,7 +345,7 @@ bool write_image_atomic(const ImageBuf& image, const std::string& filename,
         framed_spec.full_x = framed_spec.full_y = 0;
         framed.specmod().x = framed.specmod().y = 0;
         framed.specmod().full_x = framed.specmod().full_y = 0;
-        return out.open(tmp, framed_spec) && framed.write(&out);
+        return open(framed_spec) && framed.write(&out);
     }, error);
 }
 

@@ -77,10 +77,12 @@ bool write_text_atomic(const std::string& filename, const std::string& text,
 /// without a display window (PNG, JPEG) gets the display window's pixels.
 /// A deep image keeps its own channel types; the last `float_channels`
 /// channels (data: IDs are float bits) are written as float whatever
-/// `type` is, where the format has a type per channel.
+/// `type` is, where the format has a type per channel. `written`, where
+/// given, is set to the type the format took.
 bool write_image_atomic(const OIIO::ImageBuf& image, const std::string& filename,
                         OIIO::TypeDesc type, const std::string& compression,
-                        std::string& error, int float_channels = 0);
+                        std::string& error, int float_channels = 0,
+                        OIIO::TypeDesc* written = nullptr);
 
 /// Writes layers as a multi-part EXR, one part per layer named after it,
 /// with float R,G,B,A,Z over its own data window, the display window and
