@@ -233,7 +233,7 @@ class Shot:
         setting, the frame), which each output records as
         defocus:settingsHash: ``defocus --skip-existing`` skips a frame
         whose output has the same."""
-        return self._native.settings_hash(frame)
+        return self._native.settings_hash(_frame(frame, optional=False))
 
     def resolved(self, frame: Optional[int] = None) -> Dict[str, Any]:
         """Every setting as a render of `frame` (default: the shot's first)
@@ -245,7 +245,7 @@ class Shot:
         (its pixels too with focus_at); raises Error as render() does."""
         values = {name: _from_text(name, self._native.get(native))
                   for name, (native, *_r) in _SETTINGS.items()}
-        values.update(self._native.resolved_camera(frame))
+        values.update(self._native.resolved_camera(_frame(frame)))
         return values
 
     def check(self) -> None:
@@ -305,6 +305,23 @@ def _shot(shot: _ShotArg) -> Shot:
     return shot if isinstance(shot, Shot) else Shot.load(shot)
 
 
+def _frame(frame: Any, optional: bool = True) -> Optional[int]:
+    """A frame argument checked here, so that a wrong one names the
+    keyword, not pybind's arguments."""
+    if frame is None and optional:
+        return None
+    if isinstance(frame, (int, np.integer)) and not isinstance(frame, bool):
+        return int(frame)
+    takes = "a whole frame number (int)" + (" or None" if optional else "")
+    raise TypeError(f"frame: expected {takes}, got {frame!r}")
+
+
+def _flag(value: Any, name: str) -> bool:
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise TypeError(f"{name}: expected True or False, got {value!r}")
+
+
 def _image_spec(xml: str):
     import OpenImageIO as oiio
     spec = oiio.ImageSpec()
@@ -333,19 +350,19 @@ def render(shot: _ShotArg, frame: Optional[int] = None, crop: bool = False) -> n
     the shot's first frame. The pixels are those defocus writes, before
     conversion to the output's pixel type (e.g. half).
     """
-    return _defocus.render(_shot(shot)._native, frame, crop)[0]
+    return _defocus.render(_shot(shot)._native, _frame(frame), _flag(crop, "crop"))[0]
 
 
 def render_imagebuf(shot: _ShotArg, frame: Optional[int] = None, crop: bool = False):
     """render() as an OpenImageIO.ImageBuf (float), with the result's data
     and display windows and metadata (camera, settings, colour space)."""
-    return _imagebuf(*_defocus.render(_shot(shot)._native, frame, crop))
+    return _imagebuf(*_defocus.render(_shot(shot)._native, _frame(frame), _flag(crop, "crop")))
 
 
 def focus_map(shot: _ShotArg, frame: Optional[int] = None, crop: bool = False) -> np.ndarray:
     """Where the focus falls in a frame, in false colour (defocus --output
     focusmap): float32, height x width x 4, over the display window."""
-    return _defocus.focus_map(_shot(shot)._native, frame, crop)[0]
+    return _defocus.focus_map(_shot(shot)._native, _frame(frame), _flag(crop, "crop"))[0]
 
 
 def render_to_file(shot: _ShotArg, path: Union[str, os.PathLike],
@@ -353,7 +370,7 @@ def render_to_file(shot: _ShotArg, path: Union[str, os.PathLike],
     """Renders a frame and writes it atomically, exactly as ``defocus -o
     path`` does (format from the extension, the shot's pixel type and
     compression, metadata kept). Never overwrites an input."""
-    _defocus.render_to_file(_shot(shot)._native, os.fspath(path), frame)
+    _defocus.render_to_file(_shot(shot)._native, os.fspath(path), _frame(frame))
 
 
 def render_sequence(shot: _ShotArg, output: Union[str, os.PathLike],
@@ -378,7 +395,7 @@ def render_sequence(shot: _ShotArg, output: Union[str, os.PathLike],
 def frame_path(pattern: Union[str, os.PathLike], frame: int) -> str:
     """The file of `frame` in a frame pattern (``dof.#.exr`` -> ``dof.1001.exr``),
     as defocus names it; `pattern` itself when it is not one."""
-    return _defocus.frame_path(os.fspath(pattern), frame)
+    return _defocus.frame_path(os.fspath(pattern), _frame(frame, optional=False))
 
 
 def chunk_frames(frames: Sequence[int], k: int, n: int) -> List[int]:
@@ -466,6 +483,9 @@ def _layer_parts(layer: Any, i: int, what: str) -> Tuple[Any, Any, Any]:
     if isinstance(layer, dict):
         return layer.get("name", f"layer{i}"), layer.get("rgba"), layer.get("z")
     if isinstance(layer, (tuple, list)) and len(layer) in (2, 3):
+        if len(layer) == 3 and not isinstance(layer[2], str):
+            raise TypeError(f"{what}[{i}]: the third item is the layer's name, a str, not a "
+                            f"{type(layer[2]).__name__}")
         return (layer[2] if len(layer) == 3 else f"layer{i}"), layer[0], layer[1]
     raise ValueError(f"{what}[{i}]: expected (rgba, z) or (rgba, z, name)")
 
@@ -542,7 +562,8 @@ def render_layers(layers: Sequence[Any], shot: Union[Shot, Dict[str, Any], None]
     s = _settings_shot(shot, camera, settings)
     arrays = _layers(layers, "layers")
     windows = _windows(layers, arrays, origin, display_window, "layers")
-    return _defocus.render_layers(arrays, windows, s._native, frame, crop)[0]
+    return _defocus.render_layers(arrays, windows, s._native, _frame(frame),
+                                  _flag(crop, "crop"))[0]
 
 
 def decompose(rgba: Any, z: Any, shot: Union[Shot, Dict[str, Any], None] = None,
@@ -565,5 +586,5 @@ def decompose(rgba: Any, z: Any, shot: Union[Shot, Dict[str, Any], None] = None,
     given = [(rgba, z, "render")]
     arrays = _layers(given, "render")
     windows = _windows(given, arrays, origin, display_window, "render")
-    layers = _defocus.decompose(arrays, windows, s._native, frame)
+    layers = _defocus.decompose(arrays, windows, s._native, _frame(frame))
     return [(rgba_, z_, name) for name, rgba_, z_ in layers]

@@ -299,6 +299,11 @@ def test_overscan_is_passed_as_origin_and_display_window(tmp_path):
         defocus.render_layers(layers, display_window=(0, 0, 80), **SMALL_CAMERA)
     with pytest.raises(ValueError, match=r"display_window: \(0, 0, 0, 48\) is empty"):
         defocus.render_layers(layers, display_window=(0, 0, 0, 48), **SMALL_CAMERA)
+    # (rgba, z, z): the third item is the layer's name.
+    rgba, z, _ = layers[0]
+    with pytest.raises(TypeError, match=r"layers\[0\]: the third item is the layer's name, a "
+                                        r"str, not a ndarray"):
+        defocus.render_layers([(rgba, z, z)], **SMALL_CAMERA)
 
 
 def test_unset_settings_read_none_and_resolved_gives_what_a_render_uses(tmp_path):
@@ -378,6 +383,21 @@ def test_errors_name_python_keywords(example, tmp_path):
         assert "--" not in str(raised.value)
     with pytest.raises(defocus.Error, match=r"^focus_at: expected a pixel \(x, y\), got 'a'$"):
         defocus.Shot(focus_at="a")
+    # Arguments of the wrong type name the keyword and what it takes, never
+    # pybind's NativeShot and arg0.
+    shot = defocus.Shot(inputs=[example], focus=3)
+    for call in (lambda: defocus.render(shot, frame="x"),
+                 lambda: defocus.render_imagebuf(shot, frame=1.5),
+                 lambda: defocus.focus_map(shot, frame=True),
+                 lambda: defocus.render_to_file(shot, tmp_path / "x.exr", frame="2"),
+                 lambda: shot.resolved("x"),
+                 lambda: shot.settings_hash(None),
+                 lambda: defocus.frame_path("a.#.exr", "1")):
+        with pytest.raises(TypeError, match=r"^frame: expected a whole frame number") as raised:
+            call()
+        assert "NativeShot" not in str(raised.value) and "arg0" not in str(raised.value)
+    with pytest.raises(TypeError, match=r"^crop: expected True or False, got 'yes'$"):
+        defocus.render(shot, crop="yes")
 
 
 def test_the_confidence_aov_marks_rebuilt_light_as_the_command_does(example, tmp_path):
