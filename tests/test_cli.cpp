@@ -805,6 +805,47 @@ std::vector<std::string> folder(const std::string& dir)
 
 }  // namespace
 
+TEST_CASE("an output that is not a regular file, or not ours to write, is never replaced")
+{
+    const std::string dir = scratch_dir("cli_not_regular");
+    std::string log;
+    // A FIFO stays a FIFO.
+    const std::string fifo = dir + "/fifo.exr";
+    REQUIRE(::mkfifo(fifo.c_str(), 0644) == 0);
+    CHECK(run_defocus(example_scene() + " -o " + fifo + camera, log) != 0);
+    CHECK(one_line_naming(log, "fifo.exr: is a FIFO, not a regular file: not replaced"));
+    struct stat after;
+    REQUIRE(::stat(fifo.c_str(), &after) == 0);
+    CHECK(S_ISFIFO(after.st_mode));
+    // A file replaced keeps its mode and owner.
+    const std::string kept = dir + "/kept.exr";
+    Filesystem::write_text_file(kept, "old");
+    REQUIRE(::chmod(kept.c_str(), 0640) == 0);
+    REQUIRE(run_defocus(example_scene() + " -o " + kept + camera, log) == 0);
+    REQUIRE(::stat(kept.c_str(), &after) == 0);
+    CHECK((after.st_mode & 07777) == 0640);
+    CHECK(after.st_size > 3);
+    // A read-only file that this user cannot write is refused, as cp would:
+    // run as nobody in a folder anyone may write.
+    if (geteuid() == 0) {
+        const std::string shared = dir + "/shared";
+        REQUIRE(Filesystem::create_directory(shared));
+        REQUIRE(::chmod(shared.c_str(), 01777) == 0);
+        const std::string locked = shared + "/locked.exr";
+        Filesystem::write_text_file(locked, "old");
+        REQUIRE(::chmod(locked.c_str(), 0444) == 0);
+        const int status = run(format("setpriv --reuid=65534 --regid=65534 --clear-groups {} {} -o "
+                                      "{}{}",
+                                      DEFOCUS_BIN, example_scene(), locked, camera),
+                               log);
+        CHECK(status != 0);
+        CHECK(one_line_naming(log, "locked.exr: is read-only for you: not replaced"));
+        std::string text;
+        REQUIRE(Filesystem::read_text_file(locked, text));
+        CHECK(text == "old");
+    }
+}
+
 TEST_CASE("an interrupted run leaves its targets as they were and no temporary file")
 {
     const std::string dir = scratch_dir("cli_interrupt");

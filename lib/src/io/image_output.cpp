@@ -174,8 +174,8 @@ bool check_output(const std::string& filename, const std::string& compression,
         return fail(Strutil::fmt::format("the folder {} does not exist", folder));
     if (::access(folder.c_str(), W_OK | X_OK) != 0)
         return fail(Strutil::fmt::format("the folder {} is not writable", folder));
-    if (Filesystem::is_directory(filename))
-        return fail("is a folder");
+    if (const std::string problem = replace_problem(filename); !problem.empty())
+        return fail(problem);
     auto out = ImageOutput::create(filename);
     if (!out) {
         OIIO::geterror();  // cleared: our message says it better

@@ -147,6 +147,22 @@ std::string system_error()
 
 }  // namespace
 
+std::string replace_problem(const std::string& target)
+{
+    struct stat existing;
+    if (::stat(target.c_str(), &existing) != 0)
+        return "";
+    if (S_ISDIR(existing.st_mode))
+        return "is a folder";
+    if (!S_ISREG(existing.st_mode))
+        return S_ISFIFO(existing.st_mode)  ? "is a FIFO, not a regular file: not replaced"
+               : S_ISSOCK(existing.st_mode) ? "is a socket, not a regular file: not replaced"
+                                            : "is a device, not a regular file: not replaced";
+    if (::access(target.c_str(), W_OK) != 0)
+        return "is read-only for you: not replaced (make it writable, or remove it)";
+    return "";
+}
+
 TemporaryFile::TemporaryFile(const std::string& target, Kind kind)
     : m_target(target)
 {
@@ -222,6 +238,20 @@ bool TemporaryFile::commit(std::string& error)
     m_fd = -1;
     if (fd < 0)
         return fail(system_error());
+    if (const std::string problem = replace_problem(m_target); !problem.empty()) {
+        ::close(fd);
+        error = m_target + ": " + problem;
+        return false;
+    }
+    // A file replaced keeps its permissions, and its owner where we may
+    // give it (root), as cp's would.
+    if (struct stat existing; ::stat(m_target.c_str(), &existing) == 0
+        && ((geteuid() == 0 && ::fchown(fd, existing.st_uid, existing.st_gid) != 0)
+            || ::fchmod(fd, existing.st_mode & 07777) != 0)) {
+        const std::string why = system_error();
+        ::close(fd);
+        return fail(why);
+    }
     const bool synced = ::fsync(fd) == 0;
     const std::string sync_error = synced ? "" : system_error();
     if (::close(fd) != 0 || !synced)

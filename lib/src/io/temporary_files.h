@@ -8,6 +8,11 @@
 
 namespace defocus {
 
+/// Why an existing `target` must not be replaced ("" when it may be, or
+/// does not exist): it is not a regular file (a device, a FIFO, a folder),
+/// or this user cannot write it, as cp would refuse.
+std::string replace_problem(const std::string& target);
+
 /// A new temporary file beside `target`, named after it, this host, this
 /// process and a random part (".NAME.HOST.PID.RANDOM.tmp.EXT"), created
 /// by this object alone (O_CREAT | O_EXCL | O_NOFOLLOW: nothing planted at
@@ -45,9 +50,10 @@ public:
 
     /// Makes the complete file the target: its data is flushed to the disk
     /// (fsync) and it is renamed over the target, so that a crash or a full
-    /// disk never leaves a truncated target in place of the old one. False
-    /// with `error` naming the target when any step fails; the target is
-    /// then as it was.
+    /// disk never leaves a truncated target in place of the old one; a file
+    /// it replaces keeps its mode (and, for root, its owner). False with
+    /// `error` naming the target when any step fails or replace_problem()
+    /// has one; the target is then as it was.
     bool commit(std::string& error);
 
 private:
