@@ -1,5 +1,7 @@
 #include <defocus/io/image_output.h>
 
+#include <sys/resource.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -209,6 +211,52 @@ bool check_output(const std::string& filename, const std::string& compression,
     return true;
 }
 
+namespace {
+
+/// An IOFile that keeps the system's reason for its first failed write:
+/// OpenEXR turns a short write into an exception whose message OpenImageIO
+/// does not pass on.
+class ReportingFile : public Filesystem::IOFile {
+public:
+    using IOFile::IOFile;
+    size_t write(const void* buf, size_t size) override
+    {
+        return noted(IOFile::write(buf, size), size);
+    }
+    size_t pwrite(const void* buf, size_t size, int64_t offset) override
+    {
+        return noted(IOFile::pwrite(buf, size, offset), size);
+    }
+    const std::string& why() const { return m_why; }
+
+private:
+    size_t noted(size_t written, size_t size)
+    {
+        if (written < size && m_why.empty())
+            m_why = std::strerror(errno ? errno : EIO);
+        return written;
+    }
+    std::string m_why;
+};
+
+/// Why writing into `folder` failed, where a writer that names files does
+/// not say: the disk is full, or the process's file size limit was reached
+/// ("" when neither).
+std::string write_limit(const std::string& folder)
+{
+    struct statvfs disk;
+    if (::statvfs(folder.empty() ? "." : folder.c_str(), &disk) == 0
+        && uint64_t(disk.f_bavail) * disk.f_frsize < (uint64_t(1) << 20))
+        return std::strerror(ENOSPC);
+    struct rlimit size;
+    if (::getrlimit(RLIMIT_FSIZE, &size) == 0 && size.rlim_cur != RLIM_INFINITY)
+        return Strutil::fmt::format("{} (the file size limit, ulimit -f, is {} KB)",
+                                    std::strerror(EFBIG), size.rlim_cur / 1024);
+    return "";
+}
+
+}  // namespace
+
 bool write_atomic(const std::string& filename,
                   const std::function<bool(ImageOutput&, const std::string&)>& write,
                   std::string& error)
@@ -244,11 +292,17 @@ bool write_atomic(const std::string& filename,
             Strutil::replace(Strutil::replace(why, tmp, filename, true), "\n", " ", true));
         return false;
     };
-    auto written = [&]() {
+    // The system's reason (`system`, else a full disk or a size limit)
+    // first: writers say "Could not open" or nothing.
+    const std::string folder = Filesystem::parent_path(filename);
+    auto written = [&](const std::string& system = "") {
         if (write(*out, tmp) && out->close())
             return true;
-        const std::string why = out->geterror();
-        return fail(why.empty() ? "cannot write" : why);
+        const std::string said = out->geterror();
+        const std::string reason = !system.empty() ? system : write_limit(folder);
+        if (reason.empty())
+            return fail(said.empty() ? "cannot write" : said);
+        return fail("cannot write: " + reason + (said.empty() ? "" : " (" + said + ")"));
     };
     std::string why;
     if (format == "openexr") {
@@ -257,8 +311,8 @@ bool write_atomic(const std::string& filename,
             return fail("cannot write: " + std::string(std::strerror(errno)));
         bool ok = false;
         {
-            Filesystem::IOFile io(file, Filesystem::IOProxy::Write);
-            ok = out->set_ioproxy(&io) && written();
+            ReportingFile io(file, Filesystem::IOProxy::Write);
+            ok = out->set_ioproxy(&io) && written(io.why());
             out.reset();
         }
         const bool flushed = std::fflush(file) == 0 && !std::ferror(file);
@@ -280,8 +334,11 @@ bool write_atomic(const std::string& filename,
             return false;
         out.reset();
         ImageBuf back;
-        if (format != "tiff" && !read_image_file(tmp, "the file written", back, why))
-            return fail("cannot write: it does not read back complete");
+        if (format != "tiff" && !read_image_file(tmp, "the file written", back, why)) {
+            const std::string limit = write_limit(folder);
+            return fail("cannot write: "
+                        + (limit.empty() ? std::string("it does not read back complete") : limit));
+        }
     }
     return temporary.commit(error);
 }
