@@ -84,6 +84,10 @@ void bind_shot(py::module_& m)
             check(shot_frames(shot, frames, error), error);
             return frames;
         })
+        .def("fits", [](const Shot& shot, int frame) {
+            std::string error;
+            check(frame_fits(shot, frame, error), error);
+        })
         .def("resolved_camera", &resolved_camera)
         .def("settings_hash", [](const Shot& shot, int frame) {
             return settings_hash(shot, frame);

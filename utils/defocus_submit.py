@@ -23,7 +23,11 @@ only what is missing.
 Memory per task is the first frame's measured peak times the frames a task
 runs at once (--cpus), unless --mem gives it. --dry-run prints what would
 be written and submitted, and writes, renders and submits nothing. A
-resubmitted chunk logs to chunk_K.attemptA.log, keeping its earlier logs.
+resubmitted chunk logs to chunk_K.attemptA.log, keeping its earlier logs;
+a new submission into a job folder moves the earlier one's files to
+DIR/earlier.N. The output pattern and --mem are checked as each task's
+defocus checks them, so a job that every task would refuse is not
+submitted.
 """
 import argparse
 import json
@@ -264,11 +268,13 @@ def main():
     name = job_name(args.job_name, output)
     job_dir = os.path.abspath(args.job_dir or os.path.join(os.path.dirname(output),
                                                            "defocus-farm", name))
+    earlier_shot = os.path.join(job_dir, "shot.dof")
+    earlier = defocus.Shot.load(earlier_shot) if args.resume and os.path.exists(earlier_shot) \
+        else None
     with tempfile.TemporaryDirectory() as scratch:
-        # defocus reads the options into the shot; a dry run keeps it aside.
-        shot_file = os.path.join(scratch if args.dry_run else job_dir, "shot.dof")
-        if not args.dry_run:
-            os.makedirs(job_dir, exist_ok=True)
+        # defocus reads the options into the shot, aside until the job is
+        # checked as its tasks would check it.
+        shot_file = os.path.join(scratch, "shot.dof")
         run = subprocess.run([DEFOCUS, *shot_args, "--save-scene", shot_file, "-q"],
                              capture_output=True, text=True)
         if run.returncode != 0:
@@ -276,8 +282,55 @@ def main():
         # The frames, every one of whose inputs is there (the shot's
         # missing-frames setting decides what a gap does).
         shot = defocus.Shot.load(shot_file)
-        return submit(args, shot, os.path.join(job_dir, "shot.dof"), shot_file, name, job_dir,
-                      output, mem_mb)
+        frames = shot.frames_to_render()
+        refuse_what_tasks_would_refuse(shot, frames, output, mem_mb)
+        if earlier and earlier.settings_hash(frames[0]) != shot.settings_hash(frames[0]):
+            print("defocus-submit: --resume: the settings differ from the earlier "
+                  "submission's: every frame written with those is rendered again")
+        if not args.dry_run:
+            os.makedirs(job_dir, exist_ok=True)
+            if not args.resume:
+                keep_earlier_submission(job_dir)
+            # defocus saved it with paths relative to where it was saved.
+            run = subprocess.run([DEFOCUS, *shot_args, "--save-scene", earlier_shot, "-q"],
+                                 capture_output=True, text=True)
+            if run.returncode != 0:
+                fail(run.stderr.strip().removeprefix("defocus: "))
+        return submit(args, shot, earlier_shot, shot_file, name, job_dir, output, mem_mb)
+
+
+def refuse_what_tasks_would_refuse(shot, frames, output, mem_mb):
+    """The checks each task's defocus makes before it renders, made once
+    here: a job that every task would refuse is not submitted."""
+    if len(frames) > 1 and defocus.frame_path(output, frames[0]) == output:
+        fail(f"-o {output}: {len(frames)} frames need a frame pattern in the name, "
+             "e.g. out.#.exr")
+    if mem_mb:
+        limited = defocus._defocus.NativeShot(shot._native)
+        limited.set("memory-limit", f"{mem_mb}M", "--mem")
+        try:
+            limited.fits(frames[0])
+        except defocus.Error as e:
+            fail(f"--mem {mem_mb}M: {e}")
+
+
+def keep_earlier_submission(job_dir):
+    """Moves an earlier submission's files in `job_dir` (its job, shot and
+    logs) to a folder of their own, earlier.N, so a new one overwrites
+    none."""
+    files = [f for f in os.listdir(job_dir)
+             if f in ("job.json", "shot.dof", "check.log", "submitted.log")
+             or re.fullmatch(r"chunk_\d+(\.attempt\d+)?\.log", f)]
+    if not files:
+        return
+    n = 1
+    while os.path.exists(os.path.join(job_dir, f"earlier.{n}")):
+        n += 1
+    kept = os.path.join(job_dir, f"earlier.{n}")
+    os.mkdir(kept)
+    for f in files:
+        os.rename(os.path.join(job_dir, f), os.path.join(kept, f))
+    print(f"defocus-submit: the earlier submission's files are kept in {kept}")
 
 
 def submit(args, shot, shot_file, read_from, name, job_dir, output, mem_mb):

@@ -222,11 +222,13 @@ double result_bytes(double pixels)
     return 2.0 * float_bytes(pixels, 4);
 }
 
-/// Whether the image a frame is spread into and its accumulator, over the
-/// inputs' data window, fit the memory limit: checked from the headers, so
-/// that a scene too large to spread is not read and sliced first (a 41
-/// megapixel strip took seconds to be refused after slicing).
-bool spread_fits(const Shot& shot, int frame, std::string& error)
+}  // namespace
+
+// The image a frame is spread into and its accumulator, over the inputs'
+// data window: checked from the headers, so that a scene too large to
+// spread is not read and sliced first (a 41 megapixel strip took seconds
+// to be refused after slicing).
+bool frame_fits(const Shot& shot, int frame, std::string& error)
 {
     if (shot.output != OutputKind::Image)
         return true;
@@ -243,6 +245,8 @@ bool spread_fits(const Shot& shot, int frame, std::string& error)
                        bytes));
     return false;
 }
+
+namespace {
 
 /// The data channels `shot` carries from the scene whose header is `input`;
 /// false with `error` naming the files.
@@ -288,7 +292,7 @@ bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, Layer
     Timer timer;
     Scene scene;
     ReadOptions options;
-    if (!run_stage(on_stage, "read", error) || !spread_fits(shot, frame, error)
+    if (!run_stage(on_stage, "read", error) || !frame_fits(shot, frame, error)
         || !frame_reading(shot, frame, options, error)
         || !read_scene(frame_inputs(shot, frame), options, scene, error))
         return false;

@@ -221,3 +221,52 @@ def test_mem_takes_sizes_only(scene, tmp_path):
     run = submit("--dry-run", "--chunk-size", "1", "--mem", "1.5G", scene, "--focus", "3",
                  "-o", tmp_path / "out.#.exr")
     assert "#SBATCH --mem=1536M" in run.stdout
+
+
+def test_what_every_task_would_refuse_is_refused_before_submitting(scene, tmp_path, stub_sbatch):
+    base = ["--chunk-size", "4", "--cpus", "1", "--job-dir", tmp_path / "job", scene,
+            "--focus", "3"]
+    for dry in ([], ["--dry-run"]):
+        # Twelve frames into one file.
+        run = submit(*dry, "--mem", "1G", *base, "--frames", "1-12", "-o", tmp_path / "out.exr")
+        assert run.returncode != 0
+        assert run.stderr.strip().endswith(
+            "out.exr: 12 frames need a frame pattern in the name, e.g. out.#.exr")
+        # A memory limit no frame fits in (a frame of 640x360 needs 10 MB).
+        big = tmp_path / "big.exr"
+        if not big.exists():
+            subprocess.run([os.environ["MAKE_EXAMPLE_SCENE_BIN"], str(big), "--width", "640",
+                            "--height", "360"], check=True, capture_output=True)
+        run = submit(*dry, "--mem", "1", "--chunk-size", "1", big, "--focus", "3", "-o",
+                     tmp_path / "out.#.exr")
+        assert run.returncode != 0
+        assert "--mem 1M: " in run.stderr and "more than the memory limit of 1 MB" in run.stderr
+    assert not (tmp_path / "job").exists() and not (tmp_path / "defocus-farm").exists()
+    assert os.listdir(stub_sbatch) == ["sbatch"]
+
+
+def test_a_new_submission_keeps_the_earlier_ones_logs(scene, tmp_path, stub_sbatch):
+    job_dir = tmp_path / "job"
+    args = ["--chunk-size", "1", "--cpus", "1", "--mem", "1G", "--job-dir", job_dir, scene,
+            "--focus", "3", "-o", tmp_path / "out.#.exr"]
+    assert submit(*args).returncode == 0
+    (job_dir / "chunk_1.log").write_text("the first submission's log")
+    run = submit(*args)
+    assert run.returncode == 0, run.stderr
+    assert f"the earlier submission's files are kept in {job_dir}/earlier.1" in run.stdout
+    assert (job_dir / "earlier.1" / "chunk_1.log").read_text() == "the first submission's log"
+    assert (job_dir / "earlier.1" / "job.json").exists()
+    assert not (job_dir / "chunk_1.log").exists()
+
+
+def test_resume_with_other_settings_says_so(scene, tmp_path, stub_sbatch):
+    job_dir = tmp_path / "job"
+    args = ["--chunk-size", "1", "--cpus", "1", "--mem", "1G", "--job-dir", job_dir, scene,
+            "--focus", "3", "-o", tmp_path / "out.#.exr"]
+    assert submit(*args).returncode == 0
+    run = submit("--resume", *args)
+    assert run.returncode == 0 and "other settings" not in run.stdout
+    run = submit("--resume", *args, "--fstop", "8")
+    assert run.returncode == 0, run.stderr
+    assert ("--resume: the settings differ from the earlier submission's: every frame "
+            "written with those is rendered again") in run.stdout

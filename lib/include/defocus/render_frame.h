@@ -73,6 +73,11 @@ bool prepare_layers(Scene&& scene, const Shot& shot, int frame, const ShotAssets
                     LayeredScene& layers, FrameResult& result, std::string& error,
                     const StageCallback& on_stage = {}, int nthreads = 0);
 
+/// Whether spreading `frame` of a shot fits its memory limit, as
+/// render_frame() checks it from the inputs' headers before reading pixels;
+/// false with `error` naming the files and the memory needed.
+bool frame_fits(const Shot& shot, int frame, std::string& error);
+
 /// The spec of `frame` of a shot as render_frame() gives it, from the
 /// inputs' headers alone, without reading pixels or rendering: display and
 /// data windows, channels R,G,B,A, the pixel type to write, metadata. With
