@@ -13,6 +13,7 @@
 #include <defocus/composite/data_channels.h>
 #include <defocus/frame_report.h>
 #include <defocus/io/image_output.h>
+#include <defocus/io/shot_assets.h>
 
 #include "test_support.h"
 
@@ -349,6 +350,29 @@ TEST_CASE("a data channels setting that cannot be carried is refused in one line
     map.emplace_back("output", "focusmap");
     CHECK_FALSE(render_with(scene, map, result, error));
     CHECK(one_line_error(error, "--data-channels applies to the defocused image"));
+}
+
+TEST_CASE("the data channels' spreads stop when the render is cancelled")
+{
+    // Python's Ctrl-C came 14 s late: the stage asked only as it began.
+    const std::string dir = scratch_dir("data_cancelled");
+    const Shot shot = shot_with({ flat_scene(dir, true, true) }, with_data());
+    ShotAssets assets;
+    std::string error;
+    REQUIRE(read_shot_assets(shot, assets, error));
+    std::vector<std::string> stages;
+    int asked = 0;
+    FrameResult result;
+    CHECK_FALSE(render_frame(shot, 1, assets, result, error, [&](const char* stage) {
+        if (stage)
+            stages.push_back(stage);
+        else
+            ++asked;
+        return stage != nullptr;  // cancelled as soon as a long stage asks
+    }));
+    CHECK_THAT(error, Catch::EndsWith(": cancelled"));
+    CHECK(asked == 1);
+    CHECK(stages.back() == "render");
 }
 
 TEST_CASE("bad data values never reach the output, and integer IDs come out whole")

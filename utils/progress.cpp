@@ -136,7 +136,8 @@ RunCallbacks Progress::run_callbacks(const Shot& shot, bool verbose, bool displa
     auto label = [sequence](int frame) { return sequence ? format("frame {}", frame) : ""; };
     RunCallbacks callbacks;
     callbacks.stage = [this, label](int frame, const char* name) {
-        stage(label(frame), name);
+        if (name)
+            stage(label(frame), name);
         return true;
     };
     callbacks.written = [=, &shot](int frame, const std::string& output,

@@ -115,10 +115,6 @@ void describe_output(ImageSpec& spec, const ImageSpec& input, const Shot& shot,
     spec.attribute("Exif:ImageHistory", history + history_line(shot, frame));
 }
 
-}  // namespace
-
-namespace {
-
 /// Whether stage `name` may start; false with `error` where the callback
 /// cancels the frame.
 bool run_stage(const StageCallback& on_stage, const char* name, std::string& error)
@@ -210,10 +206,6 @@ bool layer_scene(Scene&& scene, const Shot& shot, int frame, const ShotAssets& a
     lap("slice");
     return true;
 }
-
-}  // namespace
-
-namespace {
 
 /// What spreading holds besides the layers: the image a frame is spread
 /// into and its accumulator, float RGBA each, over `pixels`.
@@ -386,6 +378,15 @@ bool read_holdout(const Shot& shot, int frame, const ImageSpec& scene,
     return true;
 }
 
+/// What -v says of the holdout ("" for none).
+std::string holdout_line(const Shot& shot, int frame, const DeepImage* holdout)
+{
+    return holdout ? format("holdout: {} ({} samples in {} pixels)",
+                            frame_path(shot.holdout, source_frame(shot, frame)),
+                            holdout->samples.size(), holdout->roi.npixels())
+                   : "";
+}
+
 /// The confidence AOV of `image`, defocused from `layered` as the shot
 /// says: the scene's rebuilt part spread and composited the same way.
 bool confidence_aov(ImageBuf& confidence, const ImageBuf& image, const LayeredScene& layered,
@@ -512,11 +513,7 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
         if (!read_holdout(shot, frame, layered.spec, layered.holdout, error)
             || !frame_data_plan(shot, frame, layered.spec, plan, error))
             return false;
-        if (layered.holdout)
-            out.holdout = format("holdout: {} ({} samples in {} pixels)",
-                                 frame_path(shot.holdout, source_frame(shot, frame)),
-                                 layered.holdout->samples.size(),
-                                 layered.holdout->roi.npixels());
+        out.holdout = holdout_line(shot, frame, layered.holdout.get());
         out.data = plan.summary();
         const double bytes = spread_bytes(layered);
         if (!shot.read.memory_limit.allows(bytes)) {
@@ -547,7 +544,8 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
             lap(aov_name(shot.aov));
         if (!plan.empty()) {
             if (!data_channels(data, image, layered, out.camera, shot.spread, images,
-                               shot.window, plan, nthreads)) {
+                               shot.window, plan, nthreads,
+                               [&] { return !on_stage || on_stage(nullptr); })) {
                 error = data.geterror();
                 return false;
             }

@@ -121,7 +121,8 @@ ScheduleResult run_plan(const Shot& shot, const ShotAssets& assets, const RunPla
             return false;
         const int frame = plan.frames[i];
         auto stage = [&](const char* name) {
-            timeline.enter(frame, name);
+            if (name)
+                timeline.enter(frame, name);
             if (!stop && (!callbacks.stage || callbacks.stage(frame, name)))
                 return true;
             stop = true;

@@ -68,8 +68,9 @@ bool plan_run(const Shot& shot, const RunRequest& request, RunPlan& plan, std::s
 /// either written or failed, never both.
 struct RunCallbacks {
     /// A stage of a frame starts ("read", "colour", "slice", "render",
-    /// "write"); false cancels the run: that frame stops and no other
-    /// starts, and neither is reported.
+    /// "write"), or with nullptr a long stage asks whether to go on; false
+    /// cancels the run: that frame stops and no other starts, and neither
+    /// is reported.
     std::function<bool(int frame, const char* stage)> stage;
     /// A frame is written; its result holds the stages' timings, "write"
     /// the last.

@@ -167,12 +167,19 @@ struct Spreader {
     const ReachOnly& reach;
     OutputWindow window;
     int nthreads;
+    const std::function<bool()>& keep_going;
 
     /// Spreads `layers` (quantity layers, back to front, made from the
     /// scene's layers `from`) apart, each handed to `sink` by its scene index.
+    /// Thousands of IDs are thousands of spreads: each first asks whether
+    /// to go on ("cancelled" when not).
     bool spread(std::vector<Layer>&& layers, const std::vector<size_t>& from,
                 const QuantitySink& sink, std::string& error) const
     {
+        if (keep_going && !keep_going()) {
+            error = "cancelled";
+            return false;
+        }
         LayeredScene alone;
         alone.source = scene.source;
         alone.spec = scene.spec;
@@ -615,7 +622,7 @@ void lay_out(const DataPlan& plan, const std::vector<std::string>& names,
 bool data_channels(ImageBuf& dst, const ImageBuf& result, const LayeredScene& scene,
                    const Camera& camera, const SpreadOptions& spread,
                    const ApertureImages& images, OutputWindow window, const DataPlan& plan,
-                   int nthreads)
+                   int nthreads, const std::function<bool()>& keep_going)
 {
     const ROI roi = result.roi();
     const std::vector<std::string> names = plan.output_channels();
@@ -625,7 +632,7 @@ bool data_channels(ImageBuf& dst, const ImageBuf& result, const LayeredScene& sc
     spec.channelnames = names;
     dst.reset(spec, InitializePixels::Yes);
     const ReachOnly reach = reach_only(camera, spread, images);
-    const Spreader spreader { scene, reach, window, nthreads };
+    const Spreader spreader { scene, reach, window, nthreads, keep_going };
     std::vector<DataLookup> lookups;
     for (const Layer& layer : scene.layers)
         lookups.emplace_back(layer);

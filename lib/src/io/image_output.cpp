@@ -239,18 +239,19 @@ private:
     std::string m_why;
 };
 
-/// Why writing into `folder` failed, where a writer that names files does
-/// not say: the disk is full, or the process's file size limit was reached
+/// Why writing `filename` failed, where a writer that names files does not
+/// say: its disk is full, or the process's file size limit was reached
 /// ("" when neither).
-std::string write_limit(const std::string& folder)
+std::string write_limit(const std::string& filename)
 {
+    const std::string folder = Filesystem::parent_path(filename);
     struct statvfs disk;
     if (::statvfs(folder.empty() ? "." : folder.c_str(), &disk) == 0
         && uint64_t(disk.f_bavail) * disk.f_frsize < (uint64_t(1) << 20))
         return std::strerror(ENOSPC);
     struct rlimit size;
     if (::getrlimit(RLIMIT_FSIZE, &size) == 0 && size.rlim_cur != RLIM_INFINITY)
-        return Strutil::fmt::format("{} (the file size limit, ulimit -f, is {} KB)",
+        return Strutil::fmt::format("{} (the process's file size limit is {} KB)",
                                     std::strerror(EFBIG), size.rlim_cur / 1024);
     return "";
 }
@@ -292,14 +293,12 @@ bool write_atomic(const std::string& filename,
             Strutil::replace(Strutil::replace(why, tmp, filename, true), "\n", " ", true));
         return false;
     };
-    // The system's reason (`system`, else a full disk or a size limit)
-    // first: writers say "Could not open" or nothing.
-    const std::string folder = Filesystem::parent_path(filename);
-    auto written = [&](const std::string& system = "") {
+    // The system's reason first: writers say "Could not open" or nothing.
+    auto written = [&](const ReportingFile* file = nullptr) {
         if (write(*out, tmp) && out->close())
             return true;
-        const std::string said = out->geterror();
-        const std::string reason = !system.empty() ? system : write_limit(folder);
+        const std::string said = out->geterror(), system = file ? file->why() : "",
+                          reason = !system.empty() ? system : write_limit(filename);
         if (reason.empty())
             return fail(said.empty() ? "cannot write" : said);
         return fail("cannot write: " + reason + (said.empty() ? "" : " (" + said + ")"));
@@ -312,7 +311,7 @@ bool write_atomic(const std::string& filename,
         bool ok = false;
         {
             ReportingFile io(file, Filesystem::IOProxy::Write);
-            ok = out->set_ioproxy(&io) && written(io.why());
+            ok = out->set_ioproxy(&io) && written(&io);
             out.reset();
         }
         const bool flushed = std::fflush(file) == 0 && !std::ferror(file);
@@ -335,7 +334,7 @@ bool write_atomic(const std::string& filename,
         out.reset();
         ImageBuf back;
         if (format != "tiff" && !read_image_file(tmp, "the file written", back, why)) {
-            const std::string limit = write_limit(folder);
+            const std::string limit = write_limit(filename);
             return fail("cannot write: "
                         + (limit.empty() ? std::string("it does not read back complete") : limit));
         }

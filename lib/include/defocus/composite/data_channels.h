@@ -20,6 +20,7 @@
 //    matte is the object's share of the output alpha.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -80,9 +81,11 @@ bool plan_data_channels(const OIIO::ImageSpec& input, const std::string& setting
 /// (less chromatic aberration and the PSF image, which change colour, not
 /// reach). Cryptomatte coverages are scaled so that they sum, with the
 /// pixel's share of unlabelled light, to the result's alpha.
+/// `keep_going`, where given, is asked before each spread; false stops
+/// with the error "cancelled".
 bool data_channels(OIIO::ImageBuf& dst, const OIIO::ImageBuf& result, const LayeredScene& scene,
                    const Camera& camera, const SpreadOptions& spread,
                    const ApertureImages& images, OutputWindow window, const DataPlan& plan,
-                   int nthreads = 0);
+                   int nthreads = 0, const std::function<bool()>& keep_going = {});
 
 }  // namespace defocus
