@@ -352,6 +352,34 @@ TEST_CASE("a data channels setting that cannot be carried is refused in one line
     CHECK(one_line_error(error, "--data-channels applies to the defocused image"));
 }
 
+TEST_CASE("a continuous channel declared an ID is refused before its values are spread")
+{
+    // Every pixel its own value: thousands of "objects" over the frame.
+    const std::string dir = scratch_dir("data_continuous");
+    ImageSpec spec(frame_width, frame_height, 6, TypeFloat);
+    spec.channelnames = { "R", "G", "B", "A", "Z", "noise" };
+    spec.alpha_channel = 3;
+    spec.z_channel = 4;
+    ImageBuf image(spec);
+    for (int y = 0; y < frame_height; ++y)
+        for (int x = 0; x < frame_width; ++x) {
+            const float pixel[6] = { 0.5f, 0.5f, 0.5f, 1.0f, 5.0f,
+                                     float((x * 7919 + y * 104729) % 10007) / 10007.0f };
+            image.setpixel(x, y, pixel);
+        }
+    const std::string scene = dir + "/noise.exr";
+    REQUIRE(image.write(scene));
+    FrameResult result;
+    std::string error;
+    CHECK_FALSE(render_with(scene, with_data("noise:id"), result, error));
+    CHECK(one_line_error(error, "noise: 10007 distinct values strewn over the frame, as a "
+                                "continuous channel has"));
+    CHECK_THAT(command_line_words(error), Catch::EndsWith("carry it with --data-channels "
+                                                          "noise:average"));
+    // As what it is, it is carried.
+    REQUIRE(render_with(scene, with_data("noise:average"), result, error));
+}
+
 TEST_CASE("the data channels' spreads stop when the render is cancelled")
 {
     // Python's Ctrl-C came 14 s late: the stage asked only as it began.

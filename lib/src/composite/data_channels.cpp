@@ -14,6 +14,9 @@
 #include <Imath/ImathVec.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/parallel.h>
+#include <OpenImageIO/strutil.h>
+
+#include <defocus/shot/setting_words.h>
 
 #include "spread/block_levels.h"
 #include "util/float_pixels.h"
@@ -383,6 +386,34 @@ struct ObjectExtent {
     ROI all;
 };
 
+/// Spreads of the frame past which an ID channel is taken for a
+/// continuous one: 9,938 compact IDs cost under one spread of the frame,
+/// 5,828 values of a colour channel nearly 2,000.
+constexpr double most_id_spreads = 64.0;
+
+/// Whether `objects` of an ID channel are objects: a continuous channel
+/// declared an ID (a user's mistake) has a value per pixel, each an
+/// "object" strewn over the frame, whose spreads would take minutes; false
+/// with `error` saying so, before any is spread.
+bool plausible_ids(const ObjectSet& set, const std::vector<ObjectExtent>& objects,
+                   const ROI& frame, std::string& error)
+{
+    if (set.crypto)
+        return true;
+    double area = 0.0;  // what the spreads cover, 3 objects at a time
+    for (const ObjectExtent& object : objects)
+        for (const auto& [layer, extent] : object.layers)
+            area += double(extent.npixels()) / 3.0;
+    const double spreads = area / std::max(1.0, double(frame.npixels()));
+    if (spreads <= most_id_spreads)
+        return true;
+    const std::string& name = set.channels.front();
+    error = Strutil::fmt::format("{}: {} distinct values strewn over the frame, as a continuous channel has: "
+                   "as IDs they would take {:.0f} spreads of the frame; carry it with {}",
+                   name, objects.size(), spreads, mention("data-channels", name + ":average"));
+    return false;
+}
+
 /// Every object of `set` the scene's layers show, ordered by place so that
 /// objects spread together lie close.
 std::vector<ObjectExtent> find_objects(const ObjectSet& set, const LayeredScene& scene,
@@ -645,19 +676,26 @@ bool data_channels(ImageBuf& dst, const ImageBuf& result, const LayeredScene& sc
     std::vector<std::array<int, 3>> normals;
     lay_out(plan, names, targets, sets, averages, normals);
     std::string error;
+    std::vector<std::vector<ObjectExtent>> objects;
+    for (const ObjectSet& set : sets) {
+        objects.push_back(find_objects(set, scene, lookups));
+        if (!plausible_ids(set, objects.back(), roi, error)) {
+            dst.errorfmt("{}", error);
+            return false;
+        }
+    }
     if (!spread_quantities(dst, cov, spreader, lookups, targets, !sets.empty(), error)) {
         dst.errorfmt("{}", error);
         return false;
     }
     finish_quantities(dst, cov, averages, normals, nthreads);
-    for (const ObjectSet& set : sets) {
-        TopShares top(pixels, set.ranks());
-        if (!spread_objects(set, find_objects(set, scene, lookups), spreader, lookups, cov, top,
-                            error)) {
+    for (size_t s = 0; s < sets.size(); ++s) {
+        TopShares top(pixels, sets[s].ranks());
+        if (!spread_objects(sets[s], objects[s], spreader, lookups, cov, top, error)) {
             dst.errorfmt("{}", error);
             return false;
         }
-        write_objects(dst, set, top, cov, result, nthreads);
+        write_objects(dst, sets[s], top, cov, result, nthreads);
     }
     return true;
 }
