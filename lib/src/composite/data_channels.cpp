@@ -386,15 +386,10 @@ struct ObjectExtent {
     ROI all;
 };
 
-/// Spreads of the frame past which an ID channel is taken for a
-/// continuous one: 9,938 compact IDs cost under one spread of the frame,
-/// 5,828 values of a colour channel nearly 2,000.
-constexpr double most_id_spreads = 64.0;
-
 /// Whether `objects` of an ID channel are objects: a continuous channel
-/// declared an ID (a user's mistake) has a value per pixel, each an
-/// "object" strewn over the frame, whose spreads would take minutes; false
-/// with `error` saying so, before any is spread.
+/// declared an ID (a user's mistake) has a value per pixel, each strewn
+/// over the frame. Past 64 spreads of the frame (9,938 compact IDs take
+/// under one, 5,828 values of a colour channel 2,000), false with `error`.
 bool plausible_ids(const ObjectSet& set, const std::vector<ObjectExtent>& objects,
                    const ROI& frame, std::string& error)
 {
@@ -405,7 +400,7 @@ bool plausible_ids(const ObjectSet& set, const std::vector<ObjectExtent>& object
         for (const auto& [layer, extent] : object.layers)
             area += double(extent.npixels()) / 3.0;
     const double spreads = area / std::max(1.0, double(frame.npixels()));
-    if (spreads <= most_id_spreads)
+    if (spreads <= 64.0)
         return true;
     const std::string& name = set.channels.front();
     error = Strutil::fmt::format("{}: {} distinct values strewn over the frame, as a continuous channel has: "
