@@ -40,11 +40,7 @@ void make_source(const Layer& layer, const CircleOfConfusion& coc, double extent
 /// Whether `layer`'s light can reach `window`.
 bool reaches(const SignedLayer& layer, const ROI& window)
 {
-    if (!layer.lit.defined())
-        return false;
-    // Not npixels(): it multiplies a negative width by a negative height.
-    const ROI both = roi_intersection(layer.lit_reach(), window);
-    return both.width() > 0 && both.height() > 0;
+    return has_pixels(layer.light_in(window));
 }
 
 /// A spread pixel as "over" takes it, as the engine composites: where a
@@ -114,9 +110,9 @@ void BandSums::sum(const std::vector<SignedLayer>& all, const std::vector<Apertu
     layers.clear();
     boxes.clear();
     for (size_t l = 0; l < all.size(); ++l)
-        if (reaches(all[l], band)) {
+        if (const ROI box = all[l].light_in(band); has_pixels(box)) {
             layers.push_back(l);
-            boxes.push_back(roi_intersection(all[l].lit_reach(), band));
+            boxes.push_back(box);
         }
     const size_t n = size_t(band.npixels()), row = size_t(band.width());
     whole.assign(layers.size() * n * 4, 0.0f);
@@ -196,12 +192,13 @@ void SubApertureLayers::compute(const LayeredScene& scene, const CircleOfConfusi
 
     // Bands of two tile rows: a pixel's light reaches the bands of the
     // rows its blur spans, so taller bands would spread each pixel fewer
-    // times, but their buffers fall out of the caches (4 rows took 6% longer
-    // on the 4K example, 8 rows 40%). A band is cut where its tiles with cells are far enough apart that
-    // no pixel's light reaches both sides.
+    // times, but their buffers fall out of the caches (4 rows took 6%
+    // longer on the 4K example, 8 rows 40%). A band is cut where its tiles
+    // with cells are far enough apart that no pixel's light reaches both
+    // sides.
     float reach = 0.0f;
     for (const SignedLayer& layer : layers)
-        reach = std::max(reach, layer.reach);
+        reach = std::max(reach, layer.reach());
     const int gap = int(std::ceil(2.0 * reach / CellTiles::size)) + 1;
     const int band_rows = 2;
     parallel_for_each_item(0, (m_tiles.rows + band_rows - 1) / band_rows, [&](int64_t b) {

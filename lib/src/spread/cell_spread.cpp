@@ -284,7 +284,6 @@ void SignedLayer::set(const OIIO::ROI& pixels, const float* rgba, const float* r
     radii[1] = blocks > 0 ? *std::max_element(highest.begin(), highest.end()) : 0.0f;
     if (radii[0] > radii[1])
         radii[0] = radii[1] = 0.0f;
-    reach = std::max(std::abs(radii[0]), std::abs(radii[1])) * extent;
     gradient.assign(size_t(roi.npixels()) * 2, 0.0f);
     parallel_for_each_item(0, int64_t(height), [&](int64_t row) {
         const size_t y = size_t(row);
@@ -299,13 +298,14 @@ void SignedLayer::set(const OIIO::ROI& pixels, const float* rgba, const float* r
     }, nthreads);
 }
 
-OIIO::ROI SignedLayer::lit_reach() const
+OIIO::ROI SignedLayer::light_in(const OIIO::ROI& window) const
 {
     if (!lit.defined())
-        return lit;
+        return OIIO::ROI(window.xbegin, window.xbegin, window.ybegin, window.ybegin);
     // A footprint's corner deltas land up to a pixel past its edge.
-    const int r = int(std::ceil(reach)) + 2;
-    return OIIO::ROI(lit.xbegin - r, lit.xend + r, lit.ybegin - r, lit.yend + r);
+    const int r = int(std::ceil(reach())) + 2;
+    return OIIO::roi_intersection(
+        OIIO::ROI(lit.xbegin - r, lit.xend + r, lit.ybegin - r, lit.yend + r), window);
 }
 
 void CellBand::reset(const OIIO::ROI& window)
@@ -319,7 +319,7 @@ void CellBand::reset(const OIIO::ROI& window)
 
 void CellBand::spread(const SignedLayer& layer, const ApertureCell& cell)
 {
-    m_box = OIIO::roi_intersection(layer.lit_reach(), m_window);
+    m_box = layer.light_in(m_window);
     spread_pixels(layer, cell, m_window, m_deltas.data(), m_stride, m_line);
 }
 

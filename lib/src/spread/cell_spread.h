@@ -4,6 +4,8 @@
 // that the cost does not grow with the blur.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include <OpenImageIO/imagebuf.h>
@@ -11,6 +13,13 @@
 #include "spread/aperture_cells.h"
 
 namespace defocus {
+
+/// Whether `roi` holds a pixel. Not npixels(): that multiplies a negative
+/// width by a negative height, as an intersection of apart windows has.
+inline bool has_pixels(const OIIO::ROI& roi)
+{
+    return roi.width() > 0 && roi.height() > 0;
+}
 
 /// Lit pixels of one row and one signed radius, columns [x_begin, x_end).
 struct PixelRun {
@@ -38,11 +47,13 @@ struct SignedLayer {
     std::vector<float> gradient;     ///< ∂ρ/∂x, ∂ρ/∂y a pixel, 0 across a step in depth
     float extent = 1.0f;             ///< how far the aperture reaches per unit of radius
     float radii[2] = { 0.0f, 0.0f }; ///< the lowest and highest signed radius lit
-    float reach = 0.0f;              ///< how far any pixel's light lands from it
     OIIO::ROI lit;                   ///< the bounds of the lit pixels (undefined: none)
 
-    /// The pixels that this layer's light can land on.
-    OIIO::ROI lit_reach() const;
+    /// How far any pixel's light lands from it.
+    float reach() const { return std::max(std::abs(radii[0]), std::abs(radii[1])) * extent; }
+    /// The pixels of `window` that this layer's light can land on; none
+    /// (see has_pixels) where it lands on none of them.
+    OIIO::ROI light_in(const OIIO::ROI& window) const;
 
     /// `roi`'s pixels of colour `color` and signed radius `radius` (a float
     /// a pixel), as runs.
@@ -73,7 +84,7 @@ public:
     template<typename Use>
     void integrate(Use&& use)
     {
-        if (m_box.width() <= 0 || m_box.height() <= 0)
+        if (!has_pixels(m_box))
             return;
         const int first = m_box.xbegin - m_window.xbegin;
         std::fill(m_running.begin() + ptrdiff_t(first) * 4,
