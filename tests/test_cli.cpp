@@ -826,23 +826,32 @@ TEST_CASE("an output that is not a regular file, or not ours to write, is never 
     CHECK((after.st_mode & 07777) == 0640);
     CHECK(after.st_size > 3);
     // A read-only file that this user cannot write is refused, as cp would:
-    // run as nobody in a folder anyone may write.
+    // run as nobody in a folder anyone may write. The checkout may lie in
+    // a folder nobody cannot enter (mktemp -d makes them 0700), so the
+    // program and the scene are copied into one under /tmp.
     if (geteuid() == 0) {
-        const std::string shared = dir + "/shared";
+        const std::string shared = "/tmp/defocus-test-not-ours-" + std::to_string(getpid());
+        Filesystem::remove_all(shared);
         REQUIRE(Filesystem::create_directory(shared));
         REQUIRE(::chmod(shared.c_str(), 01777) == 0);
+        const std::string program = shared + "/defocus", scene = shared + "/scene.exr";
+        REQUIRE(Filesystem::copy(DEFOCUS_BIN, program));
+        REQUIRE(Filesystem::copy(example_scene(), scene));
+        REQUIRE(::chmod(program.c_str(), 0755) == 0);
+        REQUIRE(::chmod(scene.c_str(), 0644) == 0);
         const std::string locked = shared + "/locked.exr";
         Filesystem::write_text_file(locked, "old");
         REQUIRE(::chmod(locked.c_str(), 0444) == 0);
         const int status = run(format("setpriv --reuid=65534 --regid=65534 --clear-groups {} {} -o "
                                       "{}{}",
-                                      DEFOCUS_BIN, example_scene(), locked, camera),
+                                      program, scene, locked, camera),
                                log);
         CHECK(status != 0);
         CHECK(one_line_naming(log, "locked.exr: is read-only for you: not replaced"));
         std::string text;
         REQUIRE(Filesystem::read_text_file(locked, text));
         CHECK(text == "old");
+        Filesystem::remove_all(shared);
     }
 }
 
