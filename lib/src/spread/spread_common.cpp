@@ -9,6 +9,7 @@
 
 #include <OpenImageIO/parallel.h>
 
+#include "spread/pixels_alone.h"
 #include "util/fresh_image.h"
 #include "util/parallel_rows.h"
 
@@ -158,6 +159,7 @@ bool spread_image(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const OIIO::Im
             return OIIO::ImageBuf(spec, const_cast<float*>(pixels));
         };
         visible = visible_bokeh(view(4, color), view(1, source.radius), highlights, nthreads);
+        add_pixels_alone(source, visible, nthreads);
         source.keep_exact = visible.data();
     }
     std::unique_ptr<ShapePrograms> programs;

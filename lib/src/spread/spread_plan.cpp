@@ -8,6 +8,7 @@
 
 #include <defocus/spread/spread.h>
 
+#include "spread/pixels_alone.h"
 #include "util/parallel_rows.h"
 
 namespace defocus {
@@ -159,6 +160,7 @@ bool spread_pass(const SpreadPlan& plan, const Layer& layer, const FloatPixels& 
     if (plan.method == SpreadMethod::Bounded && layer_radius >= smallest_merged_radius()) {
         out.highlights = visible_bokeh(layer.color, out.radius,
                                        { exact_highlight_threshold, plan.luma }, nthreads);
+        add_pixels_alone(source, out.highlights, nthreads);
         source.keep_exact = out.highlights.data();
     }
     out.engine = std::make_unique<SpreadEngine>(source, plan.method, plan.programs.get(), nthreads);
