@@ -41,12 +41,12 @@ bool renders(const std::vector<std::string>& inputs, const Settings& settings)
 TEST_CASE("a header asking for more memory than the limit is refused before allocating")
 {
     const std::string dir = scratch_dir("memory_limit_header");
-    // 200000 x 200000 pixels in a 100 KB file: 1.16 TB to spread into,
-    // 745 GB as RGBA + Z floats to read (a focus map only reads).
+    // 200000 x 200000 pixels in a 100 KB file: 745 GB as RGBA + Z floats
+    // to read (all a focus map does), and 1.16 TB more to spread into.
     const std::string giant = dir + "/giant.exr";
     write_exr_header_only(giant, 200000, 200000);
     CHECK(one_line_error(refusal({ giant }, { { "focus", "3" } }),
-                          "giant.exr: spreading a data window of 200000x200000 needs 1.16 TB, "
+                          "giant.exr: spreading a data window of 200000x200000 needs 1.89 TB, "
                           "more than the memory limit of"));
     CHECK(one_line_error(refusal({ giant }, { { "focus", "3" }, { "output", "focusmap" } }),
                           "giant.exr: a data window of 200000x200000 needs 745 GB, more than "
@@ -63,11 +63,20 @@ TEST_CASE("a header asking for more memory than the limit is refused before allo
                                              { "output", "focusmap" } }),
                           "big.exr: a data window of 4000x3000 needs 229 MB, more than the "
                           "memory limit of 100 MB"));
-    // Its layer would fit in 300 MB, but not the image it is spread into and
-    // the accumulator: refused from the header too, before it is read.
+    // Its layer would fit in 300 MB, but not beside the image it is spread
+    // into and the accumulator: refused from the header too, before it is
+    // read.
     CHECK(one_line_error(refusal({ big }, { { "focus", "3" }, { "memory-limit", "300M" } }),
-                          "big.exr: spreading a data window of 4000x3000 needs 366 MB, more "
+                          "big.exr: spreading a data window of 4000x3000 needs 595 MB, more "
                           "than the memory limit of 300 MB"));
+    // A strip of 8388616 x 6 pixels: 1 GB to read, 1.5 GB to spread into.
+    // Counting only the latter, the header passed 2 GB and the file was
+    // read (16 s under ASan) before the blur's estimate refused it.
+    const std::string strip = dir + "/strip.exr";
+    write_exr_header_only(strip, 8388616, 6);
+    CHECK(one_line_error(refusal({ strip }, { { "focus", "3" }, { "memory-limit", "2G" } }),
+                          "strip.exr: spreading a data window of 8388616x6 needs 2.44 GB, more "
+                          "than the memory limit of 2 GB"));
     // Spreading: a blur of 20000 px grows every layer by 10000 px a side.
     CHECK(one_line_error(refusal({ scene }, { { "focus", "0.01" }, { "fstop", "0.1" },
                                                { "focal", "300" }, { "max-blur", "20000" },

@@ -216,10 +216,13 @@ double result_bytes(double pixels)
 
 }  // namespace
 
-// The image a frame is spread into and its accumulator, over the inputs'
-// data window: checked from the headers, so that a scene too large to
-// spread is not read and sliced first (a 41 megapixel strip took seconds
-// to be refused after slicing).
+// What spreading holds at the least (see spread_bytes): the parts as read,
+// which the layers hold again grown by their blur, and the image the frame
+// is spread into with its accumulator over the inputs' data window. Checked
+// from the headers, so that a scene too large to spread is not read and
+// sliced first (a 41 megapixel strip took seconds to be refused after
+// slicing); only the blur, which the depths give, is left to the check
+// after reading.
 bool frame_fits(const Shot& shot, int frame, std::string& error)
 {
     if (shot.output != OutputKind::Image)
@@ -228,7 +231,7 @@ bool frame_fits(const Shot& shot, int frame, std::string& error)
     ImageSpec input;
     if (!read_scene_spec(inputs, frame_read_options(shot, frame), input, error))
         return false;
-    const double bytes = result_bytes(double(input.image_pixels()));
+    const double bytes = declared_bytes(inputs) + result_bytes(double(input.image_pixels()));
     if (shot.read.memory_limit.allows(bytes))
         return true;
     error = format("{}: {}", Strutil::join(inputs, " "),
