@@ -269,6 +269,13 @@ int main(int argc, const char* argv[])
     ShotAssets assets;
     if (!read_shot_assets(shot, assets, error))
         return fail(error);
+    // The limit bounds the process, not only its frames: what it holds
+    // before the first frame (its code and libraries, 120 MB) is counted,
+    // and what comes and goes beside the frames' images: worker threads'
+    // stacks, the file encoders' buffers (up to 25 MB at 4K).
+    const double transient = 32.0 * 1024 * 1024;
+    cl.shot.read.memory_limit
+        = shot.read.memory_limit.beside_process(resident_bytes() + transient);
     const RunRequest request = run_request(cl);
     RunPlan plan;
     if (!plan_run(shot, request, plan, error))

@@ -1,6 +1,9 @@
 #include "process_memory.h"
 
 #include <climits>  // and with it <features.h>, which says whether this is glibc
+#include <fstream>
+
+#include <unistd.h>
 
 #ifdef __GLIBC__
 #include <malloc.h>
@@ -25,6 +28,17 @@ void keep_freed_memory()
     mallopt(M_MMAP_MAX, 0);
     mallopt(M_TRIM_THRESHOLD, INT_MAX);
 #endif
+}
+
+double resident_bytes()
+{
+    // Linux: the second field of statm, in pages.
+    std::ifstream statm("/proc/self/statm");
+    double total = 0.0, resident = 0.0;
+    if (!(statm >> total >> resident))
+        return 0.0;
+    const long page = sysconf(_SC_PAGESIZE);
+    return page > 0 ? resident * double(page) : 0.0;
 }
 
 }  // namespace defocus

@@ -14,4 +14,8 @@ namespace defocus {
 /// policy.
 void keep_freed_memory();
 
+/// The bytes of memory the process has resident now (its code, libraries
+/// and heap), 0 where the system does not say.
+double resident_bytes();
+
 }  // namespace defocus

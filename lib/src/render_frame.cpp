@@ -21,6 +21,8 @@
 #include <defocus/shot/setting_words.h>
 #include <defocus/version.h>
 
+#include "composite/spread_memory.h"
+
 namespace defocus {
 
 using namespace OIIO;
@@ -207,13 +209,6 @@ bool layer_scene(Scene&& scene, const Shot& shot, int frame, const ShotAssets& a
     return true;
 }
 
-/// What spreading holds besides the layers: the image a frame is spread
-/// into and its accumulator, float RGBA each, over `pixels`.
-double result_bytes(double pixels)
-{
-    return 2.0 * float_bytes(pixels, 4);
-}
-
 }  // namespace
 
 // What spreading holds at the least (see spread_bytes): the parts as read,
@@ -323,31 +318,6 @@ bool prepare_layers(Scene&& scene, const Shot& shot, int frame, const ShotAssets
 }
 
 namespace {
-
-/// A bound on what spreading the layers holds at once: each layer grown by
-/// its blur's reach, the result and an accumulator over all of them, and
-/// the holdout.
-double spread_bytes(const LayeredScene& layered)
-{
-    const DeepImage* holdout = layered.holdout.get();
-    double bytes = holdout ? double(holdout->samples.size() * sizeof(DeepSample)
-                                    + holdout->offsets.size() * sizeof(uint64_t))
-                           : 0.0;
-    ROI all = layered.spec.roi();
-    for (size_t i = 0; i < layered.layers.size(); ++i) {
-        const LayerReport& r = layered.reports[i];
-        const int reach =
-            int(std::ceil(0.5 * std::max(std::abs(r.coc_min), std::abs(r.coc_max)))) + 1;
-        ROI grown = layered.layers[i].color.roi();
-        grown.xbegin -= reach;
-        grown.xend += reach;
-        grown.ybegin -= reach;
-        grown.yend += reach;
-        bytes += float_bytes(grown.npixels(), 5);
-        all = roi_union(all, grown);
-    }
-    return bytes + result_bytes(double(all.npixels()));
-}
 
 /// The shot's holdout at `frame`, front to back (none when the shot names
 /// none), over the scene's display window.

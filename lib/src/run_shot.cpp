@@ -8,6 +8,7 @@
 #include <defocus/io/image_output.h>
 #include <defocus/io/scene_io.h>
 #include <defocus/io/settings_hash.h>
+#include <defocus/shot/setting_words.h>
 #include <defocus/stage_timeline.h>
 
 namespace defocus {
@@ -163,7 +164,7 @@ ScheduleResult run_plan(const Shot& shot, const ShotAssets& assets, const RunPla
         return ok;
     };
     const ScheduleResult run = run_frames(
-        int(plan.frames.size()), request.threads, shot.read.memory_limit.bytes(),
+        int(plan.frames.size()), request.threads, size_t(shot.read.memory_limit.for_frames()),
         request.stop_on_error, render_one,
         [&](int i) { return declared_bytes(frame_inputs(shot, plan.frames[i])); });
     if (cancelled)

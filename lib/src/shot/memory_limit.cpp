@@ -74,15 +74,23 @@ size_t MemoryLimit::bytes() const
 
 std::string MemoryLimit::exceeded(const std::string& what, double bytes) const
 {
-    if (m_spent > 0.0)
-        return OIIO::Strutil::fmt::format(
-            "{} needs {}, more than the {} the memory limit of {} ({}) leaves beside the "
-            "frame's other inputs",
-            what, readable(bytes), readable(std::max(0.0, double(this->bytes()) - m_spent)),
-            readable(double(this->bytes())), mention("memory-limit"));
-    return OIIO::Strutil::fmt::format("{} needs {}, more than the memory limit of {} ({})", what,
-                                      readable(bytes), readable(double(this->bytes())),
-                                      mention("memory-limit"));
+    const double limit = double(this->bytes());
+    if (m_spent <= 0.0 && m_process <= 0.0)
+        return OIIO::Strutil::fmt::format("{} needs {}, more than the memory limit of {} ({})",
+                                          what, readable(bytes), readable(limit),
+                                          mention("memory-limit"));
+    const std::string beside
+        = m_process <= 0.0 ? "the frame's other inputs"
+          : m_spent <= 0.0
+              ? OIIO::Strutil::fmt::format("what the program itself holds ({})",
+                                           readable(m_process))
+              : OIIO::Strutil::fmt::format(
+                  "the frame's other inputs and what the program itself holds ({})",
+                  readable(m_process));
+    return OIIO::Strutil::fmt::format(
+        "{} needs {}, more than the {} the memory limit of {} ({}) leaves beside {}", what,
+        readable(bytes), readable(std::max(0.0, limit - m_process - m_spent)), readable(limit),
+        mention("memory-limit"), beside);
 }
 
 }  // namespace defocus

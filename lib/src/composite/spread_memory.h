@@ -1,0 +1,18 @@
+// Internal: what spreading a frame holds, as the memory limit counts it.
+#pragma once
+
+#include <defocus/layers/layered_scene.h>
+
+namespace defocus {
+
+/// What spreading holds besides the layers: the image a frame is spread
+/// into and its accumulator, float RGBA each, over `pixels`.
+double result_bytes(double pixels);
+
+/// A bound on what spreading the layers holds at once: each layer's
+/// buffers (colour, depth, the rebuilt plane of a sliced render) grown by
+/// its blur's reach, with its blur field and highlight mask; the result and
+/// an accumulator over all of them; and the holdout.
+double spread_bytes(const LayeredScene& layered);
+
+}  // namespace defocus
