@@ -163,6 +163,27 @@ TEST_CASE("a sequence: keyframes per frame, each frame's metadata, and frames sh
     CHECK(OIIO::ImageBufAlgo::compare(last_frame, alone, 0.0f, 0.0f).maxerror == 0.0);
 }
 
+TEST_CASE("a long stage saying how far it is stays one stage")
+{
+    CHECK(stage_of("data channels 12/134") == "data channels");
+    CHECK(stage_of("data channels") == "data channels");
+    CHECK(stage_of("read") == "read");
+    CHECK(stage_of("render 3/") == "render 3/");
+    CHECK(stage_of("take 2") == "take 2");
+    StageTimeline timeline;
+    timeline.enter(2, "read");
+    for (const char* stage : { "render", "data channels 0/3", "data channels 1/3",
+                               "data channels 2/3" }) {
+        timeline.enter(1, stage);
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    const std::string report = timeline.finish(1);
+    INFO(report);
+    CHECK(OIIO::Strutil::contains(report, "data channels 0.0"));
+    CHECK_FALSE(OIIO::Strutil::contains(report, "/3"));
+    CHECK(std::count(report.begin(), report.end(), ',') <= 1);
+}
+
 TEST_CASE("the stages of frames side by side, and how long each overlapped others (-v)")
 {
     using std::this_thread::sleep_for;

@@ -398,6 +398,15 @@ bool aov_channel(ImageBuf& aov, const ImageBuf& image, const LayeredScene& layer
     return true;
 }
 
+/// The data channels' question before each spread, asked as their stage
+/// saying how far it is ("data channels 12/134").
+std::function<bool(int, int)> data_progress(const StageCallback& on_stage)
+{
+    return [&on_stage](int done, int total) {
+        return !on_stage || on_stage(format("data channels {}/{}", done, total).c_str());
+    };
+}
+
 /// finish_frame() of a deep result, from the spread on (see defocus_deep).
 bool deep_frame(const Shot& shot, int frame, const ApertureImages& images,
                 LayeredScene& layered, FrameResult& out, std::string& error, int nthreads)
@@ -518,7 +527,7 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
         if (!plan.empty()) {
             if (!data_channels(data, image, layered, out.camera, shot.spread, images,
                                shot.window, plan, nthreads,
-                               [&] { return !on_stage || on_stage(nullptr); })) {
+                               data_progress(on_stage))) {
                 error = data.geterror();
                 return false;
             }

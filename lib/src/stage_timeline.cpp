@@ -19,9 +19,25 @@ void StageTimeline::close(int frame, Clock::time_point now)
         }
 }
 
-void StageTimeline::enter(int frame, const std::string& stage)
+std::string stage_of(const std::string& name)
 {
+    const size_t space = name.rfind(' ');
+    if (space == std::string::npos)
+        return name;
+    const std::string count = name.substr(space + 1);
+    const size_t slash = count.find('/');
+    const bool steps = slash != std::string::npos && slash > 0 && slash + 1 < count.size()
+                       && count.find_first_not_of("0123456789/") == std::string::npos;
+    return steps ? name.substr(0, space) : name;
+}
+
+void StageTimeline::enter(int frame, const std::string& name)
+{
+    const std::string stage = stage_of(name);
     std::lock_guard<std::mutex> lock(m_mutex);
+    for (const Stay& s : m_stays)
+        if (s.frame == frame && s.open && s.stage == stage)
+            return;
     const Clock::time_point now = Clock::now();
     close(frame, now);
     m_stays.push_back({ frame, stage, now, now, true });

@@ -53,9 +53,11 @@ struct FrameResult {
 };
 
 /// Called as each stage of a frame starts ("read", "colour", "slice",
-/// "render"), for progress display; false cancels the frame there, which
-/// then fails with the error "cancelled". Long stages also call it with
-/// nullptr, no new stage, only to ask whether to go on.
+/// "render", "data channels"), for progress display; false cancels the
+/// frame there, which then fails with the error "cancelled". Long stages
+/// also call it with nullptr, no new stage, only to ask whether to go on,
+/// or with their name and how far they are ("data channels 12/134"; see
+/// stage_of).
 using StageCallback = std::function<bool(const char* stage)>;
 
 /// The first half of a frame, shared by render_frame() and layerize: read

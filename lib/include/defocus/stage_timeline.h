@@ -9,12 +9,17 @@
 
 namespace defocus {
 
+/// The stage a stage callback's `name` names: without the count of its
+/// steps done that a long stage adds ("data channels 12/134").
+std::string stage_of(const std::string& name);
+
 /// The stages of the frames a run has in flight, as they enter them, from
 /// any thread. Only what a frame still in flight can meet is kept, so a
 /// long sequence holds a few dozen entries.
 class StageTimeline {
 public:
-    /// Frame `frame` enters `stage` (leaving the stage it was in).
+    /// Frame `frame` enters `stage` (leaving the stage it was in); the
+    /// same stage further on (see stage_of) is no new stage.
     void enter(int frame, const std::string& stage);
 
     /// Frame `frame` is done: for each of its stages, how long it took and

@@ -18,6 +18,7 @@
 
 #include <defocus/shot/setting_words.h>
 
+#include "composite/data_lookup.h"
 #include "spread/block_levels.h"
 #include "util/float_pixels.h"
 #include "util/parallel_rows.h"
@@ -27,87 +28,6 @@ namespace defocus {
 using namespace OIIO;
 
 namespace {
-
-/// Where each pixel of a layer finds its data: the source pixel at the same
-/// place, or, for a pixel rebuilt behind nearer layers, the nearest pixel
-/// of the layer that was seen (the surface it continues); clamped into the
-/// data's window, as extend_edges() repeats the outermost pixels.
-class DataLookup {
-public:
-    explicit DataLookup(const Layer& layer)
-        : m_data(layer.data.get())
-        , m_roi(layer.color.roi())
-    {
-        if (m_data && layer.rebuilt.initialized())
-            find_nearest_seen(layer);
-    }
-
-    bool has_data() const { return m_data != nullptr; }
-    int channel(const std::string& name) const
-    {
-        return m_data ? m_data->spec().channelindex(name) : -1;
-    }
-
-    /// The data of layer pixel (x, y): has_data() must be true.
-    const float* operator()(int x, int y) const
-    {
-        if (!m_nearest.empty()) {
-            const Imath::V2i& n
-                = m_nearest[size_t(y - m_roi.ybegin) * m_roi.width() + (x - m_roi.xbegin)];
-            if (n.x != INT_MIN) {
-                x = n.x;
-                y = n.y;
-            }
-        }
-        const ROI& source = m_data->roi();
-        x = std::clamp(x, source.xbegin, source.xend - 1);
-        y = std::clamp(y, source.ybegin, source.yend - 1);
-        return static_cast<const float*>(m_data->pixeladdr(x, y));
-    }
-
-private:
-    /// Two raster sweeps carry each seen pixel's place to its neighbours,
-    /// keeping the nearest (an approximate distance transform).
-    void find_nearest_seen(const Layer& layer)
-    {
-        const ROI& r = m_roi;
-        m_nearest.assign(size_t(r.npixels()), Imath::V2i(INT_MIN, INT_MIN));
-        const FloatPixels color(layer.color, r);
-        const ROI marked = roi_intersection(layer.rebuilt.roi(), r);
-        auto at = [&](int x, int y) -> Imath::V2i& {
-            return m_nearest[size_t(y - r.ybegin) * r.width() + (x - r.xbegin)];
-        };
-        for (int y = r.ybegin; y < r.yend; ++y)
-            for (int x = r.xbegin; x < r.xend; ++x) {
-                const bool rebuilt = marked.contains(x, y)
-                                     && *static_cast<const uint8_t*>(layer.rebuilt.pixeladdr(x, y));
-                if (color(x, y)[3] > 0.0f && !rebuilt)
-                    at(x, y) = Imath::V2i(x, y);
-            }
-        auto relax = [&](int x, int y, int nx, int ny) {
-            if (!r.contains(nx, ny) || at(nx, ny).x == INT_MIN)
-                return;
-            Imath::V2i& here = at(x, y);
-            const Imath::V2i& there = at(nx, ny);
-            const int64_t d = int64_t(there.x - x) * (there.x - x) + int64_t(there.y - y) * (there.y - y);
-            if (here.x == INT_MIN
-                || d < int64_t(here.x - x) * (here.x - x) + int64_t(here.y - y) * (here.y - y))
-                here = there;
-        };
-        for (int y = r.ybegin; y < r.yend; ++y)
-            for (int x = r.xbegin; x < r.xend; ++x)
-                for (auto [dx, dy] : { std::pair(-1, 0), { -1, -1 }, { 0, -1 }, { 1, -1 } })
-                    relax(x, y, x + dx, y + dy);
-        for (int y = r.yend - 1; y >= r.ybegin; --y)
-            for (int x = r.xend - 1; x >= r.xbegin; --x)
-                for (auto [dx, dy] : { std::pair(1, 0), { 1, 1 }, { 0, 1 }, { -1, 1 } })
-                    relax(x, y, x + dx, y + dy);
-    }
-
-    const ImageBuf* m_data;
-    ROI m_roi;
-    std::vector<Imath::V2i> m_nearest;  ///< empty when nothing is rebuilt
-};
 
 /// A data value safe to spread: NaN and infinity carry nothing (0), and
 /// values beyond +-1e30 are clamped there, as sanitize() clamps colour
@@ -170,16 +90,18 @@ struct Spreader {
     const ReachOnly& reach;
     OutputWindow window;
     int nthreads;
-    const std::function<bool()>& keep_going;
+    const std::function<bool(int done, int total)>& keep_going;
+    int total = 0;  ///< spreads in all
+    int done = 0;
 
     /// Spreads `layers` (quantity layers, back to front, made from the
     /// scene's layers `from`) apart, each handed to `sink` by its scene index.
-    /// Thousands of IDs are thousands of spreads: each first asks whether
-    /// to go on ("cancelled" when not).
+    /// Thousands of IDs are hundreds of spreads: each first asks whether
+    /// to go on ("cancelled" when not), saying how far the stage is.
     bool spread(std::vector<Layer>&& layers, const std::vector<size_t>& from,
-                const QuantitySink& sink, std::string& error) const
+                const QuantitySink& sink, std::string& error)
     {
-        if (keep_going && !keep_going()) {
+        if (keep_going && !keep_going(done++, total)) {
             error = "cancelled";
             return false;
         }
@@ -188,6 +110,8 @@ struct Spreader {
         alone.spec = scene.spec;
         alone.luma = scene.luma;
         const CircleOfConfusion coc(reach.camera, scene.spec.roi_full());
+        // ImageBuf's move may throw: a vector that grows copies its layers.
+        alone.layers.reserve(layers.size());
         for (size_t k = 0; k < layers.size(); ++k) {
             // A whole layer's quantities have its alpha and depth: its report.
             const bool whole = layers[k].color.roi() == scene.layers[from[k]].color.roi();
@@ -218,14 +142,22 @@ struct Coverage {
         return size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin);
     }
 
-    /// The transmittance in front of layer `i` at (x, y).
-    float transmittance(size_t i, int x, int y) const
+    /// The transmittance in front of layer `i` over row y, columns
+    /// [x0, x1), into t.
+    void transmittance(size_t i, int y, int x0, int x1, float* t) const
     {
-        float t = 1.0f;
-        for (size_t m = i + 1; m < layer_alpha.size(); ++m)
-            if (layer_alpha[m].initialized() && layer_alpha[m].roi().contains(x, y))
-                t *= 1.0f - *static_cast<const float*>(layer_alpha[m].pixeladdr(x, y));
-        return t;
+        std::fill(t, t + (x1 - x0), 1.0f);
+        for (size_t m = i + 1; m < layer_alpha.size(); ++m) {
+            if (!layer_alpha[m].initialized())
+                continue;
+            const ROI& r = layer_alpha[m].roi();
+            const int begin = std::max(x0, r.xbegin), end = std::min(x1, r.xend);
+            if (y < r.ybegin || y >= r.yend || begin >= end)
+                continue;
+            const float* a = static_cast<const float*>(layer_alpha[m].pixeladdr(begin, y));
+            for (int x = begin; x < end; ++x)
+                t[x - x0] *= 1.0f - a[x - begin];
+        }
     }
 };
 
@@ -243,8 +175,10 @@ void composite_quantities(ImageBuf& dst, Coverage& cov, const ImageBuf& spread, 
 {
     const ROI lit = roi_intersection(spread.roi(), cov.roi);
     parallel_for(lit.ybegin, lit.yend, [&](int y) {
-        for (int x = lit.xbegin; x < lit.xend; ++x) {
-            const float* s = static_cast<const float*>(spread.pixeladdr(x, y));
+        const float* s = static_cast<const float*>(spread.pixeladdr(lit.xbegin, y));
+        float* out = static_cast<float*>(dst.pixeladdr(lit.xbegin, y));
+        for (int x = lit.xbegin; x < lit.xend;
+             ++x, s += spread.nchannels(), out += dst.nchannels()) {
             const size_t i = cov.index(x, y);
             const float a = s[3];
             if (first) {
@@ -255,7 +189,6 @@ void composite_quantities(ImageBuf& dst, Coverage& cov, const ImageBuf& spread, 
                     cov.best_layer[i] = int(layer);
                 }
             }
-            float* out = static_cast<float*>(dst.pixeladdr(x, y));
             for (size_t j = 0; j < targets.size(); ++j) {
                 const QuantityTarget& t = targets[j];
                 if (t.kind == DataKind::Average)
@@ -282,7 +215,7 @@ std::vector<size_t> lit_layers(const LayeredScene& scene)
 /// Spreads the depth and the Average and Dominant channels, three at a
 /// time, through every layer; the first spread also fills `cov` (each
 /// layer's alpha only when `keep_alphas`: mattes need it).
-bool spread_quantities(ImageBuf& dst, Coverage& cov, const Spreader& spreader,
+bool spread_quantities(ImageBuf& dst, Coverage& cov, Spreader& spreader,
                        const std::vector<DataLookup>& lookups,
                        const std::vector<QuantityTarget>& all, bool keep_alphas,
                        std::string& error)
@@ -293,6 +226,7 @@ bool spread_quantities(ImageBuf& dst, Coverage& cov, const Spreader& spreader,
         const std::vector<QuantityTarget> targets(
             all.begin() + first, all.begin() + std::min(all.size(), first + 3));
         std::vector<Layer> layers;
+        layers.reserve(from.size());  // see Spreader::spread
         for (size_t i : from) {
             const Layer& layer = scene.layers[i];
             const DataLookup& lookup = lookups[i];
@@ -496,7 +430,7 @@ ROI spread_alike(const ROI& roi, const ROI& layer, const LayerReport& report)
 /// it lies in each layer, and keeps each pixel's largest shares: a matte's
 /// spread in one layer, attenuated by the layers in front, summed.
 bool spread_objects(const ObjectSet& set, const std::vector<ObjectExtent>& objects,
-                    const Spreader& spreader, const std::vector<DataLookup>& lookups,
+                    Spreader& spreader, const std::vector<DataLookup>& lookups,
                     const Coverage& cov, TopShares& top, std::string& error)
 {
     const LayeredScene& scene = spreader.scene;
@@ -505,6 +439,7 @@ bool spread_objects(const ObjectSet& set, const std::vector<ObjectExtent>& objec
         const size_t count = std::min<size_t>(3, objects.size() - first);
         std::vector<Layer> layers;
         std::vector<size_t> from;
+        layers.reserve(scene.layers.size());  // see Spreader::spread
         for (size_t i : lit_layers(scene)) {
             ROI crop;
             for (size_t m = 0; m < count; ++m)
@@ -531,13 +466,13 @@ bool spread_objects(const ObjectSet& set, const std::vector<ObjectExtent>& objec
                 const ROI lit = roi_intersection(s.roi(), cov.roi);
                 touched = roi_union(touched, lit);
                 parallel_for(lit.ybegin, lit.yend, [&](int y) {
-                    for (int x = lit.xbegin; x < lit.xend; ++x) {
-                        const float* p = static_cast<const float*>(s.pixeladdr(x, y));
-                        const float t = cov.transmittance(i, x, y);
-                        float* acc = &shares[cov.index(x, y) * 3];
+                    std::vector<float> t(size_t(lit.width()));
+                    cov.transmittance(i, y, lit.xbegin, lit.xend, t.data());
+                    const float* p = static_cast<const float*>(s.pixeladdr(lit.xbegin, y));
+                    float* acc = &shares[cov.index(lit.xbegin, y) * 3];
+                    for (int x = 0; x < lit.width(); ++x, p += s.nchannels(), acc += 3)
                         for (size_t m = 0; m < count; ++m)
-                            acc[m] += p[m] * t;
-                    }
+                            acc[m] += p[m] * t[size_t(x)];
                 }, by_rows(spreader.nthreads));
             }, error))
             return false;
@@ -648,7 +583,7 @@ void lay_out(const DataPlan& plan, const std::vector<std::string>& names,
 bool data_channels(ImageBuf& dst, const ImageBuf& result, const LayeredScene& scene,
                    const Camera& camera, const SpreadOptions& spread,
                    const ApertureImages& images, OutputWindow window, const DataPlan& plan,
-                   int nthreads, const std::function<bool()>& keep_going)
+                   int nthreads, const std::function<bool(int, int)>& keep_going)
 {
     const ROI roi = result.roi();
     const std::vector<std::string> names = plan.output_channels();
@@ -658,7 +593,7 @@ bool data_channels(ImageBuf& dst, const ImageBuf& result, const LayeredScene& sc
     spec.channelnames = names;
     dst.reset(spec, InitializePixels::Yes);
     const ReachOnly reach = reach_only(camera, spread, images);
-    const Spreader spreader { scene, reach, window, nthreads, keep_going };
+    Spreader spreader { scene, reach, window, nthreads, keep_going };
     std::vector<DataLookup> lookups;
     for (const Layer& layer : scene.layers)
         lookups.emplace_back(layer);
@@ -672,12 +607,15 @@ bool data_channels(ImageBuf& dst, const ImageBuf& result, const LayeredScene& sc
     lay_out(plan, names, targets, sets, averages, normals);
     std::string error;
     std::vector<std::vector<ObjectExtent>> objects;
+    // Quantities and objects are spread three at a time.
+    spreader.total = std::max<int>(1, (int(targets.size()) + 2) / 3);
     for (const ObjectSet& set : sets) {
         objects.push_back(find_objects(set, scene, lookups));
         if (!plausible_ids(set, objects.back(), roi, error)) {
             dst.errorfmt("{}", error);
             return false;
         }
+        spreader.total += (int(objects.back().size()) + 2) / 3;
     }
     if (!spread_quantities(dst, cov, spreader, lookups, targets, !sets.empty(), error)) {
         dst.errorfmt("{}", error);

@@ -81,11 +81,13 @@ bool plan_data_channels(const OIIO::ImageSpec& input, const std::string& setting
 /// (less chromatic aberration and the PSF image, which change colour, not
 /// reach). Cryptomatte coverages are scaled so that they sum, with the
 /// pixel's share of unlabelled light, to the result's alpha.
-/// `keep_going`, where given, is asked before each spread; false stops
-/// with the error "cancelled".
+/// `keep_going`, where given, is asked before each spread with how many of
+/// the stage's spreads are done and how many there are (thousands of IDs
+/// are hundreds of spreads); false stops with the error "cancelled".
 bool data_channels(OIIO::ImageBuf& dst, const OIIO::ImageBuf& result, const LayeredScene& scene,
                    const Camera& camera, const SpreadOptions& spread,
                    const ApertureImages& images, OutputWindow window, const DataPlan& plan,
-                   int nthreads = 0, const std::function<bool()>& keep_going = {});
+                   int nthreads = 0,
+                   const std::function<bool(int done, int total)>& keep_going = {});
 
 }  // namespace defocus
