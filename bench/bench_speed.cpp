@@ -483,6 +483,19 @@ int main(int argc, const char* argv[])
         // As most users write it: zip, OpenEXR's default and the example's.
         f.push_back({ "4K zip", format("{} {} -o {}/4k.exr {} -q", DEFOCUS_BIN,
                                        arg_quote(scene4k), arg_quote(scratch), example_camera) });
+        // Compositing per cell of the aperture, automatic, against one cell
+        // (today's method): the garden at focus 1.25 and the 4K example.
+        for (const char* cells : { "1", "0" }) {
+            if (have_garden)
+                f.push_back({ format("garden f1.25 cells {}", cells),
+                              format("{} {} -o {}/garden.exr --focal 85 --fstop 1.4 --focus 1.25 "
+                                     "--aperture-cells {} -q",
+                                     DEFOCUS_BIN, arg_quote(garden + "/layers.exr"),
+                                     arg_quote(scratch), cells) });
+            f.push_back({ format("4K cells {}", cells),
+                          format("{} {} -o {}/4k.exr {} --aperture-cells {} -q", DEFOCUS_BIN,
+                                 arg_quote(scene4k), arg_quote(scratch), example_camera, cells) });
+        }
         return f;
     }();
     for (const auto& [name, command] : frames)
@@ -663,6 +676,14 @@ int main(int argc, const char* argv[])
                 "of its flat output\n",
                 median["frame 4K deep out"] / median["frame 4K example"],
                 peak["4K deep out"] / peak["4K example"]);
+    std::printf("\nautomatic aperture cells / one cell, whole processes (issue 61)\n");
+    if (have_garden)
+        std::printf("  garden, focus 1.25: %.2fx the time (target: at most 2x)\n",
+                    median["frame garden f1.25 cells 0"] / median["frame garden f1.25 cells 1"]);
+    std::printf("  4K example: %.2fx the time (target: at most 1.5x), %.2fx the peak memory "
+                "(target: at most 1.3x)\n",
+                median["frame 4K cells 0"] / median["frame 4K cells 1"],
+                peak["4K cells 0"] / peak["4K cells 1"]);
     std::printf("\nlens effects, whole frames of %s (%s)\n",
                 have_garden ? "the garden" : "a 1280x720 example scene", effects_camera.c_str());
     const double plain_disc = median["effect plain disc"];
