@@ -251,7 +251,7 @@ void SubApertureLayers::allocate(const std::vector<SignedLayer>& layers)
                 m_offset[l][t] = (used++) * int64_t(tile_floats);
     }
     // Left unset: keep() writes every pixel that change() reads.
-    m_pixels.reset(new float[size_t(used) * tile_floats]);
+    m_pixels.reset(new Imath::half[size_t(used) * tile_floats]);
 }
 
 void SubApertureLayers::keep(const BandSums& sums, int column, int row)
@@ -263,33 +263,39 @@ void SubApertureLayers::keep(const BandSums& sums, int column, int row)
         if (at < 0)
             continue;
         for (int y = tile.ybegin; y < tile.yend; ++y)
-            for (int x = tile.xbegin; x < tile.xend; ++x)
-                sums.change(i, x, y,
-                            &m_pixels[size_t(at)
-                                      + ((y - tile.ybegin) * CellTiles::size + (x - tile.xbegin))
-                                            * 4]);
+            for (int x = tile.xbegin; x < tile.xend; ++x) {
+                float change[4];
+                sums.change(i, x, y, change);
+                Imath::half* out = &m_pixels[size_t(at)
+                                             + ((y - tile.ybegin) * CellTiles::size
+                                                + (x - tile.xbegin)) * 4];
+                std::copy(change, change + 4, out);
+            }
     }
 }
 
-const float* SubApertureLayers::change(size_t l, int x, int y, int& end) const
+bool SubApertureLayers::change(size_t l, int x, int y, int& end, float* out) const
 {
     const ROI& window = m_tiles.window;
     if (l >= m_offset.size() || y < window.ybegin || y >= window.yend || x >= window.xend) {
         end = INT_MAX;
-        return nullptr;
+        return false;
     }
     if (x < window.xbegin) {
         end = window.xbegin;
-        return nullptr;
+        return false;
     }
     const int column = (x - window.xbegin) / CellTiles::size,
               row = (y - window.ybegin) / CellTiles::size;
     const ROI tile = m_tiles.tile(column, row);
     end = tile.xend;
     const int64_t at = offset(l, size_t(row) * m_tiles.columns + column);
-    return at < 0 ? nullptr
-                  : &m_pixels[size_t(at)
-                              + ((y - tile.ybegin) * CellTiles::size + (x - tile.xbegin)) * 4];
+    if (at < 0)
+        return false;
+    const Imath::half* in
+        = &m_pixels[size_t(at) + ((y - tile.ybegin) * CellTiles::size + (x - tile.xbegin)) * 4];
+    std::copy(in, in + size_t(end - x) * 4, out);
+    return true;
 }
 
 SubApertureReport SubApertureLayers::report() const
