@@ -305,3 +305,25 @@ TEST_CASE("a result keeps the software that made its input, and adds a line to i
     CHECK_THAT(once.image.spec().get_string_attribute("Exif:ImageHistory"),
                Catch::EndsWith(" --focus 3 --aperture mask:" + mask + " --deep --crop"));
 }
+
+TEST_CASE("slicing a flat render stops when the render is cancelled")
+{
+    // Python's Ctrl-C waited for the slicing of a 4K render (6 s): only
+    // the stages after it asked whether to go on.
+    const std::string dir = scratch_dir("render_frame_slice_cancelled");
+    const Shot shot = shot_with({ two_depth_scene(dir) }, { { "focal", "50" },
+                                                             { "fstop", "1.4" },
+                                                             { "focus", "3" } });
+    ShotAssets assets;
+    std::string error;
+    REQUIRE(read_shot_assets(shot, assets, error));
+    std::string last_stage;
+    FrameResult result;
+    CHECK_FALSE(render_frame(shot, 1, assets, result, error, [&](const char* stage) {
+        if (stage)
+            last_stage = stage;
+        return stage != nullptr;  // cancelled as soon as a stage asks to go on
+    }));
+    CHECK_THAT(error, Catch::EndsWith(": cancelled"));
+    CHECK(last_stage == "slice");
+}

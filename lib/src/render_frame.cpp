@@ -188,7 +188,7 @@ bool layer_scene(Scene&& scene, const Shot& shot, int frame, const ShotAssets& a
     const size_t layers_given = scene.layers.size();
     Slicing slicing;
     if (!decompose_layers(std::move(scene), coc, shot.layering, layered, slicing, error,
-                          nthreads))
+                          nthreads, [&] { return !on_stage || on_stage(nullptr); }))
         return fail();
     const LayerBounds& bounds = slicing.bounds;
     layered.luma = luma_weights(color.config.get());

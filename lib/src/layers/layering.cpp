@@ -154,7 +154,8 @@ std::string cutting_exceeds(const MemoryLimit& limit, const std::string& name,
 
 /// Cuts one flat render's or deep image's fragments into layers, appended
 /// to `layers`. `held` counts the bytes the layers cut so far hold; false
-/// with `error` when the next layer would take them past `limit`. The last
+/// with `error` when the next layer would take them past `limit`, or
+/// "cancelled" when `keep_going` (asked before each) says so. The last
 /// layer takes the pixels of `render` (if given: the flat render the
 /// fragments read, which nothing reads after) where it covers all of it:
 /// each of its pixels is read before it is written, and a 4K frame's last
@@ -162,7 +163,8 @@ std::string cutting_exceeds(const MemoryLimit& limit, const std::string& name,
 template<typename Source>
 bool slice(const Source& frags, const std::string& base, const LayerBounds& bounds,
            const MemoryLimit& limit, double& held, std::vector<Layer>& layers,
-           std::string& error, Layer* render, int nthreads)
+           std::string& error, Layer* render, int nthreads,
+           const std::function<bool()>& keep_going)
 {
     const double fragment_bytes = frags.bytes();
     // ImageBuf's move may throw, so a vector that grows copies its layers.
@@ -174,6 +176,10 @@ bool slice(const Source& frags, const std::string& base, const LayerBounds& boun
     for (int k = 0; k < bounds.count(); ++k) {
         if (extents[k].width() == 0)
             continue;
+        if (keep_going && !keep_going()) {
+            error = "cancelled";
+            return false;
+        }
         // The hidden background matters as far as it shows through the
         // blurred edges of nearer layers, or spreads its own light out
         // from under them: up to the largest blur of layers 0..k.
@@ -250,7 +256,8 @@ std::shared_ptr<const ImageBuf> deep_layer_data(const DeepImage& deep, const Lay
 
 bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
                       const LayeringOptions& options, LayeredScene& layered,
-                      Slicing& slicing, std::string& error, int nthreads)
+                      Slicing& slicing, std::string& error, int nthreads,
+                      const std::function<bool()>& keep_going)
 {
     slicing = Slicing();
     const std::vector<BlurField> flats = blur_fields(scene, coc, nthreads);
@@ -263,7 +270,7 @@ bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
         slicing.mixed_pixels += int64_t(mixed.size());
         const FlatFragments ff(flats[i], mixed, coc, bounds);
         if (!slice(ff, scene.flat[i].name, bounds, options.memory_limit, held, scene.layers,
-                   error, &scene.flat[i], nthreads))
+                   error, &scene.flat[i], nthreads, keep_going))
             return false;
     }
     for (const DeepImage& deep : scene.deep) {
@@ -274,7 +281,8 @@ bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
         }
         const size_t first = scene.layers.size();
         if (!slice(deep_fragments(deep, coc, bounds, nthreads), deep.name, bounds,
-                   options.memory_limit, held, scene.layers, error, nullptr, nthreads))
+                   options.memory_limit, held, scene.layers, error, nullptr, nthreads,
+                   keep_going))
             return false;
         if (!deep.data_names.empty())
             for (size_t i = first; i < scene.layers.size(); ++i)

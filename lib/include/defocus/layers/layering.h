@@ -2,6 +2,8 @@
 // layered framework (spread each layer, composite back to front) applies.
 #pragma once
 
+#include <functional>
+
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -80,10 +82,12 @@ struct Slicing {
 /// fill_hidden_background). A flat render's mixed pixels, on the silhouette
 /// of a nearer surface, are cut as two fragments (find_mixed_pixels). Sets
 /// `slicing` to what was done. False with `error` when the layers would
-/// take more than options.memory_limit.
+/// take more than options.memory_limit. `keep_going`, where given, is
+/// asked before each layer is cut; false stops with the error "cancelled".
 bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
                       const LayeringOptions& options, LayeredScene& layered,
-                      Slicing& slicing, std::string& error, int nthreads = 0);
+                      Slicing& slicing, std::string& error, int nthreads = 0,
+                      const std::function<bool()>& keep_going = {});
 
 /// The pixels of a layer that nearer layers hide and it does not cover,
 /// and what the layer shows elsewhere, as cutting it finds them.
