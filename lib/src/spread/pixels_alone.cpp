@@ -37,8 +37,8 @@ public:
         const int top = m_levels.back().y0, rows = int(m_levels.back().marked.size())
                                                        / m_levels.back().columns;
         parallel_for_each_item(0, rows, [&](int64_t row) {
-            const int y0 = std::max(roi.ybegin, (top + int(row)) << exact_block_levels),
-                      y1 = std::min(roi.yend, (top + int(row) + 1) << exact_block_levels);
+            const int y0 = std::max(roi.ybegin, (top + int(row)) * (1 << exact_block_levels)),
+                      y1 = std::min(roi.yend, (top + int(row) + 1) * (1 << exact_block_levels));
             for (int y = y0; y < y1; ++y) {
                 const uint8_t* kept = kept_exact + size_t(y - roi.ybegin) * roi.width();
                 for (int x = roi.xbegin; x < roi.xend; ++x)
