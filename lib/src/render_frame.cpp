@@ -243,9 +243,7 @@ namespace {
 bool frame_data_plan(const Shot& shot, int frame, const ImageSpec& input, DataPlan& plan,
                      std::string& error)
 {
-    const std::string aov = shot.output == OutputKind::Image && shot.aov != Aov::None
-                                ? aov_name(shot.aov)
-                                : "";
+    const std::string aov = aov_channel(shot);
     const std::string files = Strutil::join(frame_inputs(shot, frame), " ");
     if (!plan_data_channels(input, shot.data_channels, plan, error)) {
         error = format("{}: {}", files, error);
@@ -602,9 +600,9 @@ bool frame_spec(const Shot& shot, int frame, const ShotAssets& assets, ImageSpec
     }
     spec = shot.deep ? deep_result_spec(input, window, deep_color_type(shot, input))
                      : result_spec(input, window, output_pixel_type(shot, input));
-    if (shot.output == OutputKind::Image && shot.aov != Aov::None) {
+    if (const std::string aov = aov_channel(shot); !aov.empty()) {
         spec.nchannels += 1;
-        spec.channelnames.push_back(aov_name(shot.aov));
+        spec.channelnames.push_back(aov);
     }
     DataPlan plan;
     if (!frame_data_plan(shot, frame, input, plan, error))

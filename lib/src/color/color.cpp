@@ -69,6 +69,13 @@ std::string& package_config()
     return path;
 }
 
+/// What $OCIO names, "" when it is unset or empty.
+std::string ocio_variable()
+{
+    const char* env = std::getenv("OCIO");
+    return env ? env : "";
+}
+
 }  // namespace
 
 void set_package_ocio_config(const char* path)
@@ -89,17 +96,16 @@ ColorManagement& ColorManagement::operator=(ColorManagement&&) noexcept = defaul
 
 bool ColorManagement::chosen(const std::string& explicit_file)
 {
-    const char* env = std::getenv("OCIO");
-    return !explicit_file.empty() || (env && *env);
+    return !explicit_file.empty() || !ocio_variable().empty();
 }
 
 bool ColorManagement::load(const std::string& explicit_file, std::string& error)
 {
-    const char* env = std::getenv("OCIO");
+    const std::string env = ocio_variable();
     if (!explicit_file.empty()) {
         m_path = explicit_file;
         m_origin = mention("colorconfig");
-    } else if (env && *env) {
+    } else if (!env.empty()) {
         m_path = env;
         m_origin = "$OCIO";
     } else {

@@ -145,13 +145,10 @@ std::string system_error()
     return std::strerror(errno);
 }
 
-}  // namespace
-
-std::string replace_problem(const std::string& target)
+/// Why `target`, which is there as `existing` says, is not replaced; ""
+/// when it may be.
+std::string problem_replacing(const std::string& target, const struct stat& existing)
 {
-    struct stat existing;
-    if (::stat(target.c_str(), &existing) != 0)
-        return "";
     if (S_ISDIR(existing.st_mode))
         return "is a folder";
     if (!S_ISREG(existing.st_mode))
@@ -161,6 +158,14 @@ std::string replace_problem(const std::string& target)
     if (::access(target.c_str(), W_OK) != 0)
         return "is read-only for you: not replaced (make it writable, or remove it)";
     return "";
+}
+
+}  // namespace
+
+std::string replace_problem(const std::string& target)
+{
+    struct stat existing;
+    return ::stat(target.c_str(), &existing) == 0 ? problem_replacing(target, existing) : "";
 }
 
 TemporaryFile::TemporaryFile(const std::string& target, Kind kind)
@@ -238,14 +243,17 @@ bool TemporaryFile::commit(std::string& error)
     m_fd = -1;
     if (fd < 0)
         return fail(system_error());
-    if (const std::string problem = replace_problem(m_target); !problem.empty()) {
+    struct stat existing;
+    const bool replacing = ::stat(m_target.c_str(), &existing) == 0;
+    if (const std::string problem = replacing ? problem_replacing(m_target, existing) : "";
+        !problem.empty()) {
         ::close(fd);
         error = m_target + ": " + problem;
         return false;
     }
     // A file replaced keeps its permissions, and its owner where we may
     // give it (root), as cp's would.
-    if (struct stat existing; ::stat(m_target.c_str(), &existing) == 0
+    if (replacing
         && ((geteuid() == 0 && ::fchown(fd, existing.st_uid, existing.st_gid) != 0)
             || ::fchmod(fd, existing.st_mode & 07777) != 0)) {
         const std::string why = system_error();

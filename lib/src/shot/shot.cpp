@@ -163,6 +163,11 @@ bool is_animated(const Shot& shot)
            || shot.optical_centre.animated();
 }
 
+std::string aov_channel(const Shot& shot)
+{
+    return shot.output == OutputKind::Image && shot.aov != Aov::None ? aov_name(shot.aov) : "";
+}
+
 Camera camera_at(const Shot& shot, int frame)
 {
     Camera camera;
