@@ -44,8 +44,11 @@ float safe_depth(float z)
     return std::min(z, 1e30f);
 }
 
-/// Fills up to three quantities of a layer pixel.
-using QuantityFill = std::function<void(int x, int y, float q[3])>;
+/// What one spread carries: quantities or objects' mattes, as R, G and B.
+constexpr size_t per_spread = 3;
+
+/// Fills up to per_spread quantities of a layer pixel.
+using QuantityFill = std::function<void(int x, int y, float q[per_spread])>;
 
 /// `layer` over `roi` with three quantities times its alpha as colour.
 Layer quantity_layer(const Layer& layer, const ROI& roi, const QuantityFill& fill, int nthreads)
@@ -69,7 +72,7 @@ Layer quantity_layer(const Layer& layer, const ROI& roi, const QuantityFill& fil
         float* o = static_cast<float*>(out.color.pixeladdr(roi.xbegin, y));
         for (int x = roi.xbegin; x < roi.xend; ++x, o += 4) {
             const float a = color(x, y)[3];
-            float q[3] = { 0.0f, 0.0f, 0.0f };
+            float q[per_spread] = { 0.0f, 0.0f, 0.0f };
             if (a > 0.0f)
                 fill(x, y, q);
             o[0] = q[0] * a;
@@ -222,9 +225,9 @@ bool spread_quantities(ImageBuf& dst, Coverage& cov, Spreader& spreader,
 {
     const LayeredScene& scene = spreader.scene;
     const std::vector<size_t> from = lit_layers(scene);
-    for (size_t first = 0; first < all.size() || first == 0; first += 3) {
+    for (size_t first = 0; first < all.size() || first == 0; first += per_spread) {
         const std::vector<QuantityTarget> targets(
-            all.begin() + first, all.begin() + std::min(all.size(), first + 3));
+            all.begin() + first, all.begin() + std::min(all.size(), first + per_spread));
         std::vector<Layer> layers;
         layers.reserve(from.size());  // see Spreader::spread
         for (size_t i : from) {
@@ -234,7 +237,8 @@ bool spread_quantities(ImageBuf& dst, Coverage& cov, Spreader& spreader,
             for (const QuantityTarget& t : targets)
                 channels.push_back(t.source.empty() ? -1 : lookup.channel(t.source));
             const FloatPixels depth(layer.depth, layer.depth.roi());
-            layers.push_back(quantity_layer(layer, layer.color.roi(), [&](int x, int y, float q[3]) {
+            layers.push_back(quantity_layer(layer, layer.color.roi(),
+                                            [&](int x, int y, float q[per_spread]) {
                 for (size_t j = 0; j < channels.size(); ++j)
                     q[j] = targets[j].source.empty() ? safe_depth(*depth(x, y))
                            : channels[j] >= 0       ? safe_value(lookup(x, y)[channels[j]])
@@ -332,7 +336,7 @@ bool plausible_ids(const ObjectSet& set, const std::vector<ObjectExtent>& object
     double area = 0.0;  // what the spreads cover, 3 objects at a time
     for (const ObjectExtent& object : objects)
         for (const auto& [layer, extent] : object.layers)
-            area += double(extent.npixels()) / 3.0;
+            area += double(extent.npixels()) / per_spread;
     const double spreads = area / std::max(1.0, double(frame.npixels()));
     if (spreads <= 64.0)
         return true;
@@ -434,9 +438,9 @@ bool spread_objects(const ObjectSet& set, const std::vector<ObjectExtent>& objec
                     const Coverage& cov, TopShares& top, std::string& error)
 {
     const LayeredScene& scene = spreader.scene;
-    std::vector<float> shares(size_t(cov.roi.npixels()) * 3, 0.0f);
-    for (size_t first = 0; first < objects.size(); first += 3) {
-        const size_t count = std::min<size_t>(3, objects.size() - first);
+    std::vector<float> shares(size_t(cov.roi.npixels()) * per_spread, 0.0f);
+    for (size_t first = 0; first < objects.size(); first += per_spread) {
+        const size_t count = std::min(per_spread, objects.size() - first);
         std::vector<Layer> layers;
         std::vector<size_t> from;
         layers.reserve(scene.layers.size());  // see Spreader::spread
@@ -451,7 +455,8 @@ bool spread_objects(const ObjectSet& set, const std::vector<ObjectExtent>& objec
             std::vector<int> channels;
             for (const std::string& name : set.channels)
                 channels.push_back(lookups[i].channel(name));
-            layers.push_back(quantity_layer(scene.layers[i], crop, [&](int x, int y, float q[3]) {
+            layers.push_back(quantity_layer(scene.layers[i], crop,
+                                            [&](int x, int y, float q[per_spread]) {
                 PixelObject found[max_ranks];
                 const int n = pixel_objects(set, lookups[i](x, y), channels, found);
                 for (size_t m = 0; m < count; ++m)
@@ -469,8 +474,8 @@ bool spread_objects(const ObjectSet& set, const std::vector<ObjectExtent>& objec
                     std::vector<float> t(size_t(lit.width()));
                     cov.transmittance(i, y, lit.xbegin, lit.xend, t.data());
                     const float* p = static_cast<const float*>(s.pixeladdr(lit.xbegin, y));
-                    float* acc = &shares[cov.index(lit.xbegin, y) * 3];
-                    for (int x = 0; x < lit.width(); ++x, p += s.nchannels(), acc += 3)
+                    float* acc = &shares[cov.index(lit.xbegin, y) * per_spread];
+                    for (int x = 0; x < lit.width(); ++x, p += s.nchannels(), acc += per_spread)
                         for (size_t m = 0; m < count; ++m)
                             acc[m] += p[m] * t[size_t(x)];
                 }, by_rows(spreader.nthreads));
@@ -482,8 +487,8 @@ bool spread_objects(const ObjectSet& set, const std::vector<ObjectExtent>& objec
             for (int x = touched.xbegin; x < touched.xend; ++x) {
                 const size_t i = cov.index(x, y);
                 for (size_t m = 0; m < count; ++m) {
-                    top.insert(i, objects[first + m].id, shares[i * 3 + m]);
-                    shares[i * 3 + m] = 0.0f;
+                    top.insert(i, objects[first + m].id, shares[i * per_spread + m]);
+                    shares[i * per_spread + m] = 0.0f;
                 }
             }
         }, by_rows(spreader.nthreads));
@@ -607,15 +612,15 @@ bool data_channels(ImageBuf& dst, const ImageBuf& result, const LayeredScene& sc
     lay_out(plan, names, targets, sets, averages, normals);
     std::string error;
     std::vector<std::vector<ObjectExtent>> objects;
-    // Quantities and objects are spread three at a time.
-    spreader.total = std::max<int>(1, (int(targets.size()) + 2) / 3);
+    auto spreads = [](size_t items) { return int((items + per_spread - 1) / per_spread); };
+    spreader.total = std::max(1, spreads(targets.size()));
     for (const ObjectSet& set : sets) {
         objects.push_back(find_objects(set, scene, lookups));
         if (!plausible_ids(set, objects.back(), roi, error)) {
             dst.errorfmt("{}", error);
             return false;
         }
-        spreader.total += (int(objects.back().size()) + 2) / 3;
+        spreader.total += spreads(objects.back().size());
     }
     if (!spread_quantities(dst, cov, spreader, lookups, targets, !sets.empty(), error)) {
         dst.errorfmt("{}", error);
