@@ -274,8 +274,9 @@ int main(int argc, const char* argv[])
     // and what comes and goes beside the frames' images: worker threads'
     // stacks, the file encoders' buffers (up to 25 MB at 4K).
     const double transient = 32.0 * 1024 * 1024;
-    cl.shot.read.memory_limit
-        = shot.read.memory_limit.beside_process(resident_bytes() + transient);
+    const double process = resident_bytes() + transient;
+    cl.shot.read.memory_limit = shot.read.memory_limit.beside_process(process);
+    cl.shot.layering.memory_limit = shot.layering.memory_limit.beside_process(process);
     const RunRequest request = run_request(cl);
     RunPlan plan;
     if (!plan_run(shot, request, plan, error))

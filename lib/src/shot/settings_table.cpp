@@ -167,7 +167,9 @@ std::vector<SettingRule> scene_rules()
         // One limit, held by both stages that allocate what files ask for.
         { { "memory-limit", "scene", "memory_limit", K::Text, G::Scene,
             "--memory-limit SIZE",
-            "The most memory a frame's images may take, e.g. 12G or 512M. A file whose "
+            "The most memory rendering may take, e.g. 12G or 512M: the defocus command "
+            "counts its own code and libraries in it, so that it bounds its peak; Python "
+            "and the plugin count the frames' images. A file whose "
             "header asks for more (a giant data window, a deep file with billions of "
             "samples) is refused before anything is allocated (default: half the "
             "machine's memory)" },
