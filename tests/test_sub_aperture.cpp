@@ -8,6 +8,7 @@
 
 #include <OpenImageIO/imagebufalgo.h>
 
+#include <defocus/composite/data_channels.h>
 #include <defocus/composite/defocus_layers.h>
 
 #include "test_support.h"
@@ -173,4 +174,69 @@ TEST_CASE("a blurred opaque edge over sharp stripes is what the thin lens sees")
     const double cells = psnr_over(stack.engine(0), exact, band);
     WARN("blurred edge over stripes, against the thin lens: " << cells << " dB");
     CHECK(cells >= 35.0);
+}
+
+TEST_CASE("depth as a data channel is composited per part of the lens as colour is")
+{
+    // A light at 10 m before a wall at 60 m, behind a fence at 1 m: the
+    // light's bokeh mixes their depths and the bars' in the proportions each
+    // part of the lens sees. Depth times alpha, spread as colour and over
+    // alpha, is what the thin lens sees of depth.
+    Stack stack, depth_as_colour;
+    std::vector<LensLayer> depths;
+    auto add = [&](const char* name, float depth, const Shade& shade) {
+        stack.add(name, depth, shade);
+        depth_as_colour.add(name, depth, [&](int x, int y, float* rgba) {
+            shade(x, y, rgba);
+            rgba[0] = rgba[1] = rgba[2] = depth * rgba[3];
+        });
+        depths.push_back(depth_as_colour.lens.back());
+    };
+    add("wall", 60.0f, [](int, int, float* rgba) {
+        rgba[0] = rgba[1] = rgba[2] = 0.05f;
+        rgba[3] = 1.0f;
+    });
+    add("light", 10.0f, [](int x, int y, float* rgba) {
+        if (std::hypot(x + 0.5 - centre_x, y + 0.5 - centre_y) < 3.0)
+            rgba[0] = rgba[1] = rgba[2] = rgba[3] = 1.0f;
+    });
+    add("bars", 1.0f, [](int x, int, float* rgba) {
+        if ((x - centre_x + 8 + 1600) % 16 >= 6 && (x - centre_x + 8 + 1600) % 16 < 10) {
+            rgba[0] = rgba[1] = rgba[2] = 0.01f;
+            rgba[3] = 1.0f;
+        }
+    });
+    const ImageBuf exact = thin_lens(depths, bokeh);
+    // The mean distance in metres from the thin lens's depth over the
+    // bokeh, and the farthest from the depth spread as colour.
+    auto depth_error = [&](int cells, double& from_colour) {
+        SpreadOptions spread;
+        spread.aperture_cells = cells;
+        DataPlan plan;
+        plan.depth = true;
+        ImageBuf data;
+        REQUIRE(data_channels(data, stack.engine(cells), stack.scene, lens_camera(), spread,
+                              ApertureImages(), OutputWindow::Input, plan));
+        const ImageBuf colour = depth_as_colour.engine(cells);
+        double error = 0.0;
+        from_colour = 0.0;
+        for (int y = bokeh.ybegin; y < bokeh.yend; ++y)
+            for (int x = bokeh.xbegin; x < bokeh.xend; ++x) {
+                float truth[4], spread_depth[4], z[2];
+                exact.getpixel(x, y, truth);
+                colour.getpixel(x, y, spread_depth);
+                data.getpixel(x, y, z);
+                error += std::abs(z[0] - truth[0] / truth[3]);
+                from_colour = std::max(from_colour,
+                                       double(std::abs(z[0] - spread_depth[0] / spread_depth[3])));
+            }
+        return error / double(bokeh.npixels());
+    };
+    double cells_from_colour, one_from_colour;
+    const double cells = depth_error(0, cells_from_colour), one = depth_error(1, one_from_colour);
+    WARN("depth through the fence, mean error against the thin lens: " << cells
+         << " m with cells, " << one << " m with one cell");
+    CHECK(cells_from_colour < 1e-3);
+    CHECK(one_from_colour < 1e-3);
+    CHECK(cells < 0.7 * one);
 }

@@ -3,44 +3,113 @@
 #include <algorithm>
 #include <cmath>
 
+#include <OpenImageIO/parallel.h>
+
 #include <defocus/shot/memory_limit.h>
+
+#include "composite/sub_aperture.h"
 
 namespace defocus {
 
 using namespace OIIO;
+
+namespace {
+
+/// How far a layer's light lands from its pixels, and a pixel more.
+ROI grown_by_blur(const ROI& roi, const LayerReport& report)
+{
+    const int reach = int(std::ceil(0.5 * std::max(std::abs(report.coc_min),
+                                                   std::abs(report.coc_max))))
+                      + 1;
+    ROI grown = roi;
+    grown.xbegin -= reach;
+    grown.xend += reach;
+    grown.ybegin -= reach;
+    grown.yend += reach;
+    return grown;
+}
+
+/// What SubApertureLayers keeps while the layers are spread, as if every
+/// tile took cells: each layer's change (half RGBA) over where its light
+/// lands in `frame`.
+double change_bytes(const LayeredScene& layered, const ROI& frame)
+{
+    double bytes = 0.0;
+    for (size_t i = 0; i < layered.layers.size(); ++i)
+        bytes += SubApertureLayers::change_bytes
+                 * double(roi_intersection(
+                              grown_by_blur(layered.layers[i].color.roi(), layered.reports[i]),
+                              frame)
+                              .npixels());
+    return bytes;
+}
+
+/// What SubApertureLayers holds while it finds the changes, and frees
+/// before the layers are spread: each layer as the cells read it (a float
+/// RGBA copy unless it is one, its radius's slope, and while it is made its
+/// radius and runs, here 4 bytes a pixel); and on each of `nthreads`
+/// threads, a band of two tile rows across `frame` with each layer's sums
+/// (two float RGBA) and the band's light through a cell (double RGBA) and
+/// transmittances (two doubles).
+double cell_work_bytes(const LayeredScene& layered, const ROI& frame, int nthreads)
+{
+    double bytes = 0.0;
+    for (const Layer& layer : layered.layers) {
+        const bool copied = layer.color.spec().format != TypeFloat || layer.color.nchannels() != 4;
+        bytes += double(layer.color.roi().npixels())
+                 * ((copied ? float_bytes(1.0, 4) : 0.0) + float_bytes(1.0, 3));
+    }
+    const double band = double(frame.width() + 2) * (2 * CellTiles::size + 2);
+    const double per_layer = 2.0 * float_bytes(1.0, 4);
+    const double per_band = 4.0 * sizeof(double) + 2.0 * sizeof(double);
+    const int threads = nthreads > 0 ? nthreads : OIIO::get_int_attribute("threads", 1);
+    return bytes
+           + double(threads) * band * (per_layer * double(layered.layers.size()) + per_band);
+}
+
+/// Whether `spread` may cut the aperture into cells (the soft PSFs of tent
+/// and smooth take none).
+bool takes_cells(const SpreadOptions& spread)
+{
+    return spread.aperture_cells != 1 && spread.aperture.shape != ApertureShape::Tent
+           && spread.aperture.shape != ApertureShape::Smooth;
+}
+
+}  // namespace
 
 double result_bytes(double pixels)
 {
     return 2.0 * float_bytes(pixels, 4);
 }
 
-double spread_bytes(const LayeredScene& layered)
+double spread_bytes(const LayeredScene& layered, const SpreadOptions& spread, int nthreads)
 {
     const DeepImage* holdout = layered.holdout.get();
-    double bytes = holdout ? double(holdout->samples.size() * sizeof(DeepSample)
-                                    + holdout->offsets.size() * sizeof(uint64_t))
-                           : 0.0;
+    const double holdout_bytes = holdout ? double(holdout->samples.size() * sizeof(DeepSample)
+                                                  + holdout->offsets.size() * sizeof(uint64_t))
+                                         : 0.0;
+    // The layers as held, and what spreading them adds.
+    double layers = 0.0, spreading = 0.0;
     ROI all = layered.spec.roi();
     for (size_t i = 0; i < layered.layers.size(); ++i) {
         const Layer& layer = layered.layers[i];
-        const LayerReport& r = layered.reports[i];
-        const int reach =
-            int(std::ceil(0.5 * std::max(std::abs(r.coc_min), std::abs(r.coc_max)))) + 1;
         const ROI roi = layer.color.roi();
-        ROI grown = roi;
-        grown.xbegin -= reach;
-        grown.xend += reach;
-        grown.ybegin -= reach;
-        grown.yend += reach;
+        const ROI grown = grown_by_blur(roi, layered.reports[i]);
         const double growth = roi.npixels() > 0 ? double(grown.npixels()) / roi.npixels() : 0.0;
         double held = 0.0;
         for (const ImageBuf* image : { &layer.color, &layer.depth, &layer.rebuilt })
             held += image->initialized() ? double(image->spec().image_bytes()) : 0.0;
         const double blur_field = float_bytes(1.0, 1) + 1.0;  // a radius and a mask byte
-        bytes += held * growth + blur_field * double(grown.npixels());
+        layers += held;
+        spreading += held * (growth - 1.0) + blur_field * double(grown.npixels());
         all = roi_union(all, grown);
     }
-    return bytes + result_bytes(double(all.npixels()));
+    spreading += result_bytes(double(all.npixels()));
+    // The cells' changes are found before the layers are spread, and kept
+    // while they are.
+    const double cells = takes_cells(spread) ? change_bytes(layered, all) : 0.0;
+    const double work = takes_cells(spread) ? cell_work_bytes(layered, all, nthreads) : 0.0;
+    return holdout_bytes + layers + cells + std::max(spreading, work);
 }
 
 }  // namespace defocus

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <defocus/layers/layered_scene.h>
+#include <defocus/shot/options.h>
 
 namespace defocus {
 
@@ -9,10 +10,12 @@ namespace defocus {
 /// into and its accumulator, float RGBA each, over `pixels`.
 double result_bytes(double pixels);
 
-/// A bound on what spreading the layers holds at once: each layer's
-/// buffers (colour, depth, the rebuilt plane of a sliced render) grown by
-/// its blur's reach, with its blur field and highlight mask; the result and
-/// an accumulator over all of them; and the holdout.
-double spread_bytes(const LayeredScene& layered);
+/// A bound on what spreading the layers as `spread` says holds at once:
+/// each layer's buffers (colour, depth, the rebuilt plane of a sliced
+/// render) grown by its blur's reach, with its blur field and highlight
+/// mask; the result and an accumulator over all of them; the holdout; and
+/// where the aperture may be cut into cells, what compositing per cell
+/// holds, on `nthreads` threads (0: all).
+double spread_bytes(const LayeredScene& layered, const SpreadOptions& spread, int nthreads);
 
 }  // namespace defocus

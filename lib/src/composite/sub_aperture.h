@@ -66,6 +66,9 @@ public:
 
     SubApertureReport report() const;
 
+    /// What a layer's change holds a pixel.
+    static constexpr size_t change_bytes = 4 * sizeof(Imath::half);
+
 private:
     static constexpr size_t tile_floats = size_t(CellTiles::size) * CellTiles::size * 4;
 

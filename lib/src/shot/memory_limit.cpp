@@ -25,9 +25,14 @@ constexpr Unit units[] = { { 'T', 1024.0 * 1024 * 1024 * 1024 },
 
 std::string readable(double bytes)
 {
+    // Units are of 1024: 1000 to 1023 of one are written whole, not as 1e+03.
     for (const Unit& unit : units)
-        if (bytes >= unit.bytes)
-            return OIIO::Strutil::fmt::format("{:.3g} {}B", bytes / unit.bytes, unit.suffix);
+        if (bytes >= unit.bytes) {
+            const double count = bytes / unit.bytes;
+            return count >= 999.5
+                       ? OIIO::Strutil::fmt::format("{:.0f} {}B", count, unit.suffix)
+                       : OIIO::Strutil::fmt::format("{:.3g} {}B", count, unit.suffix);
+        }
     return OIIO::Strutil::fmt::format("{:.0f} bytes", bytes);
 }
 
