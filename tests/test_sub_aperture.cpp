@@ -44,13 +44,15 @@ struct Stack {
     LayeredScene scene;
     std::vector<LensLayer> lens;
 
-    Stack()
+    /// The display window 600 × 400 from (`display_x`, 0).
+    explicit Stack(int display_x = 0)
     {
         scene.source = "synthetic";
         scene.spec = OIIO::ImageSpec(frame.width(), frame.height(), 4, OIIO::TypeFloat);
         scene.spec.x = frame.xbegin;
         scene.spec.y = frame.ybegin;
-        scene.spec.full_x = scene.spec.full_y = 0;
+        scene.spec.full_x = display_x;
+        scene.spec.full_y = 0;
         scene.spec.full_width = 600;
         scene.spec.full_height = 400;
     }
@@ -77,24 +79,26 @@ struct Stack {
         order_layers(scene, coc);
     }
 
-    ImageBuf engine(int cells) const
+    ImageBuf engine(int cells, OutputWindow window = OutputWindow::Input) const
     {
         SpreadOptions spread;
         spread.aperture_cells = cells;
         ImageBuf out;
-        REQUIRE(defocus_layers(out, scene, lens_camera(), spread));
+        REQUIRE(defocus_layers(out, scene, lens_camera(), spread, {}, window));
         return out;
     }
 };
 
 /// A light 20 times brighter than the wall around it, at 10 m, behind
 /// vertical bars at 1 m, 4 px wide every 16 px; `bars` says which columns
-/// of bars there are (by index from the centre).
-Stack fence(const std::function<bool(int bar)>& bars)
+/// of bars there are (by index from the centre). The light is at the
+/// centre, or `light_x` across; the display window from `display_x`.
+Stack fence(const std::function<bool(int bar)>& bars, int light_x = centre_x,
+            int display_x = 0)
 {
-    Stack stack;
-    stack.add("light", 10.0f, [](int x, int y, float* rgba) {
-        const bool light = std::hypot(x + 0.5 - centre_x, y + 0.5 - centre_y) < 3.0;
+    Stack stack(display_x);
+    stack.add("light", 10.0f, [=](int x, int y, float* rgba) {
+        const bool light = std::hypot(x + 0.5 - light_x, y + 0.5 - centre_y) < 3.0;
         rgba[0] = rgba[1] = rgba[2] = light ? 1.0f : 0.05f;
         rgba[3] = 1.0f;
     });
@@ -124,6 +128,24 @@ TEST_CASE("a fence before a far light cuts its shadow into the light's bokeh")
          << " dB with cells, " << one << " dB with one cell");
     CHECK(cells >= 35.0);
     CHECK(one < cells - 5.0);
+}
+
+TEST_CASE("the fence's shadow runs on past the data window into a grown one")
+{
+    // The light at the right edge of the data and display windows: half its
+    // bokeh lands in the margin that the grown window adds.
+    const Stack stack = fence([](int) { return true; }, frame.xend - 2, frame.xend - 600);
+    const ROI edge(frame.xend - 14, frame.xend + 12, centre_y - 12, centre_y + 12, 0, 1, 0, 4);
+    const ROI margin(frame.xend, edge.xend, edge.ybegin, edge.yend, 0, 1, 0, 4);
+    const ImageBuf exact = thin_lens(stack.lens, edge);
+    const ImageBuf cells = stack.engine(0, OutputWindow::Grown),
+                   one = stack.engine(1, OutputWindow::Grown);
+    REQUIRE(cells.roi().contains(margin));
+    const double in_margin = psnr_over(cells, exact, margin), one_there = psnr_over(one, exact, margin);
+    WARN("fence past the data window, over the margin: " << in_margin << " dB with cells, "
+         << one_there << " dB with one cell");
+    CHECK(in_margin >= 35.0);
+    CHECK(one_there < in_margin - 5.0);
 }
 
 TEST_CASE("a near bar cuts the far light's bokeh on the side the thin lens says")

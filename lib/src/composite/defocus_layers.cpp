@@ -419,9 +419,8 @@ bool composite_apart(const LayeredScene& scene, FrameSpreads& layers,
 
 /// The layers' changes from compositing per cell of the aperture, with its
 /// shape (a disc, polygon, mask or box; the soft PSFs of tent and smooth
-/// take none): over the frame's window, or for a grown one, known only
-/// once the layers are spread, over the data and display windows, its
-/// margin composited whole.
+/// take none), over the frame's window: the display or data window, or
+/// both grown to wherever the layers' light lands.
 void compute_cells(SubApertureLayers& cells, const LayeredScene& scene, const Camera& camera,
                    const SpreadOptions& spread, const SpreadPlan& plan, OutputWindow window,
                    const ROI& display, int nthreads)
@@ -437,7 +436,7 @@ void compute_cells(SubApertureLayers& cells, const LayeredScene& scene, const Ca
                   window == OutputWindow::Display ? display
                   : window == OutputWindow::Input ? scene.spec.roi()
                                                   : roi_union(display, scene.spec.roi()),
-                  nthreads);
+                  window == OutputWindow::Grown, nthreads);
 }
 
 /// defocus_layers(), or with `apart` spread_layers_apart().

@@ -173,14 +173,19 @@ void BandSums::change(size_t i, int x, int y, float* out) const
 
 void SubApertureLayers::compute(const LayeredScene& scene, const CircleOfConfusion& coc,
                                 const RowProfile& profile, int cells, const ROI& window,
-                                int nthreads)
+                                bool grown, int nthreads)
 {
     std::vector<FloatPixels> colors(scene.layers.size());
     std::vector<SignedLayer> layers(scene.layers.size());
     for (size_t l = 0; l < scene.layers.size(); ++l)
         if (scene.reports[l].pixels > 0)
             make_source(scene.layers[l], coc, profile.extent(), colors[l], layers[l], nthreads);
-    m_tiles = plan_cell_tiles(layers, window, cells, nthreads);
+    ROI where = window;
+    if (grown)
+        for (const SignedLayer& layer : layers)
+            if (const ROI light = layer.light(); light.defined())
+                where = roi_union(where, light);
+    m_tiles = plan_cell_tiles(layers, where, cells, nthreads);
     allocate(layers);
     std::map<int, std::vector<ApertureCell>> cuts;
     for (uint8_t across : m_tiles.across)

@@ -55,9 +55,11 @@ class SubApertureLayers {
 public:
     /// The changes over `window` for the layers of `scene` through `coc`,
     /// with the aperture's shape `profile`; `cells` is the setting (0
-    /// automatic, 1 none, else about that many).
+    /// automatic, 1 none, else about that many). With `grown`, the window
+    /// grows to take in wherever the layers' light lands.
     void compute(const LayeredScene& scene, const CircleOfConfusion& coc,
-                 const RowProfile& profile, int cells, const OIIO::ROI& window, int nthreads);
+                 const RowProfile& profile, int cells, const OIIO::ROI& window, bool grown,
+                 int nthreads);
 
     /// Layer `l`'s change at pixel (x, y), RGBA, and the next pixels' of
     /// its row up to column `end`, into `out` (room for a tile's row);

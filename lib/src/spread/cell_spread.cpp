@@ -298,14 +298,20 @@ void SignedLayer::set(const OIIO::ROI& pixels, const float* rgba, const float* r
     }, nthreads);
 }
 
+OIIO::ROI SignedLayer::light() const
+{
+    if (!lit.defined())
+        return lit;
+    // A footprint's corner deltas land up to a pixel past its edge.
+    const int r = int(std::ceil(reach())) + 2;
+    return OIIO::ROI(lit.xbegin - r, lit.xend + r, lit.ybegin - r, lit.yend + r);
+}
+
 OIIO::ROI SignedLayer::light_in(const OIIO::ROI& window) const
 {
     if (!lit.defined())
         return OIIO::ROI(window.xbegin, window.xbegin, window.ybegin, window.ybegin);
-    // A footprint's corner deltas land up to a pixel past its edge.
-    const int r = int(std::ceil(reach())) + 2;
-    return OIIO::roi_intersection(
-        OIIO::ROI(lit.xbegin - r, lit.xend + r, lit.ybegin - r, lit.yend + r), window);
+    return OIIO::roi_intersection(light(), window);
 }
 
 void CellBand::reset(const OIIO::ROI& window)

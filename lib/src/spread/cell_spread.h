@@ -51,6 +51,8 @@ struct SignedLayer {
 
     /// How far any pixel's light lands from it.
     float reach() const { return std::max(std::abs(radii[0]), std::abs(radii[1])) * extent; }
+    /// The pixels this layer's light can land on (undefined: none).
+    OIIO::ROI light() const;
     /// The pixels of `window` that this layer's light can land on; none
     /// (see has_pixels) where it lands on none of them.
     OIIO::ROI light_in(const OIIO::ROI& window) const;
