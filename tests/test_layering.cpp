@@ -469,3 +469,68 @@ TEST_CASE("stripes behind a thin blurred pole keep their contrast")
                   << contrast(truth));
     CHECK(contrast(flat_result) >= 0.5 * contrast(truth));
 }
+
+namespace {
+
+/// A deep render of size 120x80: a striped wall at 25 m, and over the left
+/// half, a uniform fog from 2 m to 20 m of alpha 0.6, as one volume sample
+/// a pixel (`thin` 0), as `thin` point samples of the same alpha between
+/// them evenly through it, or (-1) as one point sample at 11 m.
+Scene fog_scene(int thin)
+{
+    Scene scene;
+    scene.spec = OIIO::ImageSpec(120, 80, 4, OIIO::TypeFloat);
+    DeepImage deep;
+    deep.name = "fog";
+    deep.roi = ROI(0, 120, 0, 80);
+    const float alpha = 0.6f, shade = 0.3f, near = 2.0f, far = 20.0f;
+    for (int y = 0; y < 80; ++y)
+        for (int x = 0; x < 120; ++x) {
+            deep.offsets.push_back(deep.samples.size());
+            if (x < 60 && thin <= 0)
+                deep.samples.push_back({ shade * alpha, shade * alpha, shade * alpha, alpha,
+                                         thin < 0 ? 0.5f * (near + far) : near,
+                                         thin < 0 ? 0.5f * (near + far) : far });
+            for (int i = 0; x < 60 && i < thin; ++i) {
+                const float a = float(-std::expm1(std::log1p(-alpha) / thin));
+                const float z = near + (far - near) * (i + 0.5f) / float(thin);
+                deep.samples.push_back({ shade * a, shade * a, shade * a, a, z, z });
+            }
+            const float wall = (x / 4) % 2 ? 1.0f : 0.1f;
+            deep.samples.push_back({ wall, wall, wall, 1.0f, 25.0f, 25.0f });
+        }
+    deep.offsets.push_back(deep.samples.size());
+    scene.deep.push_back(std::move(deep));
+    return scene;
+}
+
+}  // namespace
+
+TEST_CASE("a volume deep sample is spread over the depth it spans")
+{
+    // Volume samples (ZBack > Z), as Houdini, Karma or RenderMan write fog,
+    // are the limit of thin samples through them: a fog from 2 m to 20 m
+    // (CoC -5.8 to +9.8 px) is the same as 1024 thin samples, layer by
+    // layer. Each piece of it between the layers' boundaries went to the
+    // layers as a point at its middle depth: 2.3e-3 off.
+    LayeringOptions eight;
+    eight.layers = 8;
+    const ImageBuf volume = render(fog_scene(0), 3.0, eight);
+    auto worst = [&](const ImageBuf& other) {
+        float most = 0.0f;
+        for (int y = 0; y < 80; ++y)
+            for (int x = 0; x < 120; ++x)
+                for (int c = 0; c < 4; ++c)
+                    most = std::max(most, std::abs(volume.getchannel(x, y, 0, c)
+                                                   - other.getchannel(x, y, 0, c)));
+        return most;
+    };
+    const float fine = worst(render(fog_scene(1024), 3.0, eight)),
+                coarse = worst(render(fog_scene(64), 3.0, eight)),
+                one_depth = worst(render(fog_scene(-1), 3.0, eight));
+    WARN("fog as one volume sample, at most this far from 1024 thin samples: "
+         << fine << "; from 64 (2.4 px of CoC apart at 2 m): " << coarse
+         << "; a point sample at its middle depth: " << one_depth);
+    CHECK(fine < 1e-3f);
+    CHECK(one_depth > 10.0f * fine);
+}

@@ -70,10 +70,14 @@ void tally_rows(const ROI& roi, Tally& total, const Tally& empty, int nthreads, 
     }, paropt(nthreads));
 }
 
-/// Folds every covered deep sample (both ends of a volume sample) into
-/// `total`: visit(tally, c, alpha) with its CoC c.
+/// Folds every covered deep sample into `total`: visit(tally, c, alpha)
+/// with its CoC c. A volume sample is visited as the thin samples it is
+/// the limit of: a piece of it from every `step` of CoC, each with its
+/// share of the sample's optical depth (a thin sample's alpha), and its far
+/// end with none. CoC is affine in 1/z at a pixel, so each piece's length
+/// in depth follows from the ends'.
 template<typename Tally, typename Visit, typename Merge>
-void tally_deep_cocs(const Scene& scene, const CircleOfConfusion& coc, Tally& total,
+void tally_deep_cocs(const Scene& scene, const CircleOfConfusion& coc, double step, Tally& total,
                      const Tally& empty, int nthreads, Visit&& visit, Merge&& merge)
 {
     for (const DeepImage& deep : scene.deep)
@@ -82,11 +86,28 @@ void tally_deep_cocs(const Scene& scene, const CircleOfConfusion& coc, Tally& to
                 const int64_t p = deep.pixel_index(x, y);
                 for (uint64_t i = deep.offsets[p]; i < deep.offsets[p + 1]; ++i) {
                     const DeepSample& s = deep.samples[i];
-                    if (s.a > 0.0f) {
-                        visit(tally, coc.diameter(s.z, x, y), s.a);
-                        if (s.zback != s.z)
-                            visit(tally, coc.diameter(s.zback, x, y), 0.0f);
+                    if (!(s.a > 0.0f))
+                        continue;
+                    const double c_near = coc.diameter(s.z, x, y);
+                    if (!(s.zback > s.z) || !std::isfinite(s.zback)) {
+                        visit(tally, c_near, s.a);
+                        continue;
                     }
+                    const double c_far = coc.diameter(s.zback, x, y);
+                    const double steps = std::ceil((c_far - c_near) / step);
+                    const int pieces = steps < 4096.0 ? std::max(1, int(steps)) : 4096;
+                    const double optical_depth = -std::log1p(-std::min(double(s.a), 1.0 - 1e-7));
+                    const double inv_near = 1.0 / s.z, inv_far = 1.0 / s.zback;
+                    const double per_depth = optical_depth / (double(s.zback) - s.z);
+                    double z = s.z;
+                    for (int k = 0; k < pieces; ++k) {
+                        const double t = double(k + 1) / pieces;
+                        const double z_end = 1.0 / (inv_near + (inv_far - inv_near) * t);
+                        visit(tally, c_near + (c_far - c_near) * k / pieces,
+                              float(per_depth * (z_end - z)));
+                        z = z_end;
+                    }
+                    visit(tally, c_far, 0.0f);
                 }
             }
         }, merge);
@@ -101,7 +122,7 @@ CocHistogram coc_histogram(const Scene& scene, const std::vector<BlurField>& fla
         range = { std::min(range.first, double(flat.least_blur())),
                   std::max(range.second, double(flat.largest_blur())) };
     tally_deep_cocs(
-        scene, coc, range, Range { INFINITY, -INFINITY }, nthreads,
+        scene, coc, INFINITY, range, Range { INFINITY, -INFINITY }, nthreads,
         [](Range& r, double c, float) {
             r.first = std::min(r.first, c);
             r.second = std::max(r.second, c);
@@ -131,7 +152,7 @@ CocHistogram coc_histogram(const Scene& scene, const std::vector<BlurField>& fla
             }
         }, add);
     tally_deep_cocs(
-        scene, coc, h.weight, empty, nthreads,
+        scene, coc, CocHistogram::bin, h.weight, empty, nthreads,
         [&](std::vector<double>& weight, double c, float a) { weight[h.index(c)] += a; }, add);
     return h;
 }
@@ -192,23 +213,35 @@ public:
         }, by_rows(m_nthreads));
     }
 
-    /// Between the successive samples of each pixel of a deep image.
+    /// Between the successive samples of each pixel of a deep image: from
+    /// the far end of what lies in front (a volume sample is continuous
+    /// through its depth) to the next sample's near end.
     void scan_samples(const DeepImage& deep, const CircleOfConfusion& coc)
     {
         const size_t first = m_rows.size();
         m_rows.resize(first + deep.roi.height());
         parallel_for(deep.roi.ybegin, deep.roi.yend, [&](int y) {
             std::vector<Occlusion>& out = m_rows[first + (y - deep.roi.ybegin)];
-            std::vector<double> cocs;
+            std::vector<std::pair<double, double>> spans;  // near and far CoC
             for (int x = deep.roi.xbegin; x < deep.roi.xend; ++x) {
                 const int64_t p = deep.pixel_index(x, y);
-                cocs.clear();
-                for (uint64_t i = deep.offsets[p]; i < deep.offsets[p + 1]; ++i)
-                    if (deep.samples[i].a > 0.0f)
-                        cocs.push_back(coc.diameter(deep.samples[i].z, x, y));
-                std::sort(cocs.begin(), cocs.end());
-                for (size_t i = 1; i < cocs.size(); ++i)
-                    add(out, cocs[i - 1], cocs[i]);
+                spans.clear();
+                for (uint64_t i = deep.offsets[p]; i < deep.offsets[p + 1]; ++i) {
+                    const DeepSample& s = deep.samples[i];
+                    if (s.a > 0.0f) {
+                        const double near = coc.diameter(s.z, x, y);
+                        spans.emplace_back(near, s.zback > s.z && std::isfinite(s.zback)
+                                                     ? coc.diameter(s.zback, x, y)
+                                                     : near);
+                    }
+                }
+                std::sort(spans.begin(), spans.end());
+                double reached = spans.empty() ? 0.0 : spans[0].second;
+                for (size_t i = 1; i < spans.size(); ++i) {
+                    if (spans[i].first > reached)
+                        add(out, reached, spans[i].first);
+                    reached = std::max(reached, spans[i].second);
+                }
             }
         }, by_rows(m_nthreads));
     }
@@ -358,10 +391,12 @@ LayerBounds layer_bounds(const Scene& scene, const std::vector<BlurField>& flats
         for (size_t k = 0; k <= cuts.size(); ++k) {
             const int to = k < cuts.size() ? cuts[k] : int(h.weight.size());
             while (to - from > span) {
-                // The emptiest bin within reach; among equals the farthest,
-                // so that a gap between objects is crossed in one layer.
-                int best = from + 1;
-                for (int i = from + 1; i <= from + span; ++i)
+                // The emptiest bin in the farther half of the reach; among
+                // equals the farthest, so that a gap between objects is
+                // crossed in one layer. (Over all of it, content that
+                // thickens with depth, as fog does, was cut a bin at a time.)
+                int best = from + (span + 1) / 2;
+                for (int i = best; i <= from + span; ++i)
                     if (h.weight[i] <= h.weight[best])
                         best = i;
                 bounds.push_back(h.lo + (best + 0.5) * CocHistogram::bin);

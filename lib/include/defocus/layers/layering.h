@@ -27,6 +27,9 @@ public:
 
     int count() const { return int(m_bounds.size()) - 1; }
     double boundary(int i) const { return m_bounds[i]; }
+    /// How wide, in CoC, the band about each boundary is whose content
+    /// belongs to both layers (see share()).
+    double soft_band() const { return m_band; }
 
     /// The layers a point with signed CoC `c` belongs to: `front` with
     /// weight `front_weight`, and front + 1 with the rest. Content within
