@@ -506,6 +506,36 @@ Scene fog_scene(int thin)
 
 }  // namespace
 
+TEST_CASE("a checker behind a thin pole continues with its period")
+{
+    // Checks 15 px wide, 10 high; a pole over x 56-63 hides a check's edge
+    // (at x 60). A line between the hole's two sides ramps from one check's
+    // colour to the other's; a copy from one period along the row puts the
+    // edge where it is.
+    const ROI pole(56, 64, 0, 80);
+    auto check = [](int x, int y) { return (x / 15 + y / 10) % 2 ? 0.9f : 0.1f; };
+    Scene scene = flat_scene([&](int x, int y, float* rgba, float& z) {
+        const bool in_pole = pole.contains(x, y);
+        std::fill(rgba, rgba + 3, in_pole ? 0.05f : check(x, y));
+        rgba[3] = 1.0f;
+        z = in_pole ? 1.0f / 2.9f : 0.5f;  // CoC -30 and 0 at focus 0.5
+    });
+    const Camera camera = synthetic_camera(0.5);
+    LayeredScene layers;
+    Slicing slicing;
+    std::string error;
+    REQUIRE(decompose_layers(std::move(scene), CircleOfConfusion(camera, ROI(0, 120, 0, 120)), {},
+                             layers, slicing, error));
+    const Layer& back = layers.layers.front();
+    double worst = 0.0;
+    for (int y = 4; y < 76; ++y)
+        for (int x = pole.xbegin; x < pole.xend; ++x)
+            worst = std::max(worst, double(std::abs(back.color.getchannel(x, y, 0, 0)
+                                                    - check(x, y))));
+    INFO("the checker behind the pole is at most " << worst << " off");
+    CHECK(worst < 0.01);
+}
+
 TEST_CASE("a volume deep sample is spread over the depth it spans")
 {
     // Volume samples (ZBack > Z), as Houdini, Karma or RenderMan write fog,

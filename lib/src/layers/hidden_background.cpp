@@ -12,6 +12,7 @@
 
 #include "layers/brightness.h"
 #include "layers/continued_lines.h"
+#include "layers/continued_patterns.h"
 #include "layers/hole_map.h"
 #include "util/bounding_box.h"
 #include "util/float_pixels.h"
@@ -117,6 +118,10 @@ int line_length(double max_distance)
 {
     return int(std::min(4.0 * max_distance, 65535.0));
 }
+
+/// The widest run of a hole that a pattern is copied across: beyond it, a
+/// copy from along the same row joins unrelated surfaces.
+constexpr int widest_pattern_run = 32;
 
 /// The first pyramid level over `window`: per cell of 2x2 pixels, the sums
 /// over its observed pixels (those not in `holes`), each weighed so that it counts as no brighter than
@@ -234,6 +239,14 @@ void fill_holes(Layer& layer, const HoleMap& holes, const ROI& hidden, const ROI
         ROI(hidden.xbegin - reach, hidden.xend + reach, hidden.ybegin - reach, hidden.yend + reach),
         window);
     const ContinuedLines lines(color, depth, holes, line_window, length, nthreads);
+    const int pattern_width = std::min(length, widest_pattern_run);
+    const int pattern_reach = ContinuedPatterns::reach(pattern_width);
+    const ContinuedPatterns patterns(
+        color, depth, holes,
+        roi_intersection(ROI(hidden.xbegin - pattern_reach, hidden.xend + pattern_reach,
+                             hidden.ybegin - pattern_reach, hidden.yend + pattern_reach),
+                         window),
+        pattern_width, nthreads);
 
     parallel_for(window.ybegin, window.yend, [&](int y) {
         // Row y's pixels from the window's first column on.
@@ -246,13 +259,23 @@ void fill_holes(Layer& layer, const HoleMap& holes, const ROI& hidden, const ROI
                 continue;
             const int x = window.xbegin + i;
             float mean[5], line[5], trust = 0.0f;
-            const bool pulled = pull(pyramid[0], i, y - window.ybegin, mean);
+            bool found = pull(pyramid[0], i, y - window.ybegin, mean);
             if (lines.at(x, y, line, trust)) {
-                if (!pulled)
+                if (!found)
                     trust = 1.0f;
                 for (int c = 0; c < 5; ++c)
-                    mean[c] = trust * line[c] + (1 - trust) * (pulled ? mean[c] : 0.0f);
-            } else if (!pulled)
+                    mean[c] = trust * line[c] + (1 - trust) * (found ? mean[c] : 0.0f);
+                found = true;
+            }
+            float copy[5];
+            if (patterns.at(x, y, copy, trust)) {
+                if (!found)
+                    trust = 1.0f;
+                for (int c = 0; c < 5; ++c)
+                    mean[c] = trust * copy[c] + (1 - trust) * (found ? mean[c] : 0.0f);
+                found = true;
+            }
+            if (!found)
                 continue;
             if (mean[3] <= 0.0f)
                 continue;

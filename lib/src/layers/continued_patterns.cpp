@@ -1,0 +1,260 @@
+#include "layers/continued_patterns.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <OpenImageIO/parallel.h>
+
+#include "util/parallel_rows.h"
+
+namespace defocus {
+
+using namespace OIIO;
+
+namespace {
+
+/// Observed pixels compared on each side of a run, along it.
+constexpr int side_pixels = 5;
+
+/// How far along its line a run's copy is searched, beyond the run's own
+/// width: a period of the pattern must fit.
+constexpr int search_reach = 64;
+
+/// Side pixels covered less than this (beside a nearer edge, or the
+/// layer's own edge) are not compared.
+constexpr float min_side_coverage = 0.25f;
+
+/// Where the best copy's sides differ from the run's by this share of
+/// their own variation, it is trusted 1/e.
+constexpr float copy_trust_scale = 0.1f;
+
+/// How unlike two observations' colours are: squared differences of their
+/// colour over their coverage. A pixel beside a nearer edge holds only the
+/// part of its coverage the edge leaves, so its coverage is not compared.
+float colour_difference(const float a[5], const float b[5])
+{
+    float diff = 0.0f;
+    for (int c = 0; c < 3; ++c) {
+        const float d = a[c] / a[3] - b[c] / b[3];
+        diff += d * d;
+    }
+    return diff;
+}
+
+}  // namespace
+
+int ContinuedPatterns::reach(int max_width)
+{
+    return max_width + search_reach + side_pixels + 2;
+}
+
+ContinuedPatterns::ContinuedPatterns(const FloatPixels& color, const FloatPixels& depth,
+                                     const HoleMap& holes, const ROI& window, int max_width,
+                                     int nthreads)
+    : m_color(color)
+    , m_depth(depth)
+    , m_holes(holes)
+    , m_window(window)
+    , m_max_width(max_width)
+    , m_copies(size_t(std::max<imagesize_t>(window.npixels(), 0)))
+{
+    if (window.width() <= 0 || window.height() <= 0)
+        return;
+    continue_runs(true, nthreads);
+    continue_runs(false, nthreads);
+}
+
+bool ContinuedPatterns::observed(int x, int y) const
+{
+    // Not a surface continued behind a nearer edge: that is made up too.
+    return m_window.contains(x, y) && *m_holes.row(x, y) == HiddenPixels::seen;
+}
+
+void ContinuedPatterns::observation(int x, int y, float value[5]) const
+{
+    const float* c = m_color(x, y);
+    std::copy(c, c + 4, value);
+    value[4] = c[3] > 0.0f ? c[3] * std::min(*m_depth(x, y), 1e30f) : 0.0f;
+}
+
+/// One run of hidden pixels along a line: u along it, v across.
+struct ContinuedPatterns::Run {
+    int begin, end, v;
+};
+
+/// A seen pixel beside a run, at (u, v) of its line's axes.
+struct ContinuedPatterns::Sample {
+    int u, v;
+    float value[5];
+};
+
+void ContinuedPatterns::pixel(bool along_rows, int u, int v, int& x, int& y)
+{
+    x = along_rows ? u : v;
+    y = along_rows ? v : u;
+}
+
+std::vector<ContinuedPatterns::Sample> ContinuedPatterns::sides(bool along_rows, const Run& run,
+                                                                 float& nearest) const
+{
+    // Up to `side_pixels` seen pixels before and after the run, on its own
+    // line and the two beside it on either side, from the second on: the
+    // pixel next to the hole often holds some of the occluder's antialiased
+    // edge.
+    std::vector<Sample> found;
+    nearest = INFINITY;
+    for (int dv = -2; dv <= 2; ++dv)
+        for (int k = 2; k <= side_pixels + 1; ++k)
+            for (const int u : { run.begin - k, run.end - 1 + k }) {
+                int x, y;
+                pixel(along_rows, u, run.v + dv, x, y);
+                if (!observed(x, y))
+                    continue;
+                Sample s { u, run.v + dv, {} };
+                observation(x, y, s.value);
+                if (s.value[3] < min_side_coverage)
+                    continue;
+                nearest = std::min(nearest, s.value[4] / s.value[3]);
+                found.push_back(s);
+            }
+    return found;
+}
+
+float ContinuedPatterns::difference(bool along_rows, const Run& run,
+                                    const std::vector<Sample>& sides, int shift, float nearest,
+                                    std::vector<float>& differences) const
+{
+    // The copy must be seen all along, no nearer than the run's sides.
+    for (int u = run.begin; u < run.end; ++u) {
+        int x, y;
+        pixel(along_rows, u + shift, run.v, x, y);
+        if (!observed(x, y) || (m_color(x, y)[3] > 0.0f && *m_depth(x, y) < 0.99f * nearest))
+            return INFINITY;
+    }
+    differences.clear();
+    for (const Sample& s : sides) {
+        int x, y;
+        pixel(along_rows, s.u + shift, s.v, x, y);
+        if (!observed(x, y))
+            continue;
+        float other[5];
+        observation(x, y, other);
+        if (other[3] >= min_side_coverage)
+            differences.push_back(colour_difference(other, s.value));
+    }
+    if (differences.size() < sides.size() * 3 / 4)
+        return INFINITY;
+    // The worst two are left out: a side pixel may be part of another
+    // occluder's edge, or a speck.
+    std::sort(differences.begin(), differences.end());
+    const size_t kept = differences.size() - 2;
+    float sum = 0.0f;
+    for (size_t i = 0; i < kept; ++i)
+        sum += differences[i];
+    return sum / float(kept);
+}
+
+bool ContinuedPatterns::best_copy(bool along_rows, const Run& run, Copy& copy) const
+{
+    float nearest;
+    const std::vector<Sample> found = sides(along_rows, run, nearest);
+    if (found.size() < 2 * side_pixels)
+        return false;
+    // The sides' own variation: a plain surface needs no copy.
+    float mean[5] = { 0, 0, 0, 1, 0 }, variation = 0.0f;
+    for (const Sample& s : found)
+        for (int c = 0; c < 3; ++c)
+            mean[c] += s.value[c] / s.value[3] / float(found.size());
+    for (const Sample& s : found)
+        variation += colour_difference(s.value, mean);
+    variation /= float(found.size());
+    if (variation <= 1e-8f)
+        return false;
+    const int width = run.end - run.begin, farthest = search_reach + width;
+    std::vector<float> by_shift(size_t(2 * farthest + 1), INFINITY), differences;
+    float best = INFINITY;
+    for (int shift = -farthest; shift <= farthest; ++shift)
+        if (std::abs(shift) >= width) {
+            float& d = by_shift[size_t(shift + farthest)];
+            d = difference(along_rows, run, found, shift, nearest, differences);
+            best = std::min(best, d);
+        }
+    if (!std::isfinite(best))
+        return false;
+    // Where the sides do not pin the hole's content down (a checker's edge
+    // anywhere between them matches), the shifts that match as well run
+    // together: the middle of the nearest such range is taken.
+    const float tied = best + 1e-3f * variation;
+    int chosen = 0;
+    bool any = false;
+    for (int first = -farthest; first <= farthest;) {
+        if (!(by_shift[size_t(first + farthest)] <= tied)) {
+            ++first;
+            continue;
+        }
+        int last = first;
+        while (last + 1 <= farthest && by_shift[size_t(last + 1 + farthest)] <= tied)
+            ++last;
+        const int middle = (first + last) / 2;
+        if (!any || std::abs(middle) < std::abs(chosen))
+            chosen = middle;
+        any = true;
+        first = last + 1;
+    }
+    copy = { along_rows ? chosen : 0, along_rows ? 0 : chosen,
+             std::exp(-best / (copy_trust_scale * variation)) };
+    return std::isfinite(by_shift[size_t(chosen + farthest)]);
+}
+
+void ContinuedPatterns::continue_runs(bool along_rows, int nthreads)
+{
+    const int lines = along_rows ? m_window.height() : m_window.width();
+    const int length = along_rows ? m_window.width() : m_window.height();
+    const int u0 = along_rows ? m_window.xbegin : m_window.ybegin;
+    const int v0 = along_rows ? m_window.ybegin : m_window.xbegin;
+    auto hidden = [&](int u, int v) {
+        int x, y;
+        pixel(along_rows, u, v, x, y);
+        return m_holes(x, y);
+    };
+    parallel_for(0, lines, [&](int64_t line) {
+        const int v = v0 + int(line);
+        for (int u = u0; u < u0 + length;) {
+            if (!hidden(u, v)) {
+                ++u;
+                continue;
+            }
+            Run run { u, u, v };
+            while (run.end < u0 + length && hidden(run.end, v))
+                ++run.end;
+            u = run.end;
+            Copy copy;
+            if (run.end - run.begin > m_max_width || !best_copy(along_rows, run, copy))
+                continue;
+            for (int r = run.begin; r < run.end; ++r) {
+                int x, y;
+                pixel(along_rows, r, v, x, y);
+                Copy& kept = m_copies[size_t(y - m_window.ybegin) * m_window.width()
+                                      + (x - m_window.xbegin)];
+                // Rows first, then columns: the better of the two stays.
+                if (copy.trust > kept.trust)
+                    kept = copy;
+            }
+        }
+    }, by_rows(nthreads));
+}
+
+bool ContinuedPatterns::at(int x, int y, float value[5], float& trust) const
+{
+    if (!m_window.contains(x, y))
+        return false;
+    const Copy& copy
+        = m_copies[size_t(y - m_window.ybegin) * m_window.width() + (x - m_window.xbegin)];
+    if (copy.trust <= 0.0f)
+        return false;
+    observation(x + copy.dx, y + copy.dy, value);
+    trust = copy.trust;
+    return true;
+}
+
+}  // namespace defocus

@@ -1,0 +1,70 @@
+// Internal: the surface behind a thin hole, copied from where the pixels on
+// its two sides repeat along its row or column (exemplar-based filling,
+// Criminisi, Perez & Toyama 2004, restricted to one line of search).
+#pragma once
+
+#include <vector>
+
+#include <OpenImageIO/imagebuf.h>
+
+#include "layers/hole_map.h"
+#include "util/float_pixels.h"
+
+namespace defocus {
+
+/// For each hidden pixel of a layer in a thin hole, the surface behind it
+/// copied from the same row (for a hole's run along a row) or column,
+/// shifted to where the pixels beside the run, on both sides and on the
+/// rows (columns) next to it, look most alike: a checker, bricks or
+/// stripes behind a thin pole continue with their period, which a line
+/// between the hole's two sides blurs into a blotch. Copies come only from
+/// seen pixels of the layer (not those continued behind a nearer edge) no
+/// nearer than the run's sides. Each value
+/// is premultiplied R, G, B, A and the alpha-weighted depth.
+class ContinuedPatterns {
+public:
+    /// `holes` flags the hidden pixels of `color`'s ROI; runs up to
+    /// `max_width` long are continued for those within `window`.
+    ContinuedPatterns(const FloatPixels& color, const FloatPixels& depth, const HoleMap& holes,
+                      const OIIO::ROI& window, int max_width, int nthreads);
+
+    /// How far from a hidden pixel the search reads.
+    static int reach(int max_width);
+
+    /// The copied surface at hidden pixel (x, y) and how much to trust it
+    /// (1 where the pixels beside the run match their copy's exactly,
+    /// falling as they differ against the texture's own variation); false
+    /// where no copy was found or the sides are plain.
+    bool at(int x, int y, float value[5], float& trust) const;
+
+private:
+    struct Copy {
+        int dx = 0, dy = 0;
+        float trust = 0.0f;
+    };
+
+    struct Run;
+    struct Sample;
+
+    static void pixel(bool along_rows, int u, int v, int& x, int& y);
+    void continue_runs(bool along_rows, int nthreads);
+    /// The best copy for `run`; false where none is, or its sides are
+    /// plain.
+    bool best_copy(bool along_rows, const Run& run, Copy& copy) const;
+    std::vector<Sample> sides(bool along_rows, const Run& run, float& nearest) const;
+    /// How unlike `sides` the pixels `shift` along the line are (infinite
+    /// where the copy cannot be taken).
+    float difference(bool along_rows, const Run& run, const std::vector<Sample>& sides,
+                     int shift, float nearest, std::vector<float>& differences) const;
+    void observation(int x, int y, float value[5]) const;
+    bool observed(int x, int y) const;
+
+    const FloatPixels& m_color;
+    const FloatPixels& m_depth;
+    const HoleMap& m_holes;
+    OIIO::ROI m_window;
+    int m_max_width;
+    std::vector<Copy> m_copies;  ///< per window pixel
+};
+
+}  // namespace defocus
