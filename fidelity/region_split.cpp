@@ -9,31 +9,41 @@ namespace defocus_fidelity {
 
 using namespace OIIO;
 
-bool cull_hidden(const std::string& in, const std::string& out, std::string& error,
-                 double covered)
+namespace {
+
+/// Every part of the EXR `path` as float pixels; false with `error`.
+bool read_parts(const std::string& path, std::vector<ImageBuf>& parts, std::string& error)
 {
-    auto input = ImageInput::open(in);
+    auto input = ImageInput::open(path);
     if (!input) {
-        error = in + ": " + OIIO::geterror();
+        error = path + ": " + OIIO::geterror();
         return false;
     }
     int count = 0;
     while (input->seek_subimage(count, 0))
         ++count;
     input.reset();
-    std::vector<ImageBuf> parts;
     for (int i = 0; i < count; ++i) {
-        ImageBuf part(in, i, 0);
+        ImageBuf part(path, i, 0);
         if (!part.read(i, 0, true, TypeFloat)) {
-            error = in + ": " + part.geterror();
+            error = path + ": " + part.geterror();
             return false;
         }
         parts.push_back(std::move(part));
     }
-    if (parts.empty()) {
-        error = in + ": no layers to read";
+    if (parts.empty())
+        error = path + ": no layers to read";
+    return !parts.empty();
+}
+
+}  // namespace
+
+bool cull_hidden(const std::string& in, const std::string& out, std::string& error,
+                 double covered)
+{
+    std::vector<ImageBuf> parts;
+    if (!read_parts(in, parts, error))
         return false;
-    }
     std::vector<int> alpha, depth;
     for (const ImageBuf& part : parts) {
         alpha.push_back(part.spec().channelindex("A"));

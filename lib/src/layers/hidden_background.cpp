@@ -258,23 +258,21 @@ void fill_holes(Layer& layer, const HoleMap& holes, const ROI& hidden, const ROI
             if (flags[i] != HiddenPixels::hidden)
                 continue;
             const int x = window.xbegin + i;
-            float mean[5], line[5], trust = 0.0f;
+            // The smooth fill, then each estimate of structure blended in
+            // as far as it is trusted (all of it where nothing came before).
+            float mean[5], estimate[5], trust = 0.0f;
             bool found = pull(pyramid[0], i, y - window.ybegin, mean);
-            if (lines.at(x, y, line, trust)) {
+            auto blend = [&]() {
                 if (!found)
                     trust = 1.0f;
                 for (int c = 0; c < 5; ++c)
-                    mean[c] = trust * line[c] + (1 - trust) * (found ? mean[c] : 0.0f);
+                    mean[c] = trust * estimate[c] + (1 - trust) * (found ? mean[c] : 0.0f);
                 found = true;
-            }
-            float copy[5];
-            if (patterns.at(x, y, copy, trust)) {
-                if (!found)
-                    trust = 1.0f;
-                for (int c = 0; c < 5; ++c)
-                    mean[c] = trust * copy[c] + (1 - trust) * (found ? mean[c] : 0.0f);
-                found = true;
-            }
+            };
+            if (lines.at(x, y, estimate, trust))
+                blend();
+            if (patterns.at(x, y, estimate, trust))
+                blend();
             if (!found)
                 continue;
             if (mean[3] <= 0.0f)
