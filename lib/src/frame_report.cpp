@@ -32,6 +32,8 @@ std::string frame_report(const FrameResult& frame, const Shot& shot, const std::
     r += "  " + frame.color.summary + "\n";
     if (!frame.slicing.empty())
         r += "  " + frame.slicing + "\n";
+    if (!frame.rebuilt.empty())
+        r += "  " + frame.rebuilt + "\n";
     for (const std::string* line : { &frame.edges, &frame.holdout, &frame.data })
         if (!line->empty())
             r += "  " + *line + "\n";

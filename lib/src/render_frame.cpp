@@ -204,6 +204,13 @@ bool layer_scene(Scene&& scene, const Shot& shot, int frame, const ShotAssets& a
                              made,
                              empty > 0 ? format(" ({} empty slice(s) dropped)", empty) : "",
                              Strutil::join(edges, " "), slicing.mixed_pixels);
+        const RebuiltPixels& rebuilt = slicing.rebuilt;
+        if (rebuilt.total() > 0)
+            out.rebuilt = format("hidden background rebuilt: {} px ({} patterns copied across "
+                                 "thin holes, {} along lines, {} smooth fill, {} continued "
+                                 "behind edges)",
+                                 rebuilt.total(), rebuilt.patterns, rebuilt.lines,
+                                 rebuilt.smooth, rebuilt.continued);
     }
     lap("slice");
     return true;

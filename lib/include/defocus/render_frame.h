@@ -38,6 +38,7 @@ struct FrameResult {
     PixelCounts fixed;
     std::vector<std::string> notes;  ///< how reading took what the files did not say
     std::string slicing;  ///< how flat or deep input was cut into layers ("" = not)
+    std::string rebuilt;  ///< what of the layers' hidden backgrounds was rebuilt, and how ("" = none)
     std::string edges;    ///< how the layers were extended past the data window ("" = not)
     std::string holdout;  ///< the holdout that cut the result ("" = none)
     std::string data;     ///< the data channels carried, and as what ("" = none)

@@ -219,9 +219,10 @@ ROI hidden_background_window(const ROI& content, const ROI& frame, double max_di
 namespace {
 
 /// The hidden pixels of `layer` within `window`, those of holes within
-/// `hidden`, filled and marked in layer.rebuilt.
+/// `hidden`, filled and marked in layer.rebuilt; counted into `rebuilt`.
 void fill_holes(Layer& layer, const HoleMap& holes, const ROI& hidden, const ROI& window,
-                float seen_brightness, double max_distance, int nthreads)
+                float seen_brightness, double max_distance, RebuiltPixels& rebuilt,
+                int nthreads)
 {
     const ROI roi = layer.color.roi();
     const FloatPixels color(layer.color, roi);
@@ -248,7 +249,9 @@ void fill_holes(Layer& layer, const HoleMap& holes, const ROI& hidden, const ROI
                          window),
         pattern_width, nthreads);
 
+    std::vector<RebuiltPixels> rows(size_t(window.height()));
     parallel_for(window.ybegin, window.yend, [&](int y) {
+        RebuiltPixels& counts = rows[size_t(y - window.ybegin)];
         // Row y's pixels from the window's first column on.
         const uint8_t* const flags = holes.row(window.xbegin, y);
         float* const color_row = static_cast<float*>(layer.color.pixeladdr(window.xbegin, y));
@@ -259,20 +262,25 @@ void fill_holes(Layer& layer, const HoleMap& holes, const ROI& hidden, const ROI
                 continue;
             const int x = window.xbegin + i;
             // The smooth fill, then each estimate of structure blended in
-            // as far as it is trusted (all of it where nothing came before).
+            // as far as it is trusted (all of it where nothing came before);
+            // `weight` keeps each one's share.
             float mean[5], estimate[5], trust = 0.0f;
             bool found = pull(pyramid[0], i, y - window.ybegin, mean);
-            auto blend = [&]() {
+            float weight[3] = { found ? 1.0f : 0.0f, 0.0f, 0.0f };  // smooth, lines, patterns
+            auto blend = [&](int method) {
                 if (!found)
                     trust = 1.0f;
                 for (int c = 0; c < 5; ++c)
                     mean[c] = trust * estimate[c] + (1 - trust) * (found ? mean[c] : 0.0f);
+                for (float& w : weight)
+                    w *= 1 - trust;
+                weight[method] += trust;
                 found = true;
             };
             if (lines.at(x, y, estimate, trust))
-                blend();
+                blend(1);
             if (patterns.at(x, y, estimate, trust))
-                blend();
+                blend(2);
             if (!found)
                 continue;
             if (mean[3] <= 0.0f)
@@ -280,22 +288,27 @@ void fill_holes(Layer& layer, const HoleMap& holes, const ROI& hidden, const ROI
             std::copy(mean, mean + 4, color_row + 4 * size_t(i));
             depth_row[i] = mean[4] / mean[3];
             rebuilt_row[i] = 1;
+            const int most = int(std::max_element(weight, weight + 3) - weight);
+            ++(most == 0 ? counts.smooth : most == 1 ? counts.lines : counts.patterns);
         }
     }, by_rows(nthreads));
+    for (const RebuiltPixels& row : rows)
+        rebuilt.add(row);
 }
 
 }  // namespace
 
-void fill_hidden_background(Layer& layer, const HiddenPixels& hidden_pixels,
-                            double max_distance, int nthreads)
+RebuiltPixels fill_hidden_background(Layer& layer, const HiddenPixels& hidden_pixels,
+                                     double max_distance, int nthreads)
 {
+    RebuiltPixels rebuilt;
     const ROI roi = layer.color.roi();
     const HoleMap holes(hidden_pixels.flags, roi);
     // Only the pixels around the holes matter, as far as the fill reaches.
     const ROI hidden = bounding_box(roi, holes, nthreads);
     const ROI& continued = hidden_pixels.continued_box;
     if (hidden.width() == 0 && continued.width() == 0)
-        return;
+        return rebuilt;
     const ROI window = hidden.width() > 0 ? hidden_background_window(hidden, roi, max_distance)
                                           : continued;
 
@@ -306,18 +319,25 @@ void fill_hidden_background(Layer& layer, const HiddenPixels& hidden_pixels,
     reset_zeroed_except(layer.rebuilt, rebuilt_spec, ROI(), nthreads);
     if (hidden.width() > 0)
         fill_holes(layer, holes, hidden, window, hidden_pixels.seen_brightness, max_distance,
-                   nthreads);
+                   rebuilt, nthreads);
     // A surface continued behind a nearer one's edge is made up as much as
     // a filled one.
-    if (continued.width() > 0)
+    if (continued.width() > 0) {
+        std::vector<int64_t> rows(size_t(continued.height()), 0);
         parallel_for(continued.ybegin, continued.yend, [&](int y) {
             const uint8_t* const flags = holes.row(continued.xbegin, y);
             uint8_t* const rebuilt_row
                 = static_cast<uint8_t*>(layer.rebuilt.pixeladdr(continued.xbegin, y));
             for (int i = 0; i < continued.width(); ++i)
-                if (flags[i] == HiddenPixels::continued)
+                if (flags[i] == HiddenPixels::continued) {
                     rebuilt_row[i] = 1;
+                    ++rows[size_t(y - continued.ybegin)];
+                }
         }, by_rows(nthreads));
+        for (int64_t n : rows)
+            rebuilt.continued += n;
+    }
+    return rebuilt;
 }
 
 }  // namespace defocus

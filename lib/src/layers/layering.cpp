@@ -163,7 +163,7 @@ std::string cutting_exceeds(const MemoryLimit& limit, const std::string& name,
 template<typename Source>
 bool slice(const Source& frags, const std::string& base, const LayerBounds& bounds,
            const MemoryLimit& limit, double& held, std::vector<Layer>& layers,
-           std::string& error, Layer* render, int nthreads,
+           RebuiltPixels& rebuilt, std::string& error, Layer* render, int nthreads,
            const std::function<bool()>& keep_going)
 {
     const double fragment_bytes = frags.bytes();
@@ -207,7 +207,7 @@ bool slice(const Source& frags, const std::string& base, const LayerBounds& boun
         }
         const HiddenPixels hidden = extract_layer(frags, k, window, layer, nthreads);
         if (k > 0)
-            fill_hidden_background(layer, hidden, fill_distance, nthreads);
+            rebuilt.add(fill_hidden_background(layer, hidden, fill_distance, nthreads));
         crop_to_content(layer, nthreads);
         held += float_bytes(layer.color.roi().npixels(), 5);
         layers.push_back(std::move(layer));
@@ -270,7 +270,7 @@ bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
         slicing.mixed_pixels += int64_t(mixed.size());
         const FlatFragments ff(flats[i], mixed, coc, bounds);
         if (!slice(ff, scene.flat[i].name, bounds, options.memory_limit, held, scene.layers,
-                   error, &scene.flat[i], nthreads, keep_going))
+                   slicing.rebuilt, error, &scene.flat[i], nthreads, keep_going))
             return false;
     }
     for (const DeepImage& deep : scene.deep) {
@@ -281,8 +281,8 @@ bool decompose_layers(Scene&& scene, const CircleOfConfusion& coc,
         }
         const size_t first = scene.layers.size();
         if (!slice(deep_fragments(deep, coc, bounds, nthreads), deep.name, bounds,
-                   options.memory_limit, held, scene.layers, error, nullptr, nthreads,
-                   keep_going))
+                   options.memory_limit, held, scene.layers, slicing.rebuilt, error, nullptr,
+                   nthreads, keep_going))
             return false;
         if (!deep.data_names.empty())
             for (size_t i = first; i < scene.layers.size(); ++i)

@@ -67,9 +67,28 @@ struct SplitWeights {
 SplitWeights split_weights(float front_weight, float a);
 
 /// What cutting a scene into layers did, for -v.
+/// The layer pixels the hidden-background fill rebuilt, each counted by
+/// the estimate that weighs most in it (see fill_hidden_background).
+struct RebuiltPixels {
+    int64_t smooth = 0;     ///< the push-pull average
+    int64_t lines = 0;      ///< structure continued along lines across a thin hole
+    int64_t patterns = 0;   ///< a pattern copied from one period along
+    int64_t continued = 0;  ///< a surface continued behind a nearer edge (mixed pixels)
+
+    int64_t total() const { return smooth + lines + patterns + continued; }
+    void add(const RebuiltPixels& other)
+    {
+        smooth += other.smooth;
+        lines += other.lines;
+        patterns += other.patterns;
+        continued += other.continued;
+    }
+};
+
 struct Slicing {
     LayerBounds bounds;        ///< the layer bounds used
     int64_t mixed_pixels = 0;  ///< flat pixels split into two surfaces
+    RebuiltPixels rebuilt;     ///< what the layers' hidden backgrounds hold
 };
 
 /// Cuts `scene`, sanitized (sanitize(): finite colour, depths positive or
@@ -77,9 +96,10 @@ struct Slicing {
 /// renders and deep images cut at the bounds, cropped to their content,
 /// all described and ordered back to front (order_layers) into `layered`.
 /// Deep pixels follow OpenEXR's "Interpreting OpenEXR Deep Pixels":
-/// samples sorted by Z then ZBack, volume samples split at layer planes
-/// with the alpha-split formula, and each layer's share of a pixel
-/// composited front to back with an alpha-weighted Z. A flat render's
+/// samples sorted by Z then ZBack, volume samples spread over the depth
+/// they span as the thin samples they are the limit of (the alpha-split
+/// formula), and each layer's share of a pixel composited front to back
+/// with an alpha-weighted Z. A flat render's
 /// hidden background, the part of a layer behind nearer layers that one
 /// render cannot see, is filled from the layer's visible surroundings (see
 /// fill_hidden_background). A flat render's mixed pixels, on the silhouette
@@ -119,10 +139,12 @@ struct HiddenPixels {
 /// in as the ends disagree, pixels take the push-pull average (Gortler et al.
 /// 1996) found on the coarsest pyramid level needed, up to `max_distance`
 /// pixels away. Premultiplied colour and alpha are filled, and the
-/// alpha-weighted depth. The pixels filled, and those flagged `continued`,
-/// are marked in layer.rebuilt.
-void fill_hidden_background(Layer& layer, const HiddenPixels& holes, double max_distance,
-                            int nthreads = 0);
+/// alpha-weighted depth. A run of hidden pixels up to 32 px along a row or
+/// column is also copied from the same line where the pixels beside it
+/// repeat (a checker or bricks behind a pole). The pixels filled, and
+/// those flagged `continued`, are marked in layer.rebuilt, and counted.
+RebuiltPixels fill_hidden_background(Layer& layer, const HiddenPixels& holes,
+                                     double max_distance, int nthreads = 0);
 
 /// The window over which fill_hidden_background(layer, holes,
 /// max_distance) gives the same result as over all of `frame`, for a layer
