@@ -337,8 +337,11 @@ void print_garden_split(const std::string& garden, const std::string& scratch)
     for (const char* focus : { "3", "1.25" }) {
         const ImageBuf truth_image(garden + (std::string(focus) == "3" ? "/truth_focus3.exr"
                                                                          : "/truth_focus1.25.exr"));
+        // A file of its own each: ImageBuf reads lazily, through a cache
+        // that would keep an overwritten file's pixels.
+        int renders = 0;
         auto render = [&](const std::string& input) {
-            const std::string out = scratch + "/split.exr";
+            const std::string out = format("{}/split_{}_{}.exr", scratch, focus, renders++);
             double peak = 0.0;
             run_process(format("{} {} -o {} --focal 85 --fstop 1.4 --focus {} --aperture disc -q",
                                DEFOCUS_BIN, arg_quote(input), out, focus),

@@ -56,12 +56,11 @@ ContinuedPatterns::ContinuedPatterns(const FloatPixels& color, const FloatPixels
     , m_holes(holes)
     , m_window(window)
     , m_max_width(max_width)
-    , m_copies(size_t(std::max<imagesize_t>(window.npixels(), 0)))
 {
     if (window.width() <= 0 || window.height() <= 0)
         return;
-    continue_runs(true, nthreads);
-    continue_runs(false, nthreads);
+    continue_runs(true, m_row_copies, nthreads);
+    continue_runs(false, m_column_copies, nthreads);
 }
 
 bool ContinuedPatterns::observed(int x, int y) const
@@ -206,7 +205,8 @@ bool ContinuedPatterns::best_copy(bool along_rows, const Run& run, Copy& copy) c
     return std::isfinite(by_shift[size_t(chosen + farthest)]);
 }
 
-void ContinuedPatterns::continue_runs(bool along_rows, int nthreads)
+void ContinuedPatterns::continue_runs(bool along_rows,
+                                      std::vector<std::vector<CopiedRun>>& copied, int nthreads)
 {
     const int lines = along_rows ? m_window.height() : m_window.width();
     const int length = along_rows ? m_window.width() : m_window.height();
@@ -217,6 +217,7 @@ void ContinuedPatterns::continue_runs(bool along_rows, int nthreads)
         pixel(along_rows, u, v, x, y);
         return m_holes(x, y);
     };
+    copied.assign(size_t(lines), {});
     parallel_for(0, lines, [&](int64_t line) {
         const int v = v0 + int(line);
         for (int u = u0; u < u0 + length;) {
@@ -229,31 +230,39 @@ void ContinuedPatterns::continue_runs(bool along_rows, int nthreads)
                 ++run.end;
             u = run.end;
             Copy copy;
-            if (run.end - run.begin > m_max_width || !best_copy(along_rows, run, copy))
-                continue;
-            for (int r = run.begin; r < run.end; ++r) {
-                int x, y;
-                pixel(along_rows, r, v, x, y);
-                Copy& kept = m_copies[size_t(y - m_window.ybegin) * m_window.width()
-                                      + (x - m_window.xbegin)];
-                // Rows first, then columns: the better of the two stays.
-                if (copy.trust > kept.trust)
-                    kept = copy;
-            }
+            if (run.end - run.begin <= m_max_width && best_copy(along_rows, run, copy))
+                copied[size_t(line)].push_back({ run.begin, run.end, copy });
         }
     }, by_rows(nthreads));
 }
 
+const ContinuedPatterns::Copy*
+ContinuedPatterns::copy_at(const std::vector<std::vector<CopiedRun>>& copied, int first_line,
+                           int v, int u)
+{
+    const size_t line = size_t(v - first_line);
+    if (v < first_line || line >= copied.size())
+        return nullptr;
+    const std::vector<CopiedRun>& runs = copied[line];
+    auto after = std::upper_bound(runs.begin(), runs.end(), u,
+                                  [](int at, const CopiedRun& run) { return at < run.begin; });
+    if (after == runs.begin() || u >= std::prev(after)->end)
+        return nullptr;
+    return &std::prev(after)->copy;
+}
+
 bool ContinuedPatterns::at(int x, int y, float value[5], float& trust) const
 {
-    if (!m_window.contains(x, y))
+    // The better of the copies along its row and its column.
+    const Copy* along_row = copy_at(m_row_copies, m_window.ybegin, y, x);
+    const Copy* along_column = copy_at(m_column_copies, m_window.xbegin, x, y);
+    const Copy* copy = !along_column || (along_row && along_row->trust >= along_column->trust)
+                           ? along_row
+                           : along_column;
+    if (!copy || copy->trust <= 0.0f)
         return false;
-    const Copy& copy
-        = m_copies[size_t(y - m_window.ybegin) * m_window.width() + (x - m_window.xbegin)];
-    if (copy.trust <= 0.0f)
-        return false;
-    observation(x + copy.dx, y + copy.dy, value);
-    trust = copy.trust;
+    observation(x + copy->dx, y + copy->dy, value);
+    trust = copy->trust;
     return true;
 }
 

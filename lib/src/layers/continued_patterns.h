@@ -42,12 +42,22 @@ private:
         int dx = 0, dy = 0;
         float trust = 0.0f;
     };
+    /// A run's copy: pixels [begin, end) along its line.
+    struct CopiedRun {
+        int begin, end;
+        Copy copy;
+    };
 
     struct Run;
     struct Sample;
 
     static void pixel(bool along_rows, int u, int v, int& x, int& y);
-    void continue_runs(bool along_rows, int nthreads);
+    void continue_runs(bool along_rows, std::vector<std::vector<CopiedRun>>& copied,
+                       int nthreads);
+    /// The copy of the run along line `v` of `copied` that holds `u`, or
+    /// null.
+    static const Copy* copy_at(const std::vector<std::vector<CopiedRun>>& copied, int first_line,
+                               int v, int u);
     /// The best copy for `run`; false where none is, or its sides are
     /// plain.
     bool best_copy(bool along_rows, const Run& run, Copy& copy) const;
@@ -64,7 +74,8 @@ private:
     const HoleMap& m_holes;
     OIIO::ROI m_window;
     int m_max_width;
-    std::vector<Copy> m_copies;  ///< per window pixel
+    /// Per row and per column of the window, its runs' copies, in order.
+    std::vector<std::vector<CopiedRun>> m_row_copies, m_column_copies;
 };
 
 }  // namespace defocus
