@@ -576,3 +576,20 @@ TEST_CASE("a volume deep sample is spread over the depth it spans")
     CHECK(fine < 1e-3f);
     CHECK(one_depth > 10.0f * fine);
 }
+
+TEST_CASE("a volume deep sample keeps its light where no blur tells its depths apart")
+{
+    // Through a pinhole every depth has CoC 0: the fog is one point.
+    Camera pinhole = synthetic_camera(3.0);
+    pinhole.fstop = INFINITY;
+    LayeredScene layers;
+    Slicing slicing;
+    std::string error;
+    REQUIRE(decompose_layers(fog_scene(0), CircleOfConfusion(pinhole, ROI(0, 120, 0, 120)), {},
+                             layers, slicing, error));
+    float out[4];
+    composite_pixel(layers.layers, 10, 10, out);
+    // The fog (alpha 0.6, colour 0.3) over the wall's dark stripe (0.1).
+    CHECK(out[0] == Approx(0.3f * 0.6f + 0.4f * 0.1f).epsilon(1e-4));
+    CHECK(out[3] == Approx(1.0f));
+}

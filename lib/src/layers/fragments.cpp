@@ -55,6 +55,13 @@ public:
                     std::vector<Fragment>& out)
     {
         const double c_near = coc.diameter(s.z, x, y), c_far = coc.diameter(s.zback, x, y);
+        if (!(c_far > c_near)) {
+            // No blur tells its depths apart (a pinhole): a point at its
+            // middle.
+            out.push_back({ s.r, s.g, s.b, s.a, 0.5f * (s.z + s.zback), 0, false, 1, 0 });
+            assign_layers(out.back(), x, y, coc, m_bounds);
+            return;
+        }
         const double half = 0.5 * m_bounds.soft_band();
         m_cuts.assign({ c_near, c_far });
         for (int k = 1; k < m_bounds.count(); ++k)
@@ -67,9 +74,7 @@ public:
         // CoC is affine in 1/z at a pixel.
         const double inv_near = 1.0 / s.z, inv_far = 1.0 / s.zback;
         auto depth = [&](double c) {
-            return c_far > c_near
-                       ? 1.0 / (inv_near + (inv_far - inv_near) * (c - c_near) / (c_far - c_near))
-                       : double(s.z);
+            return 1.0 / (inv_near + (inv_far - inv_near) * (c - c_near) / (c_far - c_near));
         };
         const int first = m_bounds.share(c_near).front;
         m_shares.clear();
