@@ -511,12 +511,13 @@ TEST_CASE("a checker behind a thin pole continues with its period")
     // Checks 15 px wide, 10 high; a pole over x 56-63 hides a check's edge
     // (at x 60). A line between the hole's two sides ramps from one check's
     // colour to the other's; a copy from one period along the row puts the
-    // edge where it is.
-    const ROI pole(56, 64, 0, 80);
+    // edge where it is. A light one period before the pole must not be
+    // copied behind it.
+    const ROI pole(56, 64, 0, 80), light(26, 34, 36, 44);
     auto check = [](int x, int y) { return (x / 15 + y / 10) % 2 ? 0.9f : 0.1f; };
     Scene scene = flat_scene([&](int x, int y, float* rgba, float& z) {
         const bool in_pole = pole.contains(x, y);
-        std::fill(rgba, rgba + 3, in_pole ? 0.05f : check(x, y));
+        std::fill(rgba, rgba + 3, in_pole ? 0.05f : light.contains(x, y) ? 50.0f : check(x, y));
         rgba[3] = 1.0f;
         z = in_pole ? 1.0f / 2.9f : 0.5f;  // CoC -30 and 0 at focus 0.5
     });

@@ -82,6 +82,29 @@ struct ContinuedPatterns::Run {
 };
 
 /// A seen pixel beside a run, at (u, v) of its line's axes.
+/// The colours (over coverage) of a run's sides, widened by a tenth of
+/// their spread.
+struct ContinuedPatterns::ColourRange {
+    float low[3] = { INFINITY, INFINITY, INFINITY }, high[3] = { -INFINITY, -INFINITY, -INFINITY };
+
+    void add(const float value[5])
+    {
+        for (int c = 0; c < 3; ++c) {
+            low[c] = std::min(low[c], value[c] / value[3]);
+            high[c] = std::max(high[c], value[c] / value[3]);
+        }
+    }
+    void widen()
+    {
+        for (int c = 0; c < 3; ++c) {
+            const float margin = 0.1f * (high[c] - low[c]) + 1e-3f * std::abs(high[c]);
+            low[c] -= margin;
+            high[c] += margin;
+        }
+    }
+    bool holds(int c, float v) const { return v >= low[c] && v <= high[c]; }
+};
+
 struct ContinuedPatterns::Sample {
     int u, v;
     float value[5];
@@ -120,15 +143,23 @@ std::vector<ContinuedPatterns::Sample> ContinuedPatterns::sides(bool along_rows,
 }
 
 float ContinuedPatterns::difference(bool along_rows, const Run& run,
-                                    const std::vector<Sample>& sides, int shift, float nearest,
+                                    const std::vector<Sample>& sides, const ColourRange& range,
+                                    int shift, float nearest,
                                     std::vector<float>& differences) const
 {
-    // The copy must be seen all along, no nearer than the run's sides.
+    // The copy must be seen all along, no nearer than the run's sides, and
+    // hold no colour the sides do not (a light from afar).
     for (int u = run.begin; u < run.end; ++u) {
         int x, y;
         pixel(along_rows, u + shift, run.v, x, y);
-        if (!observed(x, y) || (m_color(x, y)[3] > 0.0f && *m_depth(x, y) < 0.99f * nearest))
+        if (!observed(x, y))
             return INFINITY;
+        const float* c = m_color(x, y);
+        if (c[3] > 0.0f && *m_depth(x, y) < 0.99f * nearest)
+            return INFINITY;
+        for (int i = 0; i < 3 && c[3] > 0.0f; ++i)
+            if (!range.holds(i, c[i] / c[3]))
+                return INFINITY;
     }
     differences.clear();
     for (const Sample& s : sides) {
@@ -169,13 +200,17 @@ bool ContinuedPatterns::best_copy(bool along_rows, const Run& run, Copy& copy) c
     variation /= float(found.size());
     if (variation <= 1e-8f)
         return false;
+    ColourRange range;
+    for (const Sample& s : found)
+        range.add(s.value);
+    range.widen();
     const int width = run.end - run.begin, farthest = search_reach + width;
     std::vector<float> by_shift(size_t(2 * farthest + 1), INFINITY), differences;
     float best = INFINITY;
     for (int shift = -farthest; shift <= farthest; ++shift)
         if (std::abs(shift) >= width) {
             float& d = by_shift[size_t(shift + farthest)];
-            d = difference(along_rows, run, found, shift, nearest, differences);
+            d = difference(along_rows, run, found, range, shift, nearest, differences);
             best = std::min(best, d);
         }
     if (!std::isfinite(best))

@@ -17,7 +17,8 @@ namespace defocus {
 /// shifted to where the pixels beside the run, on both sides and on the
 /// rows (columns) next to it, look most alike: a checker, bricks or
 /// stripes behind a thin pole continue with their period, which a line
-/// between the hole's two sides blurs into a blotch. Copies come only from
+/// between the hole's two sides blurs into a blotch. A copy holds no colour
+/// its sides do not (a light from afar). Copies come only from
 /// seen pixels of the layer (not those continued behind a nearer edge) no
 /// nearer than the run's sides. Each value
 /// is premultiplied R, G, B, A and the alpha-weighted depth.
@@ -50,6 +51,7 @@ private:
 
     struct Run;
     struct Sample;
+    struct ColourRange;
 
     static void pixel(bool along_rows, int u, int v, int& x, int& y);
     void continue_runs(bool along_rows, std::vector<std::vector<CopiedRun>>& copied,
@@ -65,7 +67,8 @@ private:
     /// How unlike `sides` the pixels `shift` along the line are (infinite
     /// where the copy cannot be taken).
     float difference(bool along_rows, const Run& run, const std::vector<Sample>& sides,
-                     int shift, float nearest, std::vector<float>& differences) const;
+                     const ColourRange& range, int shift, float nearest,
+                     std::vector<float>& differences) const;
     void observation(int x, int y, float value[5]) const;
     bool observed(int x, int y) const;
 
