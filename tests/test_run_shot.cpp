@@ -54,7 +54,7 @@ RunCallbacks recording(Reports& reports, const char* cancel_at = nullptr)
 
 }  // namespace
 
-TEST_CASE("a run writes each planned frame once; a cancelled run writes nothing and fails none")
+TEST_CASE("a run writes each planned frame once, and a cancelled run writes nothing and fails none")
 {
     const Shot shot = example_shot();
     ShotAssets assets;

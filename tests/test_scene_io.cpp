@@ -361,7 +361,7 @@ TEST_CASE("a depth channel named by the user, or a depth file, stands in for Z")
     CHECK_THAT(read_error({ f }, other_window), Catch::Contains("display window"));
 }
 
-TEST_CASE("a numbered name of a file that exists names its frame; no other name does")
+TEST_CASE("a numbered name of a file that exists names its frame, and no other name does")
 {
     const std::string dir = scratch_dir("numbered_file");
     REQUIRE(Filesystem::write_text_file(dir + "/shot.dof", "{}"));

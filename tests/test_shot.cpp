@@ -243,7 +243,7 @@ TEST_CASE("every setting but the mask file is on the command line, with help")
     }
 }
 
-TEST_CASE("checking a shot reads no file; the images its aperture names are read apart")
+TEST_CASE("checking a shot reads no file, and the images its aperture names are read apart")
 {
     Shot shot;
     shot.inputs = { "scene.exr" };
@@ -256,7 +256,7 @@ TEST_CASE("checking a shot reads no file; the images its aperture names are read
 
     ApertureImages images;
     CHECK_FALSE(read_aperture_images(shot, luma_weights(nullptr), images, error));
-    CHECK(contains(error, "--aperture: "));
+    CHECK(contains(command_line_words(error), "--aperture: "));
     CHECK(contains(error, "no_mask.png: cannot read the aperture mask"));
 
     ImageBuf mask = zero_image(ROI(0, 8, 0, 8), 1);
@@ -265,7 +265,7 @@ TEST_CASE("checking a shot reads no file; the images its aperture names are read
     REQUIRE(mask.write(dir + "/mask.exr"));
     REQUIRE(set_shot_setting(shot, "aperture", "mask:" + dir + "/mask.exr", error));
     CHECK_FALSE(read_aperture_images(shot, luma_weights(nullptr), images, error));
-    CHECK(contains(error, "--psf-image: "));
+    CHECK(contains(command_line_words(error), "--psf-image: "));
     CHECK(contains(error, "no_psf.exr: cannot read the PSF image"));
 
     REQUIRE(set_shot_setting(shot, "psf-image", "", error));
