@@ -40,8 +40,6 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/strutil.h>
-
-#include "region_split.h"
 #include <OpenImageIO/sysutil.h>
 #include <OpenImageIO/timer.h>
 
@@ -55,6 +53,7 @@
 #include <defocus/spread/spread.h>
 
 #include "memory_floor.h"
+#include "region_split.h"
 
 using namespace OIIO;
 using Strutil::fmt::format;

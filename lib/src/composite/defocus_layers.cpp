@@ -429,7 +429,7 @@ void compute_cells(SubApertureLayers& cells, const LayeredScene& scene, const Ca
     const RowProfile* shape = plan.profile ? plan.profile.get()
                               : spread.aperture.shape == ApertureShape::Box ? &box
                                                                              : nullptr;
-    if (!shape || spread.aperture_cells == 1)
+    if (!shape || !takes_aperture_cells(spread))
         return;
     cells.compute(scene, CircleOfConfusion(camera, scene.spec.roi_full()), *shape,
                   spread.aperture_cells,

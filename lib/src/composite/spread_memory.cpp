@@ -67,14 +67,6 @@ double cell_work_bytes(const LayeredScene& layered, const ROI& frame, int nthrea
            + double(threads) * band * (per_layer * double(layered.layers.size()) + per_band);
 }
 
-/// Whether `spread` may cut the aperture into cells (the soft PSFs of tent
-/// and smooth take none).
-bool takes_cells(const SpreadOptions& spread)
-{
-    return spread.aperture_cells != 1 && spread.aperture.shape != ApertureShape::Tent
-           && spread.aperture.shape != ApertureShape::Smooth;
-}
-
 }  // namespace
 
 double result_bytes(double pixels)
@@ -107,9 +99,10 @@ double spread_bytes(const LayeredScene& layered, const SpreadOptions& spread, in
     spreading += result_bytes(double(all.npixels()));
     // The cells' changes are found before the layers are spread, and kept
     // while they are.
-    const double cells = takes_cells(spread) ? change_bytes(layered, all) : 0.0;
-    const double work = takes_cells(spread) ? cell_work_bytes(layered, all, nthreads) : 0.0;
-    return holdout_bytes + layers + cells + std::max(spreading, work);
+    if (!takes_aperture_cells(spread))
+        return holdout_bytes + layers + spreading;
+    return holdout_bytes + layers + change_bytes(layered, all)
+           + std::max(spreading, cell_work_bytes(layered, all, nthreads));
 }
 
 }  // namespace defocus

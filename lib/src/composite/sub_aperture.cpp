@@ -171,6 +171,12 @@ void BandSums::change(size_t i, int x, int y, float* out) const
 }
 
 
+bool takes_aperture_cells(const SpreadOptions& spread)
+{
+    return spread.aperture_cells != 1 && spread.aperture.shape != ApertureShape::Tent
+           && spread.aperture.shape != ApertureShape::Smooth;
+}
+
 void SubApertureLayers::compute(const LayeredScene& scene, const CircleOfConfusion& coc,
                                 const RowProfile& profile, int cells, const ROI& window,
                                 bool grown, int nthreads)

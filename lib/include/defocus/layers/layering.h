@@ -2,9 +2,8 @@
 // layered framework (spread each layer, composite back to front) applies.
 #pragma once
 
-#include <functional>
-
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -66,7 +65,6 @@ struct SplitWeights {
 };
 SplitWeights split_weights(float front_weight, float a);
 
-/// What cutting a scene into layers did, for -v.
 /// The layer pixels the hidden-background fill rebuilt, each counted by
 /// the estimate that weighs most in it (see fill_hidden_background).
 struct RebuiltPixels {
@@ -85,6 +83,7 @@ struct RebuiltPixels {
     }
 };
 
+/// What cutting a scene into layers did, for -v.
 struct Slicing {
     LayerBounds bounds;        ///< the layer bounds used
     int64_t mixed_pixels = 0;  ///< flat pixels split into two surfaces
