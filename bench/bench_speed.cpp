@@ -327,38 +327,31 @@ void print_garden_split(const std::string& garden, const std::string& scratch)
 {
     using namespace defocus_fidelity;
     std::printf("\ngarden, disc, known / revealed region PSNR (dB)\n");
-    std::string error;
-    const std::string culled = scratch + "/culled_layers.exr";
-    if (!cull_hidden(garden + "/layers.exr", culled, error)) {
-        std::printf("  skipped: %s\n", error.c_str());
-        return;
-    }
     for (const char* focus : { "3", "1.25" }) {
-        const ImageBuf truth_image(garden + (std::string(focus) == "3" ? "/truth_focus3.exr"
-                                                                         : "/truth_focus1.25.exr"));
-        // A file of its own each: ImageBuf reads lazily, through a cache
-        // that would keep an overwritten file's pixels.
-        int renders = 0;
-        auto render = [&](const std::string& input) {
-            const std::string out = format("{}/split_{}_{}.exr", scratch, focus, renders++);
-            double peak = 0.0;
-            run_process(format("{} {} -o {} --focal 85 --fstop 1.4 --focus {} --aperture disc -q",
-                               DEFOCUS_BIN, arg_quote(input), out, focus),
-                        peak);
-            return display_srgb(ImageBuf(out), &truth_image);
-        };
-        const std::vector<float> truth = display_srgb(truth_image);
-        const std::vector<float> layers = render(garden + "/layers.exr");
-        const std::vector<bool> revealed = revealed_pixels(layers, render(culled));
-        std::printf("  focus %-4s (%.1f%% revealed)", focus,
-                    100.0 * region_psnr(layers, truth, revealed).revealed_share);
-        for (const char* input : { "layers", "flat", "deep" }) {
-            const RegionPsnr r = region_psnr(std::string(input) == "layers"
-                                                 ? layers
-                                                 : render(format("{}/{}.exr", garden, input)),
-                                             truth, revealed);
-            std::printf("  %s %.2f / %.2f", input, r.known, r.revealed);
+        SceneSplit split;
+        std::string error;
+        if (!split_scene(garden,
+                         garden + (std::string(focus) == "3" ? "/truth_focus3.exr"
+                                                             : "/truth_focus1.25.exr"),
+                         scratch,
+                         [&](const std::string& input, const std::string& output) {
+                             double peak = 0.0;
+                             run_process(format("{} {} -o {} --focal 85 --fstop 1.4 --focus {} "
+                                                "--aperture disc -q",
+                                                DEFOCUS_BIN, arg_quote(input), arg_quote(output),
+                                                focus),
+                                         peak);
+                             return true;
+                         },
+                         split, error)) {
+            std::printf("  skipped: %s\n", error.c_str());
+            return;
         }
+        std::printf("  focus %-4s (%.1f%% revealed)", focus, 100.0 * split.layers.revealed_share);
+        for (const auto& [input, r] : { std::pair("layers", split.layers),
+                                         std::pair("flat", split.flat),
+                                         std::pair("deep", split.deep) })
+            std::printf("  %s %.2f / %.2f", input, r.known, r.revealed);
         std::printf("\n");
     }
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include <OpenImageIO/imageio.h>
 
@@ -151,6 +152,48 @@ RegionPsnr region_psnr(const std::vector<float>& image, const std::vector<float>
     return { psnr(sum[0], count[0]), psnr(sum[1], count[1]),
              psnr(sum[0] + sum[1], count[0] + count[1]),
              revealed.empty() ? 0.0 : double(count[1] / 3) / double(revealed.size()) };
+}
+
+bool split_scene(const std::string& scene, const std::string& truth, const std::string& work,
+                 const Render& render, SceneSplit& split, std::string& error)
+{
+    const std::string culled = work + "/culled_layers.exr";
+    if (!cull_hidden(scene + "/layers.exr", culled, error))
+        return false;
+    ImageBuf truth_image(truth);
+    if (!truth_image.read(0, 0, true, TypeFloat)) {
+        error = truth + ": " + truth_image.geterror();
+        return false;
+    }
+    int renders = 0;
+    auto rendered = [&](const std::string& input, std::vector<float>& pixels) {
+        const std::string out = work + "/split_" + std::to_string(renders++) + ".exr";
+        // Read past ImageBuf's cache, which would keep the pixels of a file
+        // an earlier split wrote under the same name.
+        std::unique_ptr<ImageInput> file;
+        if (!render(input, out) || !(file = ImageInput::open(out))) {
+            error = input + ": not rendered into " + out;
+            return false;
+        }
+        ImageSpec spec = file->spec();
+        spec.set_format(TypeFloat);
+        ImageBuf image(spec);
+        if (!file->read_image(0, 0, 0, spec.nchannels, TypeFloat, image.localpixels())) {
+            error = out + ": " + file->geterror();
+            return false;
+        }
+        pixels = display_srgb(image, &truth_image);
+        return true;
+    };
+    std::vector<float> layers, culled_pixels, flat, deep;
+    if (!rendered(scene + "/layers.exr", layers) || !rendered(culled, culled_pixels)
+        || !rendered(scene + "/flat.exr", flat) || !rendered(scene + "/deep.exr", deep))
+        return false;
+    const std::vector<float> truth_pixels = display_srgb(truth_image);
+    const std::vector<bool> revealed = revealed_pixels(layers, culled_pixels);
+    split = { region_psnr(layers, truth_pixels, revealed), region_psnr(flat, truth_pixels, revealed),
+              region_psnr(deep, truth_pixels, revealed) };
+    return true;
 }
 
 }  // namespace defocus_fidelity

@@ -9,6 +9,7 @@
 // and defocusing both gives the revealed region: where the two differ.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -42,5 +43,20 @@ struct RegionPsnr {
 };
 RegionPsnr region_psnr(const std::vector<float>& image, const std::vector<float>& truth,
                        const std::vector<bool>& revealed);
+
+/// Each input of a scene laid out as garden's (`layers.exr`, `flat.exr`,
+/// `deep.exr` in `scene`) against the truth `truth`, split by region.
+struct SceneSplit {
+    RegionPsnr layers, flat, deep;
+};
+
+/// Defocuses an input into an output file: false where it failed.
+using Render = std::function<bool(const std::string& input, const std::string& output)>;
+
+/// The split of the scene's layers, flat and deep renders as `render`
+/// makes them: the revealed region from the layers and the layers with the
+/// hidden pixels culled. Files go to `work`. False with `error`.
+bool split_scene(const std::string& scene, const std::string& truth, const std::string& work,
+                 const Render& render, SceneSplit& split, std::string& error);
 
 }  // namespace defocus_fidelity

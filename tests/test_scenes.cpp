@@ -11,7 +11,6 @@
 
 using namespace defocus_test;
 using namespace defocus_fidelity;
-using OIIO::ImageBuf;
 using OIIO::Strutil::fmt::format;
 
 namespace {
@@ -23,41 +22,31 @@ struct Scene {
 
 const Scene scenes[] = { { "poles", { 3.0, 1.3 } }, { "lattice", { 3.0, 1.5 } } };
 
-/// Each input's PSNR by region against a scene's truth at one focus.
-struct Split {
-    RegionPsnr layers, flat, deep;
-};
-
-Split split(const std::string& dir, const Scene& scene, double focus, const char* cells)
+/// The split of a scene's inputs at one focus, with `cells` aperture cells.
+SceneSplit split(const std::string& dir, const Scene& scene, double focus, const char* cells)
 {
     const std::string from = format("{}/{}", TEST_SCENES_DIR, scene.name);
-    const ImageBuf truth_image = read_image(format("{}/truth_focus{}.exr", from, focus));
-    REQUIRE(truth_image.initialized());
-    auto render = [&](const std::string& input) {
-        const std::string out = dir + "/out.exr";
-        std::string log;
-        const std::string command
-            = format("{} {} -o {} --focal 85 --fstop 2 --focus {} --aperture disc "
-                     "--aperture-cells {} -q",
-                     DEFOCUS_BIN, input, out, focus, cells);
-        INFO(command);
-        REQUIRE(run(command, log) == 0);
-        return display_srgb(read_image(out), &truth_image);
-    };
+    SceneSplit split;
     std::string error;
-    const std::string culled = dir + "/culled.exr";
-    const bool cut = cull_hidden(from + "/layers.exr", culled, error);
+    const bool made = split_scene(
+        from, format("{}/truth_focus{}.exr", from, focus), dir,
+        [&](const std::string& input, const std::string& output) {
+            std::string log;
+            const std::string command
+                = format("{} {} -o {} --focal 85 --fstop 2 --focus {} --aperture disc "
+                         "--aperture-cells {} -q",
+                         DEFOCUS_BIN, input, output, focus, cells);
+            INFO(command);
+            REQUIRE(run(command, log) == 0);
+            return true;
+        },
+        split, error);
     INFO(error);
-    REQUIRE(cut);
-    const std::vector<float> truth = display_srgb(truth_image);
-    const std::vector<float> layers = render(from + "/layers.exr");
-    const std::vector<bool> revealed = revealed_pixels(layers, render(culled));
-    return { region_psnr(layers, truth, revealed),
-             region_psnr(render(from + "/flat.exr"), truth, revealed),
-             region_psnr(render(from + "/deep.exr"), truth, revealed) };
+    REQUIRE(made);
+    return split;
 }
 
-std::string line(const Split& s)
+std::string line(const SceneSplit& s)
 {
     return format("{:.1f}% revealed; known / revealed / all dB: layers {:.2f} / {:.2f} / {:.2f}, "
                   "flat {:.2f} / {:.2f} / {:.2f}, deep {:.2f} / {:.2f} / {:.2f}",
@@ -78,7 +67,8 @@ TEST_CASE("our path-traced scenes, split into what the pinhole view knows and wh
     const std::string dir = scratch_dir("scenes_split");
     for (const Scene& scene : scenes)
         for (const double focus : scene.foci) {
-            const Split one = split(dir, scene, focus, "1"), cells = split(dir, scene, focus, "0");
+            const SceneSplit one = split(dir, scene, focus, "1"),
+                             cells = split(dir, scene, focus, "0");
             WARN(format("{} focus {}, one cell: {}", scene.name, focus, line(one)));
             WARN(format("{} focus {}, automatic cells: {}", scene.name, focus, line(cells)));
             CHECK(one.layers.revealed_share > 0.1);

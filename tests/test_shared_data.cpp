@@ -249,26 +249,21 @@ TEST_CASE("garden's error, split into what the pinhole view knows and what the l
     // 43.87 / 35.62).
     using namespace defocus_fidelity;
     const std::string dir = scratch_dir("garden_split");
-    std::string error;
-    const bool culled = cull_hidden(garden("layers.exr"), dir + "/culled_layers.exr", error);
-    INFO(error);
-    REQUIRE(culled);
     for (const double focus : { 3.0, 1.25 }) {
-        const std::string truth_file = focus == 3.0 ? "truth_focus3.exr" : "truth_focus1.25.exr";
-        const ImageBuf truth_image = read_float(garden(truth_file));
-        auto render = [&](const std::string& input, const std::string& name) {
-            const std::string out = format("{}/{}.exr", dir, name);
-            run_ok(DEFOCUS_BIN, format("{} -o {}{} --focus {} --aperture disc -q", input, out,
-                                       garden_camera, focus));
-            return display_srgb(read_float(out), &truth_image);
-        };
-        const std::vector<float> truth = display_srgb(truth_image);
-        const std::vector<float> layers = render(garden("layers.exr"), "layers");
-        const std::vector<bool> revealed = revealed_pixels(layers, render(dir + "/culled_layers.exr",
-                                                                          "culled"));
-        const RegionPsnr l = region_psnr(layers, truth, revealed),
-                         f = region_psnr(render(garden("flat.exr"), "flat"), truth, revealed),
-                         d = region_psnr(render(garden("deep.exr"), "deep"), truth, revealed);
+        const std::string truth = focus == 3.0 ? "truth_focus3.exr" : "truth_focus1.25.exr";
+        SceneSplit split;
+        std::string error;
+        const bool made = split_scene(
+            garden(""), garden(truth), dir,
+            [&](const std::string& input, const std::string& output) {
+                run_ok(DEFOCUS_BIN, format("{} -o {}{} --focus {} --aperture disc -q", input,
+                                           output, garden_camera, focus));
+                return true;
+            },
+            split, error);
+        INFO(error);
+        REQUIRE(made);
+        const RegionPsnr &l = split.layers, &f = split.flat, &d = split.deep;
         WARN(format("focus {}: {:.1f}% revealed; known / revealed dB: layers {:.2f} / {:.2f}, "
                     "flat {:.2f} / {:.2f}, deep {:.2f} / {:.2f}",
                     focus, 100.0 * l.revealed_share, l.known, l.revealed, f.known, f.revealed,
