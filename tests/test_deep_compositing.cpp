@@ -236,12 +236,6 @@ int64_t empty_samples(const ImageBuf& deep)
     return empty;
 }
 
-/// The largest difference between two flat images over their union.
-float largest_difference(const ImageBuf& a, const ImageBuf& b)
-{
-    return float(ImageBufAlgo::compare(a, b, 0.0f, 0.0f).maxerror);
-}
-
 /// The RGBA of a deep result flattened.
 ImageBuf flattened(const ImageBuf& deep)
 {

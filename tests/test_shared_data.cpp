@@ -295,6 +295,52 @@ TEST_CASE("automatic layering of flat.exr at f/4 comes close to the given layers
     CHECK(psnr >= 43.0);
 }
 
+TEST_CASE("garden's Z as 1/z, ray distance and CoC renders as the planar Z does", "[garden]")
+{
+    // flat.exr's Z rewritten three ways, as renderers and painted maps
+    // write depth; the sky (Z 1e10) becomes 0, 1e10 and the limiting CoC.
+    const std::string dir = scratch_dir("garden_depth_kinds");
+    const ImageBuf flat = read_float(garden("flat.exr"));
+    const OIIO::ImageSpec& spec = flat.spec();
+    const int z_channel = spec.channelindex("Z");
+    const double f = 0.085, fpx = 0.085 / 0.036 * 960, focus = 1.25;
+    const double limit = f * fpx / 1.4;  // the CoC diameter of infinity
+    auto write_kind = [&](const std::string& kind, auto&& value_of) {
+        ImageBuf out(OIIO::ImageSpec(spec.width, spec.height, spec.nchannels, OIIO::TypeFloat));
+        out.specmod().channelnames = spec.channelnames;
+        out.specmod().full_width = spec.full_width;
+        out.specmod().full_height = spec.full_height;
+        out.set_origin(spec.x, spec.y);
+        std::vector<float> pixel(spec.nchannels);
+        for (OIIO::ImageBuf::Iterator<float> it(out); !it.done(); ++it) {
+            flat.getpixel(it.x(), it.y(), pixel.data());
+            const double z = pixel[z_channel], sky = z >= 1e9;
+            const double u = (it.x() + 0.5 - 480) / fpx, v = (it.y() + 0.5 - 270) / fpx;
+            pixel[z_channel] = float(value_of(z, sky, std::sqrt(1 + u * u + v * v)));
+            for (int c = 0; c < spec.nchannels; ++c)
+                it[c] = pixel[c];
+        }
+        REQUIRE(out.write(dir + "/" + kind + ".exr"));
+    };
+    write_kind("inverse", [](double z, bool sky, double) { return sky ? 0.0 : 1.0 / z; });
+    write_kind("distance", [](double z, bool, double ray) { return z * ray; });
+    write_kind("coc", [&](double z, bool sky, double) {
+        return sky ? limit : f * fpx / 1.4 * (1 / focus - 1 / z);
+    });
+    run_ok(DEFOCUS_BIN, format("{} -o {}/z.exr{} --focus 1.25 --aperture disc",
+                               garden("flat.exr"), dir, garden_camera));
+    const ImageBuf planar = read_float(dir + "/z.exr");
+    for (const std::string kind : { "inverse", "distance", "coc" }) {
+        const std::string camera
+            = kind == "coc" ? "" : garden_camera + " --focus 1.25";
+        run_ok(DEFOCUS_BIN, format("{}/{}.exr -o {}/{}_out.exr{} --depth-kind {} --aperture disc",
+                                   dir, kind, dir, kind, camera, kind));
+        const double psnr = garden_psnr(read_float(dir + "/" + kind + "_out.exr"), planar);
+        WARN("--depth-kind " << kind << " against planar Z: " << psnr << " dB");
+        CHECK(psnr >= 50.0);
+    }
+}
+
 TEST_CASE("an sRGB-encoded render is spread in linear light", "[garden]")
 {
     // An sRGB-encoded copy of flat.exr, made with the shipped config:

@@ -286,7 +286,8 @@ TEST_CASE(".dof files: every setting round-trips, paths relative to the file")
     for (const auto& [name, value] :
          std::vector<std::pair<std::string, std::string>> {
              { "frames", "1-24" }, { "view", "left" }, { "layer", "beauty" },
-             { "layers", "12" }, { "focus", "1:1.25,24:3" }, { "focal", "85" },
+             { "layers", "12" }, { "depth-kind", "inverse" }, { "focus", "1:1.25,24:3" },
+             { "focal", "85" },
              { "fstop", "1:1.4,24:2.8" }, { "sensor", "24.89" }, { "lens", "optical" },
              { "max-blur", "100" }, { "aperture", "polygon" }, { "blades", "7" },
              { "rotation", "15" }, { "roundness", "0.25" }, { "aspect", "0.5" },

@@ -185,6 +185,11 @@ double Random::uniform()
     return double(m_state >> 11) * (1.0 / 9007199254740992.0);
 }
 
+float largest_difference(const ImageBuf& a, const ImageBuf& b)
+{
+    return float(ImageBufAlgo::compare(a, b, 0.0f, 0.0f).maxerror);
+}
+
 double channel_sum(const ImageBuf& image, int c)
 {
     double sum = 0.0;

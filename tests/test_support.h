@@ -80,6 +80,9 @@ ImageBuf direct_sum(const ImageBuf& color, const ImageBuf& radius, const ImageBu
 void highlight_on_dim_field(const ROI& roi, const Imath::V2i& at, ImageBuf& color,
                             ImageBuf& radius);
 
+/// The largest difference between two flat images over their union.
+float largest_difference(const ImageBuf& a, const ImageBuf& b);
+
 /// Sum of channel `c` over the whole data window, in double.
 double channel_sum(const ImageBuf& image, int c);
 

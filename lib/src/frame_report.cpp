@@ -12,15 +12,25 @@ std::string frame_report(const FrameResult& frame, const Shot& shot, const std::
 {
     const Camera& c = frame.camera;
     std::string r;
-    r += format("  camera: {:.4g} mm f/{:.3g} focus {:.4g}{} sensor {:.4g} mm, {} lens, {} "
-                "aperture, max blur {:.4g} px\n",
-                c.focal_length_mm, c.fstop, c.focus_distance,
-                c.in_focus_range > 0.0 ? format(" (sharp over {:.4g})", c.in_focus_range) : "",
-                c.sensor_width_mm, lens_model_name(c.lens),
-                aperture_shape_name(shot.spread.aperture.shape), c.max_blur_px);
-    const CameraOrigins& o = frame.camera_origins;
-    r += format("  camera values from: focal {}, f-number {}, focus {}, sensor {}\n",
-                o.focal_length, o.fstop, o.focus, o.sensor_width);
+    r += format("  depth: {} ({})\n", depth_kind_name(frame.depth.kind), frame.depth.origin);
+    if (frame.depth.kind == DepthKind::Coc) {
+        r += format("  camera: none, the depth is a CoC map; {} aperture, max blur {:.4g} px\n",
+                    aperture_shape_name(shot.spread.aperture.shape), c.max_blur_px);
+    } else {
+        r += format("  camera: {:.4g} mm f/{:.3g} focus {:.4g}{} sensor {:.4g} mm, {} lens, {} "
+                    "aperture, max blur {:.4g} px\n",
+                    c.focal_length_mm, c.fstop, c.focus_distance,
+                    c.in_focus_range > 0.0 ? format(" (sharp over {:.4g})", c.in_focus_range)
+                                           : "",
+                    c.sensor_width_mm, lens_model_name(c.lens),
+                    aperture_shape_name(shot.spread.aperture.shape), c.max_blur_px);
+        const CameraOrigins& o = frame.camera_origins;
+        r += format("  camera values from: focal {}, f-number {}, focus {}, sensor {}\n",
+                    o.focal_length, o.fstop, o.focus, o.sensor_width);
+    }
+    if (c.pixel_aspect != 1.0)
+        r += format("  pixels {:.4g} times as wide as tall (the file's pixelAspectRatio): "
+                    "blurred as the desqueezed image shows them\n", c.pixel_aspect);
     if (c.tilt_deg[0] != 0.0 || c.tilt_deg[1] != 0.0)
         r += format("  plane of focus tilted {:.4g},{:.4g} degrees\n", c.tilt_deg[0],
                     c.tilt_deg[1]);

@@ -14,6 +14,7 @@
 #include <defocus/focus/focus_map.h>
 #include <defocus/io/frames.h>
 #include <defocus/io/image_output.h>
+#include <defocus/io/planar_depth.h>
 #include <defocus/io/scene_io.h>
 #include <defocus/layers/edges.h>
 #include <defocus/layers/layering.h>
@@ -75,6 +76,7 @@ std::string history_line(const Shot& shot, int frame)
 void describe_output(ImageSpec& spec, const ImageSpec& input, const Shot& shot,
                      const Camera& camera, const ColorPlan& color, int frame)
 {
+    const DepthKind depth_kind = frame_depth_kind(shot, input).kind;
     spec.extra_attribs = input.extra_attribs;
     erase_part_attributes(spec);
     if (shot.output != OutputKind::Image) {
@@ -90,7 +92,10 @@ void describe_output(ImageSpec& spec, const ImageSpec& input, const Shot& shot,
                        deep_compression(shot.compression, input.get_string_attribute("compression")));
     else if (!shot.compression.empty())
         spec.attribute("compression", shot.compression);
-    record_camera(spec, camera);
+    // A CoC map's camera is only a means to draw its blur.
+    if (depth_kind != DepthKind::Coc)
+        record_camera(spec, camera);
+    spec.erase_attribute(depth_kind_attribute);  // the output has no depth
     const Aperture& aperture = shot.spread.aperture;
     spec.attribute("defocus:aperture", aperture_shape_name(aperture.shape));
     spec.attribute("defocus:aspect", float(aperture.aspect));
@@ -159,14 +164,17 @@ bool layer_scene(Scene&& scene, const Shot& shot, int frame, const ShotAssets& a
     out.notes  = scene.notes;
     if (shot.data_channels == Shot().data_channels)
         note_data_channels(scene.spec, out.notes);
-    out.fixed  = sanitize(scene, nthreads);
-    lap("read");
     // The readers name the file that failed; later stages' errors are
     // named here, once.
     auto fail = [&]() {
         error = out.source + ": " + error;
         return false;
     };
+    out.depth = frame_depth_kind(shot, scene.spec);
+    if (!planar_scene_depth(shot, frame, out.depth, scene, error, nthreads))
+        return fail();
+    out.fixed = sanitize(scene, nthreads);
+    lap("read");
 
     if (!run_stage(on_stage, "colour", error))
         return false;
@@ -181,7 +189,7 @@ bool layer_scene(Scene&& scene, const Shot& shot, int frame, const ShotAssets& a
 
     if (!run_stage(on_stage, "slice", error))
         return false;
-    if (!shot_camera(shot, scene, frame, out.camera, out.camera_origins, error))
+    if (!shot_camera(shot, scene, frame, out.camera, out.camera_origins, error, out.depth.kind))
         return fail();
     const CircleOfConfusion coc(out.camera, scene.spec.roi_full());
     const bool to_slice = !scene.flat.empty() || !scene.deep.empty();
@@ -304,8 +312,13 @@ bool frame_camera(const Shot& shot, int frame, Camera& camera, CameraOrigins& or
     if (shot.focus_at.empty() ? !read_scene_spec(inputs, options, scene.spec, error)
                               : !read_scene(inputs, options, scene, error))
         return false;
+    const DepthChoice depth = frame_depth_kind(shot, scene.spec);
+    if (!shot.focus_at.empty() && !planar_scene_depth(shot, frame, depth, scene, error)) {
+        error = Strutil::join(inputs, " ") + ": " + error;
+        return false;
+    }
     sanitize(scene);
-    if (shot_camera(shot, scene, frame, camera, origins, error))
+    if (shot_camera(shot, scene, frame, camera, origins, error, depth.kind))
         return true;
     error = Strutil::join(inputs, " ") + ": " + error;
     return false;

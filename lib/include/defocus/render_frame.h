@@ -15,6 +15,7 @@
 
 #include <defocus/color/color_plan.h>
 #include <defocus/composite/defocus_layers.h>
+#include <defocus/io/planar_depth.h>
 #include <defocus/io/shot_assets.h>
 #include <defocus/layers/layered_scene.h>
 #include <defocus/scene.h>
@@ -27,6 +28,7 @@ struct FrameResult {
     std::string source;  ///< the files read, for messages
     Camera camera;       ///< as used; the focus measured when focusing at a pixel
     CameraOrigins camera_origins;  ///< where each camera value came from
+    DepthChoice depth;             ///< what the input's depth held
     ColorPlan color;
     /// The result in the output colour space, with the input's metadata
     /// and the settings used (defocus:*, oiio:ColorSpace, compression).

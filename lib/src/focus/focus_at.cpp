@@ -82,40 +82,60 @@ bool focus_distance_at(const Scene& scene, double x, double y, double& distance,
     return true;
 }
 
-bool shot_camera(const Shot& shot, const Scene& scene, int frame, Camera& camera,
-                 CameraOrigins& origins, std::string& error)
+bool lens_camera(const Shot& shot, const OIIO::ImageSpec& header, int frame, Camera& camera,
+                 CameraOrigins& origins)
 {
     camera = camera_at(shot, frame);
     origins = { setting_origin(shot, "focal"), setting_origin(shot, "fstop"),
                 setting_origin(shot, "focus"), setting_origin(shot, "sensor") };
+    camera.pixel_aspect = header_pixel_aspect(header);
     bool has_focus = !shot.focus.empty();
     if (shot.camera_from_file) {
         // A sequence's frames are read one by one: each takes its own
         // header's values, so a focus pull baked into the render is followed.
-        const HeaderCamera header = camera_from_header(scene.spec);
-        auto take = [&](const HeaderValue& found, const char* setting, double& value,
+        const HeaderCamera found = camera_from_header(header);
+        auto take = [&](const HeaderValue& value, const char* setting, double& to,
                         std::string& origin) {
-            if (!found.found() || is_given(shot, setting))
+            if (!value.found() || is_given(shot, setting))
                 return false;
-            value = found.value;
-            origin = "file: " + found.attribute;
+            to = value.value;
+            origin = "file: " + value.attribute;
             return true;
         };
-        take(header.focal_length_mm, "focal", camera.focal_length_mm, origins.focal_length);
-        take(header.fstop, "fstop", camera.fstop, origins.fstop);
+        take(found.focal_length_mm, "focal", camera.focal_length_mm, origins.focal_length);
+        take(found.fstop, "fstop", camera.fstop, origins.fstop);
         // The projection gives f/s; with a focal length known, the filmback.
-        const bool focal_known = is_given(shot, "focal") || header.focal_length_mm.found();
+        const bool focal_known = is_given(shot, "focal") || found.focal_length_mm.found();
         if (!is_given(shot, "sensor")
-            && !take(header.sensor_width_mm, "sensor", camera.sensor_width_mm,
+            && !take(found.sensor_width_mm, "sensor", camera.sensor_width_mm,
                      origins.sensor_width)
-            && header.focal_over_filmback.found() && focal_known) {
-            camera.sensor_width_mm = camera.focal_length_mm / header.focal_over_filmback.value;
+            && found.focal_over_filmback.found() && focal_known) {
+            camera.sensor_width_mm = camera.focal_length_mm / found.focal_over_filmback.value;
             origins.sensor_width = "file: worldToNDC and the focal length";
         }
         if (shot.focus_at.empty())
-            has_focus |= take(header.focus_distance, "focus", camera.focus_distance,
+            has_focus |= take(found.focus_distance, "focus", camera.focus_distance,
                               origins.focus);
     }
+    return has_focus;
+}
+
+bool shot_camera(const Shot& shot, const Scene& scene, int frame, Camera& camera,
+                 CameraOrigins& origins, std::string& error, DepthKind depth_kind)
+{
+    const OIIO::ROI display = scene.spec.roi_full();
+    if (depth_kind == DepthKind::Coc) {
+        if (error = coc_map_conflict(shot); !error.empty())
+            return false;
+        lens_camera(shot, scene.spec, frame, camera, origins);
+        const Camera lens = camera;
+        camera = coc_map_camera(shot.camera, display);
+        camera.axis_pixel = lens.axis_pixel;
+        camera.pixel_aspect = lens.pixel_aspect;
+        origins = { "none", "none", "the CoC map", "none" };
+        return check_camera(camera, display, error);
+    }
+    bool has_focus = lens_camera(shot, scene.spec, frame, camera, origins);
     if (!shot.focus_at.empty()) {
         const Keyframes::Value at = shot.focus_at.at(frame, Interpolation::Linear);
         if (!focus_distance_at(scene, at[0], at[1], camera.focus_distance, error,
@@ -130,7 +150,7 @@ bool shot_camera(const Shot& shot, const Scene& scene, int frame, Camera& camera
                        mention("focus", "DIST"), mention("focus-at", "X,Y"));
         return false;
     }
-    return check_camera(camera, scene.spec.roi_full(), error);
+    return check_camera(camera, display, error);
 }
 
 }  // namespace defocus

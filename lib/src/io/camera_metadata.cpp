@@ -115,4 +115,11 @@ HeaderCamera camera_from_header(const OIIO::ImageSpec& spec)
     return c;
 }
 
+double header_pixel_aspect(const OIIO::ImageSpec& spec)
+{
+    const float aspect = spec.get_float_attribute("PixelAspectRatio", 1.0f);
+    // Beyond 1/100..100 a header is broken, not anamorphic.
+    return std::isfinite(aspect) && aspect >= 0.01f && aspect <= 100.0f ? aspect : 1.0;
+}
+
 }  // namespace defocus

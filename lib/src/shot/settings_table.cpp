@@ -158,6 +158,15 @@ std::vector<SettingRule> scene_rules()
                  "Metres per depth unit of the input's Z, e.g. 0.01 for centimetres "
                  "(default: 1; --focus stays in metres)" },
                [](auto& s) -> auto& { return s.read.depth_scale; }, 1e-9, 1e9),
+        choice({ "depth-kind", "scene", "depth_kind", K::Text, G::Scene, "--depth-kind KIND",
+                 "What the depth holds: z, planar camera-space depth (default); inverse, 1/z "
+                 "with 0 infinitely far (Nuke's renderers; ZDefocus's far = 0); distance, "
+                 "along each pixel's ray from the camera; coc, the signed CoC diameter in "
+                 "pixels, negative in front of the focus, as --aov coc writes it (then no "
+                 "focus applies and the camera's settings are unused). Not given, a header's "
+                 "defocus:depthKind says" },
+               [](auto& s) -> auto& { return s.depth_kind; }, parse_depth_kind, depth_kind_name,
+               "depth kind", "z, inverse, distance or coc"),
         text({ "holdout", "scene", "holdout", K::Path, G::Scene, "--holdout FILE",
                "Hold the shot out by the other elements in this deep EXR (or flat RGBA+Z "
                "render; a frame pattern for sequences): where they stand in front, the "

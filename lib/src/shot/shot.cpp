@@ -119,7 +119,10 @@ bool check_shot(const Shot& shot, std::string& error)
     };
     if (shot.inputs.empty())
         return fail("no input file");
-    if (shot.focus.empty() && shot.focus_at.empty() && !shot.camera_from_file)
+    if (shot.depth_kind == DepthKind::Coc && !coc_map_conflict(shot).empty())
+        return fail(coc_map_conflict(shot));
+    if (shot.focus.empty() && shot.focus_at.empty() && !shot.camera_from_file
+        && shot.depth_kind != DepthKind::Coc)
         return fail(format("{} or {} is required: where the focus is", mention("focus", "DIST"),
                            mention("focus-at", "X,Y")));
     const Aperture& aperture = shot.spread.aperture;
@@ -142,6 +145,17 @@ bool check_shot(const Shot& shot, std::string& error)
                                    mention("aperture", "polygon"),
                                    aperture_shape_name(aperture.shape)));
     return true;
+}
+
+std::string coc_map_conflict(const Shot& shot)
+{
+    for (const char* name :
+         { "focus", "focus-at", "focus-tilt", "split-diopter", "in-focus-range", "depth-scale" })
+        if (is_given(shot, name))
+            return format("{} has no meaning for a depth that is a CoC map ({}): the map "
+                          "gives each pixel's blur",
+                          setting_label(shot, name), mention("depth-kind", "coc"));
+    return "";
 }
 
 std::vector<std::string> shot_files(const Shot& shot)

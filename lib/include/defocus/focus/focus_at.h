@@ -21,12 +21,21 @@ namespace defocus {
 bool focus_distance_at(const Scene& scene, double x, double y, double& distance,
                        std::string& error, int window = 5);
 
-/// The camera of a shot at `frame` over a read scene: camera_at(); with
-/// camera_from_file, the values the scene's header records in place of
-/// those the shot does not give; the focus measured by focus_distance_at()
-/// when the shot focuses at a pixel; then validated. `origins` says where
-/// each value came from. False with `error` the problem.
+/// The camera of a shot at `frame` before its focus is known: camera_at();
+/// with camera_from_file, the values `header` records (camera_from_header)
+/// in place of those the shot does not give; the header's pixel aspect.
+/// True when a focus distance was found (the shot's or the header's).
+bool lens_camera(const Shot& shot, const OIIO::ImageSpec& header, int frame, Camera& camera,
+                 CameraOrigins& origins);
+
+/// The camera of a shot at `frame` over a read scene whose depth is planar:
+/// lens_camera(), with the focus measured by focus_distance_at() when the
+/// shot focuses at a pixel; then validated. A CoC map's depth (`depth_kind`
+/// Coc) has its own camera (coc_map_camera), and refuses focus settings.
+/// `origins` says where each value came from. False with `error` the
+/// problem.
 bool shot_camera(const Shot& shot, const Scene& scene, int frame, Camera& camera,
-                 CameraOrigins& origins, std::string& error);
+                 CameraOrigins& origins, std::string& error,
+                 DepthKind depth_kind = DepthKind::Z);
 
 }  // namespace defocus

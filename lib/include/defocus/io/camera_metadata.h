@@ -33,6 +33,10 @@ struct HeaderCamera {
 
 HeaderCamera camera_from_header(const OIIO::ImageSpec& spec);
 
+/// The width of a pixel over its height that the header records
+/// (OpenEXR's pixelAspectRatio; 1 when it records none, or nonsense).
+double header_pixel_aspect(const OIIO::ImageSpec& spec);
+
 /// Where each camera value of a frame came from, for -v: the option or
 /// .dof key that set it, "file: ATTRIBUTE", "--focus-at X,Y" or "default".
 struct CameraOrigins {

@@ -79,6 +79,11 @@ struct Camera : CameraBody {
     /// pixels, for lateral chromatic aberration; none: the display
     /// window's centre.
     std::optional<Imath::V2d> axis_pixel;
+    /// The width of a pixel over its height in the scene (the file's
+    /// pixelAspectRatio): 2 for a plate squeezed 2x by an anamorphic lens.
+    /// The filmback spans the file's columns; blur is drawn as it would be
+    /// seen on the desqueezed image.
+    double pixel_aspect = 1.0;
 };
 
 /// The circle of confusion of one camera over a display window, precomputed

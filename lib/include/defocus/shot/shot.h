@@ -11,6 +11,7 @@
 
 #include <defocus/optics/aperture.h>
 #include <defocus/optics/camera.h>
+#include <defocus/optics/depth_kind.h>
 #include <defocus/shot/keyframes.h>
 #include <defocus/shot/options.h>
 
@@ -31,6 +32,9 @@ struct Shot {
     /// Frames of a sequence whose input files are missing.
     MissingFrames missing_frames = MissingFrames::Error;
     ReadOptions read;
+    /// What the inputs' depth holds; where the shot does not say, a
+    /// header's depth_kind_attribute, else planar depth.
+    DepthKind depth_kind = DepthKind::Z;
     LayeringOptions layering;
     /// A deep image (or flat RGBA+Z render) of the shot's other elements,
     /// which cuts this one where they stand in front of it: a file or frame
@@ -171,6 +175,10 @@ bool check_shot(const Shot& shot, std::string& error);
 /// names one rather than a channel), the aperture mask, the PSF image and
 /// the colour config, as given (frame patterns unfilled).
 std::vector<std::string> shot_files(const Shot& shot);
+
+/// The first setting given that a CoC map leaves no meaning to (a focus,
+/// a depth scale), as a message saying so; "" for none.
+std::string coc_map_conflict(const Shot& shot);
 
 /// True when a setting changes over frames.
 bool is_animated(const Shot& shot);

@@ -1,0 +1,133 @@
+// Renders as studios write them: depth of other kinds than planar Z,
+// anamorphic plates, clipped highlights, and the picture of the layering.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <functional>
+#include <string>
+
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+
+#include <defocus/render_frame.h>
+
+#include "test_support.h"
+
+using namespace defocus;
+using namespace defocus_test;
+using namespace OIIO;
+
+namespace {
+
+const Settings lens = { { "focal", "50" }, { "fstop", "2" }, { "sensor", "36" } };
+
+Settings with(Settings settings, const Settings& more)
+{
+    settings.insert(settings.end(), more.begin(), more.end());
+    return settings;
+}
+
+/// A 40x30 flat render: a grey half at 2 m, a blue half at 6 m, a thin
+/// white bar at 1 m; its Z rewritten by `depth_of(z, x, y)`, and its header
+/// declaring `declared` as the depth's kind ("" = none).
+std::string depth_scene(const std::string& path, const std::function<float(float, int, int)>& depth_of,
+                        const std::string& declared = "")
+{
+    ImageSpec spec = rgbaz_spec(40, 30);
+    if (!declared.empty())
+        spec.attribute(depth_kind_attribute, declared);
+    ImageBuf image(spec);
+    for (ImageBuf::Iterator<float> it(image); !it.done(); ++it) {
+        const float z = it.x() >= 18 && it.x() < 21 ? 1.0f : it.x() < 20 ? 2.0f : 6.0f;
+        const float c = z == 1.0f ? 1.0f : z == 2.0f ? 0.5f : 0.2f;
+        const float pixel[5] = { c, c, z == 6.0f ? 0.8f : c, 1.0f, depth_of(z, it.x(), it.y()) };
+        for (int ch = 0; ch < 5; ++ch)
+            it[ch] = pixel[ch];
+    }
+    REQUIRE(image.write(path));
+    return path;
+}
+
+FrameResult render_ok(const std::string& input, const Settings& settings)
+{
+    FrameResult result;
+    std::string error;
+    const bool ok = render_with(input, settings, result, error);
+    INFO(error);
+    REQUIRE(ok);
+    return result;
+}
+
+}  // namespace
+
+TEST_CASE("depth as 1/z, ray distance or CoC renders as planar Z does, kind from flag or header")
+{
+    const std::string dir = scratch_dir("depth_kinds");
+    const Settings camera = with(lens, { { "focus", "3" } });
+    const std::string planar = depth_scene(dir + "/z.exr", [](float z, int, int) { return z; });
+    const ImageBuf expected = render_ok(planar, camera).image;
+
+    // 1/z, said by the header: -v names where the kind came from.
+    const FrameResult inverse = render_ok(
+        depth_scene(dir + "/inverse.exr", [](float z, int, int) { return 1.0f / z; }, "inverse"),
+        camera);
+    CHECK(inverse.depth.kind == DepthKind::Inverse);
+    CHECK(inverse.depth.origin == "file: defocus:depthKind");
+    CHECK(largest_difference(inverse.image, expected) < 1e-5f);
+    // The flag wins over the header: the same file read as planar is wrong.
+    const FrameResult overridden = render_ok(dir + "/inverse.exr",
+                                             with(camera, { { "depth-kind", "z" } }));
+    CHECK(largest_difference(overridden.image, expected) > 0.1f);
+
+    // Distance along the ray from the optical centre (40x30: 20,15).
+    const double focal_px = 50.0 / 36.0 * 40;
+    auto distance = [&](float z, int x, int y) {
+        const double u = (x + 0.5 - 20) / focal_px, v = (y + 0.5 - 15) / focal_px;
+        return float(z * std::sqrt(1 + u * u + v * v));
+    };
+    const FrameResult along_rays = render_ok(depth_scene(dir + "/distance.exr", distance),
+                                             with(camera, { { "depth-kind", "distance" } }));
+    CHECK(largest_difference(along_rays.image, expected) < 1e-5f);
+
+    // The CoC the camera gives each depth: no camera needed.
+    Camera cam;
+    cam.focal_length_mm = 50;
+    cam.fstop = 2;
+    cam.focus_distance = 3;
+    const CircleOfConfusion coc(cam, ROI(0, 40, 0, 30));
+    const FrameResult from_coc = render_ok(
+        depth_scene(dir + "/coc.exr",
+                    [&](float z, int x, int y) { return float(coc.diameter(z, x, y)); }),
+        { { "depth-kind", "coc" } });
+    CHECK(command_line_words(from_coc.depth.origin) == "--depth-kind");
+    CHECK(largest_difference(from_coc.image, expected) < 1e-4f);
+}
+
+TEST_CASE("depth kinds: nonsense depth and a focus on a CoC map are one-line errors")
+{
+    const std::string dir = scratch_dir("depth_kind_errors");
+    FrameResult result;
+    std::string error;
+    const std::string negative = depth_scene(
+        dir + "/negative.exr", [](float z, int x, int) { return x == 3 ? -1.0f : 1.0f / z; });
+    CHECK_FALSE(render_with(negative, with(lens, { { "focus", "3" }, { "depth-kind", "inverse" } }),
+                            result, error));
+    CHECK(one_line_error(error, "negative.exr: --depth-kind inverse (--depth-kind): 30 pixels "
+                                "or samples hold negative or NaN inverse depth (the first at 3,0"));
+
+    const std::string map = depth_scene(dir + "/map.exr", [](float, int, int) { return 4.0f; },
+                                        "coc");
+    for (const Settings& focused : { Settings { { "focus", "3" } },
+                                     Settings { { "focus-tilt", "5,0" }, { "focus", "3" } },
+                                     Settings { { "depth-scale", "0.01" } } }) {
+        CHECK_FALSE(render_with(map, focused, result, error));
+        INFO(error);
+        CHECK(one_line_error(error, "has no meaning for a depth that is a CoC map (--depth-kind coc)"));
+    }
+    // Said by the flag, the shot is refused before any file is read.
+    Shot shot = shot_with({ dir + "/none.exr" }, { { "depth-kind", "coc" }, { "focus", "3" } });
+    CHECK_FALSE(check_shot(shot, error));
+    CHECK(one_line_error(error, "--focus has no meaning for a depth that is a CoC map"));
+    // The map alone renders, every pixel blurred by its own CoC of 4 px.
+    CHECK(render_with(map, {}, result, error));
+}
