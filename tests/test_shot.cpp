@@ -292,7 +292,7 @@ TEST_CASE(".dof files: every setting round-trips, paths relative to the file")
              { "max-blur", "100" }, { "aperture", "polygon" }, { "blades", "7" },
              { "rotation", "15" }, { "roundness", "0.25" }, { "aspect", "0.5" },
              { "hybrid-threshold", "6" }, { "aperture-cells", "25" },
-             { "iscolorspace", "ACEScg" },
+             { "iscolorspace", "ACEScg" }, { "bloom", "1:0.9,4,24:0.8,6" },
              { "tocolorspace", "srgb_tx" }, { "output", "focusmap" },
              { "pixel-type", "float" }, { "compression", "dwaa" }, { "window", "grown" },
              { "memory-limit", "1536M" } })

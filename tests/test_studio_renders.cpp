@@ -9,6 +9,7 @@
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
 
+#include <defocus/color/bloom.h>
 #include <defocus/render_frame.h>
 
 #include "test_support.h"
@@ -130,4 +131,53 @@ TEST_CASE("depth kinds: nonsense depth and a focus on a CoC map are one-line err
     CHECK(one_line_error(error, "--focus has no meaning for a depth that is a CoC map"));
     // The map alone renders, every pixel blurred by its own CoC of 4 px.
     CHECK(render_with(map, {}, result, error));
+}
+
+TEST_CASE("bloom lifts a display-referred plate's clipped highlights, and only them")
+{
+    // An sRGB PNG: a clipped white square on grey, all of it 20 m away,
+    // the lens focused at 1 m.
+    const std::string dir = scratch_dir("bloom");
+    ImageSpec spec(64, 64, 3, TypeUInt8);
+    ImageBuf plate(spec);
+    ImageBufAlgo::fill(plate, { 0.5f, 0.5f, 0.5f });
+    ImageBufAlgo::fill(plate, { 1.0f, 1.0f, 1.0f }, ROI(29, 35, 29, 35));
+    REQUIRE(plate.write(dir + "/plate.png"));
+    write_uniform_image(dir + "/depth.exr", { "Z" }, { 20.0f }, 64, 64, TypeFloat);
+    const Settings settings = with(lens, { { "focus", "1" }, { "depth", dir + "/depth.exr" },
+                                           { "tocolorspace", "lin_rec709" } });
+    auto brightest = [](const ImageBuf& image) {
+        return ImageBufAlgo::computePixelStats(image).max[0];
+    };
+    const FrameResult plain = render_ok(dir + "/plate.png", settings);
+    const FrameResult bloomed = render_ok(dir + "/plate.png", with(settings, { { "bloom", "0.9,4" } }));
+    WARN("brightest pixel: " << brightest(plain.image) << " plain, " << brightest(bloomed.image)
+                             << " with --bloom 0.9,4");
+    CHECK(brightest(bloomed.image) >= 1.5f * brightest(plain.image));
+    CHECK(plain.bloom.empty());
+    CHECK(bloomed.bloom == "bloom: 36 pixels or samples lifted, those above 0.9 by 4x");
+    // The grey far from the square is not touched.
+    float far_plain[3], far_bloomed[3];
+    plain.image.getpixel(5, 5, far_plain, 3);
+    bloomed.image.getpixel(5, 5, far_bloomed, 3);
+    CHECK(far_plain[0] == far_bloomed[0]);
+    // A threshold above every pixel changes no bit.
+    const FrameResult above = render_ok(dir + "/plate.png", with(settings, { { "bloom", "2,4" } }));
+    CHECK(largest_difference(above.image, plain.image) == 0.0f);
+}
+
+TEST_CASE("bloom's ramp is smooth and reaches the gain at the threshold")
+{
+    const Bloom bloom { 0.5, 3.0 };
+    CHECK(bloom.factor(0.2, 0.3, 0.44) == 1.0);
+    CHECK(bloom.factor(0.5, 0.1, 0.1) == Approx(3.0));
+    CHECK(bloom.factor(0.1, 7.0, 0.1) == Approx(3.0));
+    CHECK(bloom.factor(0.475, 0.0, 0.0) == Approx(2.0));  // half way up the ramp
+    double previous = 1.0;
+    for (double v = 0.4; v <= 0.6; v += 0.001) {
+        const double f = bloom.factor(v, v, v);
+        CHECK(f >= previous);
+        CHECK(f - previous < 0.1);  // the steepest: 1.5 x 2 / 0.05 per unit, 0.06 a step
+        previous = f;
+    }
 }

@@ -40,6 +40,8 @@ std::string frame_report(const FrameResult& frame, const Shot& shot, const std::
     for (const std::string& note : frame.notes)
         r += "  " + note + "\n";
     r += "  " + frame.color.summary + "\n";
+    if (!frame.bloom.empty())
+        r += "  " + frame.bloom + "\n";
     if (!frame.slicing.empty())
         r += "  " + frame.slicing + "\n";
     if (!frame.rebuilt.empty())

@@ -4,6 +4,7 @@
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/timer.h>
 
+#include <defocus/color/bloom.h>
 #include <defocus/color/primaries.h>
 #include <defocus/composite/coc_aov.h>
 #include <defocus/composite/confidence.h>
@@ -185,6 +186,12 @@ bool layer_scene(Scene&& scene, const Shot& shot, int frame, const ShotAssets& a
             && !convert_scene(scene, *color.config, color.input, color.working, error,
                               nthreads)))
         return fail();
+    if (!shot.bloom.empty()) {
+        const Keyframes::Value at = shot.bloom.at(frame, Interpolation::Linear);
+        const int64_t lifted = apply_bloom(scene, { at[0], at[1] }, nthreads);
+        out.bloom = format("bloom: {} pixels or samples lifted, those above {:g} by {:g}x",
+                           lifted, at[0], at[1]);
+    }
     lap("colour");
 
     if (!run_stage(on_stage, "slice", error))

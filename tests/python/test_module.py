@@ -541,10 +541,10 @@ def test_errors_carry_the_commands_messages(tmp_path):
 def test_shots_round_trip_through_dof_files(tmp_path):
     shot = defocus.Shot(inputs=[tmp_path / "plate.#.exr"], frames=range(1001, 1041), focal=85, fstop=1.4,
                         focus={1001: 3.0, 1040: 1.2}, focus_tilt=(5, 0), aperture="polygon",
-                        blades=7, max_blur=200, depth_kind="distance")
+                        blades=7, max_blur=200, depth_kind="distance", bloom=(0.9, 4))
     assert shot.focus == {1001: 3.0, 1040: 1.2}
     assert shot.frames == "1001-1040" and shot.blades == 7 and shot.aperture == "polygon"
-    assert shot.depth_kind == "distance"
+    assert shot.depth_kind == "distance" and shot.bloom == (0.9, 4)
     assert shot.focus_at is None
     shot.save(tmp_path / "shot.dof")
     loaded = defocus.Shot.load(tmp_path / "shot.dof")

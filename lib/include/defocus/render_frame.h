@@ -39,6 +39,7 @@ struct FrameResult {
     int data_channels = 0;
     PixelCounts fixed;
     std::vector<std::string> notes;  ///< how reading took what the files did not say
+    std::string bloom;    ///< what bloom lifted ("" = off)
     std::string slicing;  ///< how flat or deep input was cut into layers ("" = not)
     std::string rebuilt;  ///< what of the layers' hidden backgrounds was rebuilt, and how ("" = none)
     std::string edges;    ///< how the layers were extended past the data window ("" = not)

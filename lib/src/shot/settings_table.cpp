@@ -421,6 +421,14 @@ std::vector<SettingRule> color_rules()
                "Colour space of the output (default: the input's), named in its header by "
                "chromaticities and colorInteropID" },
              [](auto& s) -> auto& { return s.output_space; }),
+        keyframes({ "bloom", "color", "bloom", K::Point, G::InputColor,
+                    "--bloom THRESHOLD,GAIN",
+                    "For display-referred plates whose highlights are clipped (sRGB PNG, "
+                    "JPEG, Rec.709 video): light whose brightest channel is above THRESHOLD "
+                    "in the spreading space is multiplied by GAIN, ramping up from 0.9 "
+                    "times THRESHOLD, so that clipped lights make bright bokeh, as "
+                    "ZDefocus's bloom does; keyframes F:T,G,F:T,G... (default: off)" },
+                  &Shot::bloom, 2, 1e-6, 1e6),
     };
 }
 

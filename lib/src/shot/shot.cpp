@@ -174,7 +174,7 @@ bool is_animated(const Shot& shot)
     return shot.focus.animated() || shot.focus_at.animated()
            || shot.focal_length_mm.animated() || shot.fstop.animated()
            || shot.focus_tilt.animated() || shot.split_diopter.focus.animated()
-           || shot.optical_centre.animated();
+           || shot.optical_centre.animated() || shot.bloom.animated();
 }
 
 std::string aov_channel(const Shot& shot)

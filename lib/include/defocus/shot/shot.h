@@ -71,6 +71,8 @@ struct Shot {
     std::string color_config;  ///< "" = $OCIO, else the shipped config
     std::string input_space;   ///< "" = the file's oiio:ColorSpace, else linear
     std::string output_space;  ///< "" = the input's
+    /// Bloom (color/bloom.h): keyframes of (threshold, gain); empty: off.
+    Keyframes bloom;
 
     OutputKind output = OutputKind::Image;
     OIIO::TypeDesc pixel_type = OIIO::TypeUnknown;  ///< unknown = the input's
