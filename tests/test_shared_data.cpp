@@ -341,6 +341,45 @@ TEST_CASE("garden's Z as 1/z, ray distance and CoC renders as the planar Z does"
     }
 }
 
+TEST_CASE("the layer view draws each layer -v lists in its own colour", "[garden]")
+{
+    const std::string out = scratch_dir("garden_layer_view") + "/layers.exr";
+    std::string log;
+    REQUIRE(run(format("{} {} -o {}{} --focus 3 --output layers -v", DEFOCUS_BIN,
+                       garden("flat.exr"), out, garden_camera),
+                log) == 0);
+    INFO(log);
+    std::vector<Imath::V3f> listed;
+    for (size_t at = log.find(" drawn #"); at != std::string::npos;
+         at = log.find(" drawn #", at + 1)) {
+        const unsigned rgb = std::stoul(log.substr(at + 8, 6), nullptr, 16);
+        listed.emplace_back((rgb >> 16) / 255.0f, ((rgb >> 8) & 255) / 255.0f,
+                            (rgb & 255) / 255.0f);
+    }
+    REQUIRE(listed.size() >= 4);
+    // Each pixel's nearest listed colour: every layer is the nearest of
+    // some, and the background's fills most of the frame unmixed.
+    const ImageBuf view = read_float(out);
+    std::vector<int64_t> nearest(listed.size(), 0);
+    int64_t exactly_background = 0;
+    for (OIIO::ImageBuf::ConstIterator<float> it(view); !it.done(); ++it) {
+        if (it[3] == 0.0f)
+            continue;
+        const Imath::V3f c(it[0], it[1], it[2]);
+        size_t best = 0;
+        for (size_t l = 1; l < listed.size(); ++l)
+            if ((c - listed[l]).length2() < (c - listed[best]).length2())
+                best = l;
+        ++nearest[best];
+        exactly_background += (c - listed[0]).length() < 0.003f;
+    }
+    for (size_t l = 0; l < listed.size(); ++l) {
+        INFO("layer " << l << " is the nearest colour of " << nearest[l] << " pixels");
+        CHECK(nearest[l] > 0);
+    }
+    CHECK(exactly_background > view.spec().image_pixels() / 4);
+}
+
 TEST_CASE("an sRGB-encoded render is spread in linear light", "[garden]")
 {
     // An sRGB-encoded copy of flat.exr, made with the shipped config:

@@ -143,9 +143,10 @@ bool parse_command_line(int argc, const char* argv[], CommandLine& cl, bool& hel
         return fail("no input file (usage: defocus INPUT -o OUTPUT [options]; see --help)");
     if (!check_shot(cl.shot, error))
         return false;
-    if (cl.shot.output == OutputKind::FocusMap && !cl.preview.empty())
-        return fail("--preview does not apply to --output focusmap, which is already a "
-                    "display image");
+    if (cl.shot.output != OutputKind::Image && !cl.preview.empty())
+        return fail(format("--preview does not apply to --output {}, which is already a "
+                           "display image",
+                           output_kind_name(cl.shot.output)));
     if (cl.output.empty() && cl.save_scene.empty())
         return fail("no output file: give -o OUTPUT");
     return true;

@@ -1,12 +1,29 @@
 #include <defocus/frame_report.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/strutil.h>
+
+#include <defocus/layers/layer_view.h>
 
 namespace defocus {
 
 using namespace OIIO;
 using Strutil::fmt::format;
+
+namespace {
+
+/// Layer `index`'s colour in the layer view, as 8-bit hex ("#f2a13d").
+std::string colour_name(int index)
+{
+    const Imath::V3f c = layer_colour(index);
+    auto byte = [](float v) { return int(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); };
+    return format("#{:02x}{:02x}{:02x}", byte(c.x), byte(c.y), byte(c.z));
+}
+
+}  // namespace
 
 std::string frame_report(const FrameResult& frame, const Shot& shot, const std::string& output)
 {
@@ -52,9 +69,11 @@ std::string frame_report(const FrameResult& frame, const Shot& shot, const std::
     if (!frame.layers.empty())
         r += "  layers, back to front:\n";
     int64_t slow = 0, covered = 0;
-    for (const LayerReport& l : frame.layers) {
-        r += format("    {:<12} {:>9} px  depth {:.4g}..{:.4g}  CoC {:.3g}..{:.3g} px\n",
-                    l.name, l.pixels, l.depth_min, l.depth_max, l.coc_min, l.coc_max);
+    for (size_t i = 0; i < frame.layers.size(); ++i) {
+        const LayerReport& l = frame.layers[i];
+        r += format("    {:<12} {:>9} px  depth {:.4g}..{:.4g}  CoC {:.3g}..{:.3g} px{}\n",
+                    l.name, l.pixels, l.depth_min, l.depth_max, l.coc_min, l.coc_max,
+                    shot.output == OutputKind::Layers ? "  drawn " + colour_name(int(i)) : "");
         slow += l.psf_pixels;
         covered += l.pixels;
     }

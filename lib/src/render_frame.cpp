@@ -18,6 +18,7 @@
 #include <defocus/io/planar_depth.h>
 #include <defocus/io/scene_io.h>
 #include <defocus/layers/edges.h>
+#include <defocus/layers/layer_view.h>
 #include <defocus/layers/layering.h>
 #include <defocus/io/settings_hash.h>
 #include <defocus/shot/setting_words.h>
@@ -515,6 +516,10 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
             return false;
         }
         lap("focus map");
+    } else if (shot.output == OutputKind::Layers) {
+        layer_view(image, layered, nthreads);
+        out.layers = layered.reports;
+        lap("layer view");
     } else {
         DataPlan plan;
         if (!read_holdout(shot, frame, layered.spec, layered.holdout, error)

@@ -447,13 +447,14 @@ bool parse_pixel_type(Shot& shot, const std::string& label, const std::string& v
 std::vector<SettingRule> output_rules()
 {
     return {
-        either({ "output", "output", "kind", K::Text, G::Output, "--output KIND",
+        choice({ "output", "output", "kind", K::Text, G::Output, "--output KIND",
                  "image: the defocused image (default); focusmap: where the focus falls, "
                  "green in focus, red in front, blue behind, brighter with more blur, "
-                 "whitened where the blur reaches --max-blur" },
-               [](auto& s) -> auto& { return s.output; }, "kind",
-               std::pair { "image", OutputKind::Image },
-               std::pair { "focusmap", OutputKind::FocusMap }),
+                 "whitened where the blur reaches --max-blur; layers: the depth layers the "
+                 "scene was cut into, each in its own colour (-v lists them), mixed by "
+                 "coverage, unblurred" },
+               [](auto& s) -> auto& { return s.output; }, parse_output_kind, output_kind_name,
+               "kind", "image, focusmap or layers"),
         { { "pixel-type", "output", "type", K::Text, G::Output, "-d TYPE",
             "Output pixel type: half or float (default: the input's)" },
           parse_pixel_type,

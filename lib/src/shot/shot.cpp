@@ -5,6 +5,7 @@
 #include <defocus/shot/setting_words.h>
 
 #include "settings_table.h"
+#include "util/parse_name.h"
 
 namespace defocus {
 
@@ -88,9 +89,9 @@ namespace {
 std::string deep_refusal(const Shot& shot)
 {
     const std::string deep = setting_label(shot, "deep");
-    if (shot.output == OutputKind::FocusMap)
+    if (shot.output != OutputKind::Image)
         return format("{} writes the defocused image, not {}", deep,
-                      mention("output", "focusmap"));
+                      mention("output", output_kind_name(shot.output)));
     if (shot.aov != Aov::None)
         return format("{} cannot be written with {}: a deep sample holds colour and depth only",
                       setting_label(shot, "aov"), deep);
@@ -111,6 +112,18 @@ std::string deep_refusal(const Shot& shot)
 
 }  // namespace
 
+bool parse_output_kind(const std::string& name, OutputKind& kind)
+{
+    return parse_name(name, { OutputKind::Image, OutputKind::FocusMap, OutputKind::Layers },
+                      output_kind_name, kind);
+}
+
+const char* output_kind_name(OutputKind kind)
+{
+    return kind == OutputKind::FocusMap ? "focusmap" : kind == OutputKind::Layers ? "layers"
+                                                                                  : "image";
+}
+
 bool check_shot(const Shot& shot, std::string& error)
 {
     auto fail = [&](std::string why) {
@@ -128,14 +141,16 @@ bool check_shot(const Shot& shot, std::string& error)
     const Aperture& aperture = shot.spread.aperture;
     if (aperture.shape == ApertureShape::Mask && aperture.mask_file.empty())
         return fail(mention("aperture", "mask:FILE") + " needs the image of the shape");
-    if (shot.output == OutputKind::FocusMap && shot.aov != Aov::None)
+    if (shot.output != OutputKind::Image && shot.aov != Aov::None)
         return fail(format("{} applies to the defocused image, not to {}",
-                           setting_label(shot, "aov"), mention("output", "focusmap")));
+                           setting_label(shot, "aov"),
+                           mention("output", output_kind_name(shot.output))));
     if (shot.deep && !deep_refusal(shot).empty())
         return fail(deep_refusal(shot));
-    if (shot.output == OutputKind::FocusMap && shot.data_channels != Shot().data_channels)
+    if (shot.output != OutputKind::Image && shot.data_channels != Shot().data_channels)
         return fail(format("{} applies to the defocused image, not {}",
-                           setting_label(shot, "data-channels"), mention("output", "focusmap")));
+                           setting_label(shot, "data-channels"),
+                           mention("output", output_kind_name(shot.output))));
     // Settings that shape only a polygon would do nothing to other apertures.
     if (aperture.shape != ApertureShape::Polygon)
         for (const char* polygon_only : { "blades", "roundness", "rotation" })

@@ -20,7 +20,12 @@ namespace defocus {
 enum class OutputKind {
     Image,     ///< the defocused image
     FocusMap,  ///< where the focus falls, in false colour (see focus_map)
+    Layers,    ///< the layers the scene was cut into, in false colour (see layer_view)
 };
+
+/// "image", "focusmap" or "layers"; false for any other name.
+bool parse_output_kind(const std::string& name, OutputKind& kind);
+const char* output_kind_name(OutputKind kind);
 
 struct Shot {
     /// Files or frame patterns (oiiotool's '#', '@', "%04d"), the layers of
