@@ -45,8 +45,8 @@ TEST_CASE("bounded cat's eye: below radius 7.5 each pixel is its cell's clipped 
         REQUIRE(spread_cateye_bounded(bounded, color, radius, *profile, cateye));
         const ImageBuf direct = direct_sum(color, radius, bounded, [&](int x, int y, double r) {
             const CatEyeCell cell = cateye_cell(cateye, { x + 0.5, y + 0.5 });
-            return aperture_psf(std::make_shared<ClippedProfile>(profile,
-                                                                 cateye_cell_offset(cell)))(r);
+            return aperture_psf(std::make_shared<ClippedProfile>(
+                profile, cateye_cell_offset(cell), cateye.clip_aspect))(r);
         });
         CHECK(worst_relative_error(bounded, direct, 1e-5, 1e-7) <= 1.0);
     }
@@ -106,7 +106,7 @@ TEST_CASE("bounded cat's eye: where the offset is one cell's, it is that clipped
         const CatEyeCell cell = cateye_cell(cateye, { 40.5, 20.5 }, fineness);
         CHECK(cateye_cell(cateye, { 3.5, -6.5 }, fineness) == cell);
         CHECK(cateye_cell(cateye, { 82.5, 59.5 }, fineness) == cell);
-        const ClippedProfile shape(disc, cateye_cell_offset(cell));
+        const ClippedProfile shape(disc, cateye_cell_offset(cell), cateye.clip_aspect);
         REQUIRE(spread_aperture(fixed, color, radius, shape, merge_all));
         CHECK(worst_relative_error(clipped, fixed, 1e-6, 1e-9) <= 1.0);
     }

@@ -181,3 +181,64 @@ TEST_CASE("bloom's ramp is smooth and reaches the gain at the threshold")
         previous = f;
     }
 }
+
+namespace {
+
+/// A 256x256 plate of black at 20 m with one bright pixel in its middle,
+/// its pixels `pixel_aspect` times as wide as tall.
+std::string point_plate(const std::string& path, float pixel_aspect)
+{
+    ImageSpec spec = rgbaz_spec(256, 256);
+    spec.attribute("PixelAspectRatio", pixel_aspect);
+    ImageBuf plate(spec);
+    ImageBufAlgo::fill(plate, { 0.0f, 0.0f, 0.0f, 1.0f, 20.0f });
+    ImageBufAlgo::fill(plate, { 100.0f, 100.0f, 100.0f, 1.0f, 20.0f }, ROI(128, 129, 128, 129));
+    REQUIRE(plate.write(path));
+    return path;
+}
+
+/// The standard deviations of the light in channel R across and down.
+Imath::V2d light_spread(const ImageBuf& image)
+{
+    double sum = 0, sx = 0, sy = 0, sxx = 0, syy = 0;
+    for (ImageBuf::ConstIterator<float> it(image); !it.done(); ++it) {
+        const double w = it[0], x = it.x() + 0.5, y = it.y() + 0.5;
+        sum += w;
+        sx += w * x;
+        sy += w * y;
+        sxx += w * x * x;
+        syy += w * y * y;
+    }
+    const double mx = sx / sum, my = sy / sum;
+    return { std::sqrt(sxx / sum - mx * mx), std::sqrt(syy / sum - my * my) };
+}
+
+double width_over_height(const ImageBuf& image)
+{
+    const Imath::V2d spread = light_spread(image);
+    return spread.x / spread.y;
+}
+
+}  // namespace
+
+TEST_CASE("an anamorphic plate's bokeh is round on the desqueezed image")
+{
+    const std::string dir = scratch_dir("pixel_aspect");
+    const Settings settings = with(lens, { { "focus", "1" } });
+    const FrameResult squeezed = render_ok(point_plate(dir + "/squeezed.exr", 2.0f), settings);
+    const FrameResult square = render_ok(point_plate(dir + "/square.exr", 1.0f), settings);
+    const double ratio = width_over_height(squeezed.image);
+    WARN("bokeh width over height: " << ratio << " (pixel aspect 2), "
+                                     << width_over_height(square.image) << " (1)");
+    CHECK(ratio == Approx(0.5).margin(0.1));
+    CHECK(width_over_height(square.image) == Approx(1.0).margin(0.02));
+    CHECK(squeezed.camera.pixel_aspect == 2.0);
+    // The light is kept, and its height is the square plate's: the lens
+    // blurs a point by as many rows either way.
+    CHECK(channel_sum(squeezed.image, 0) == Approx(100.0).epsilon(1e-4));
+    CHECK(light_spread(squeezed.image).y == Approx(light_spread(square.image).y).epsilon(0.05));
+    // --aspect, the lens's own squeeze, multiplies in.
+    const double lens_squeezed = width_over_height(
+        render_ok(dir + "/squeezed.exr", with(settings, { { "aspect", "2" } })).image);
+    CHECK(lens_squeezed == Approx(1.0).margin(0.1));
+}

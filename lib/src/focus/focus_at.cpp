@@ -55,7 +55,7 @@ float opaque_depth(std::vector<std::pair<float, float>> surfaces)
 }  // namespace
 
 bool focus_distance_at(const Scene& scene, double x, double y, double& distance,
-                       std::string& error, int window)
+                       std::string& error, int window, double pixel_aspect)
 {
     const OIIO::ImageSpec& s = scene.spec;
     if (!(x >= 0 && x < s.full_width && y >= 0 && y < s.full_height)) {
@@ -65,8 +65,9 @@ bool focus_distance_at(const Scene& scene, double x, double y, double& distance,
     }
     const int cx = s.full_x + int(x), cy = s.full_y + int(y);
     std::vector<float> depths;
+    const int half_across = int(std::lround(window / 2 / pixel_aspect));
     for (int py = cy - window / 2; py <= cy + window / 2; ++py)
-        for (int px = cx - window / 2; px <= cx + window / 2; ++px) {
+        for (int px = cx - half_across; px <= cx + half_across; ++px) {
             const float z = opaque_depth(surfaces_at(scene, px, py));
             if (std::isfinite(z))
                 depths.push_back(z);
@@ -139,7 +140,7 @@ bool shot_camera(const Shot& shot, const Scene& scene, int frame, Camera& camera
     if (!shot.focus_at.empty()) {
         const Keyframes::Value at = shot.focus_at.at(frame, Interpolation::Linear);
         if (!focus_distance_at(scene, at[0], at[1], camera.focus_distance, error,
-                               2 * shot.focus_at_radius + 1))
+                               2 * shot.focus_at_radius + 1, camera.pixel_aspect))
             return false;
         camera.focus_pixel = Imath::V2d(at[0], at[1]);
         origins.focus = setting_origin(shot, "focus-at");

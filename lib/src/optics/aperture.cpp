@@ -12,6 +12,13 @@ bool parse_aperture_shape(const std::string& name, ApertureShape& shape)
                       aperture_shape_name, shape);
 }
 
+Aperture effective_aperture(const Aperture& aperture, double pixel_aspect)
+{
+    Aperture squeezed = aperture;
+    squeezed.aspect /= pixel_aspect;
+    return squeezed;
+}
+
 const char* aperture_shape_name(ApertureShape shape)
 {
     switch (shape) {

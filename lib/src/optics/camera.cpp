@@ -26,7 +26,10 @@ Imath::V2d pixel_point(const std::optional<Imath::V2d>& pixel, const OIIO::ROI& 
 /// is that numerator at the focus point, where 1/z_f is 1/focus distance.
 struct TiltedPlane {
     double tan_h, tan_v;  ///< about the horizontal and the vertical axis
-    double centre_x, centre_y, focal_px;
+    double centre_x, centre_y;
+    /// The focal length in rows, and in columns (rows over the pixel
+    /// aspect: a wide pixel spans more of the field).
+    double focal_px, focal_px_x;
     double focus_term;
 };
 
@@ -39,8 +42,9 @@ TiltedPlane tilted_plane(const Camera& camera, const OIIO::ROI& display)
     p.centre_x = display.xbegin + 0.5 * display.width();
     p.centre_y = display.ybegin + 0.5 * display.height();
     p.focal_px = camera.focal_length_mm / camera.sensor_width_mm * display.width();
+    p.focal_px_x = p.focal_px / camera.pixel_aspect;
     const Imath::V2d focus = pixel_point(camera.focus_pixel, display);
-    p.focus_term = 1.0 - p.tan_v * (focus.x - p.centre_x) / p.focal_px
+    p.focus_term = 1.0 - p.tan_v * (focus.x - p.centre_x) / p.focal_px_x
                    + p.tan_h * (focus.y - p.centre_y) / p.focal_px;
     return p;
 }
@@ -60,7 +64,12 @@ CircleOfConfusion::CircleOfConfusion(const Camera& camera, const OIIO::ROI& disp
     // mm, converted to metres, the unit of depth.
     const double f = camera.focal_length_mm * 1e-3;
     const double f_over_s = camera.focal_length_mm / camera.sensor_width_mm;
-    m_scale = f * f_over_s / camera.fstop * display.width();
+    // In rows (the filmback spans the columns of the file, its pixels
+    // square on the sensor, the squeeze in the lens), then as the diameter
+    // of the disc of the footprint's area in the file's pixels: a round
+    // bokeh on the desqueezed image is 1 / pixel_aspect as wide as tall in
+    // them (see effective_aperture).
+    m_scale = f * f_over_s / camera.fstop * display.width() / std::sqrt(camera.pixel_aspect);
     if (camera.lens == LensModel::Optical)
         m_scale *= camera.focus_distance / (camera.focus_distance - f);
 
@@ -70,8 +79,9 @@ CircleOfConfusion::CircleOfConfusion(const Camera& camera, const OIIO::ROI& disp
     // exactly 1/focus distance and the slopes are zero.
     const TiltedPlane p = tilted_plane(camera, display);
     const double k = 1.0 / (camera.focus_distance * p.focus_term);
-    m_inv_focus = k * (1.0 + p.tan_v * p.centre_x / p.focal_px - p.tan_h * p.centre_y / p.focal_px);
-    m_tilt_x = -k * p.tan_v / p.focal_px;
+    m_inv_focus
+        = k * (1.0 + p.tan_v * p.centre_x / p.focal_px_x - p.tan_h * p.centre_y / p.focal_px);
+    m_tilt_x = -k * p.tan_v / p.focal_px_x;
     m_tilt_y = k * p.tan_h / p.focal_px;
 
     if (camera.in_focus_range > 0.0) {
@@ -85,10 +95,13 @@ CircleOfConfusion::CircleOfConfusion(const Camera& camera, const OIIO::ROI& disp
     // the power that moves the focus from the focus distance to its own.
     const SplitDiopter& split = camera.split;
     if (split.distance > 0.0) {
-        const double dx = split.x1 - split.x0, dy = split.y1 - split.y0;
+        // In the desqueezed image's pixels, x times the pixel aspect, so
+        // that the transition is as wide whichever way the line runs.
+        const double aspect = camera.pixel_aspect;
+        const double dx = (split.x1 - split.x0) * aspect, dy = split.y1 - split.y0;
         const double length = std::hypot(dx, dy);
         // On the right of the line's direction, as the image is seen (y down).
-        m_split_nx = -dy / length;
+        m_split_nx = -dy * aspect / length;
         m_split_ny = dx / length;
         m_split_offset = m_split_nx * (split.x0 + 0.5) + m_split_ny * (split.y0 + 0.5);
         m_split_power = 1.0 / split.distance - 1.0 / camera.focus_distance;

@@ -220,14 +220,28 @@ bool MaskProfile::set_shape(const OIIO::ImageBuf& image, double aspect, const Im
     const double unit = std::sqrt(pi / count);
     m_sx = unit * std::sqrt(aspect);
     m_sy = unit / std::sqrt(aspect);
+    measure_extent();
+    return true;
+}
+
+void MaskProfile::measure_extent()
+{
     double extent = 0.0;
-    for (int y = 0; y < roi.height(); ++y)
+    for (int y = 0; y < int(m_runs.size()); ++y)
         for (const Run& run : m_runs[y])
             extent = std::max({ extent, std::abs(run.begin - m_cx) * m_sx,
                                 std::abs(run.end - m_cx) * m_sx, std::abs(y - m_cy) * m_sy,
                                 std::abs(y + 1 - m_cy) * m_sy });
     m_extent = extent;
-    return true;
+}
+
+std::shared_ptr<const MaskProfile> MaskProfile::squeezed(double factor) const
+{
+    auto shape = std::make_shared<MaskProfile>(*this);
+    shape->m_sx *= std::sqrt(factor);
+    shape->m_sy /= std::sqrt(factor);
+    shape->measure_extent();
+    return shape;
 }
 
 double MaskProfile::rows(double r, std::vector<RowSpan>& spans) const

@@ -39,12 +39,22 @@ struct SpanCache {
     }
 };
 
+/// Half the chord at height dy from its centre of the clip of CoC radius
+/// r: the disc of radius r squeezed `clip_aspect` times as wide as tall,
+/// keeping its area; negative where the row misses it.
+double clip_half_chord(double r, double dy, double clip_aspect)
+{
+    const double width = std::sqrt(clip_aspect);
+    const double t = dy * width / r;  // over the half-height r / width
+    return std::abs(t) >= 1.0 ? -1.0 : r * width * std::sqrt(1.0 - t * t);
+}
+
 /// The sub-row spans `sub` of a shape (its spans at sub_rows times the
-/// radius r) as spans of the footprint's rows, each cut by the disc of
-/// radius r centred at d when `clip` (unclipped if the clip leaves
-/// nothing). Returns their area.
+/// radius r) as spans of the footprint's rows, each cut by the clip of
+/// radius r (clip_half_chord) centred at d when `clip` (unclipped if the
+/// clip leaves nothing). Returns their area.
 double clip_sub_rows(const std::vector<RowSpan>& sub, double r, bool clip, const V2d& d,
-                     std::vector<RowSpan>& out)
+                     double clip_aspect, std::vector<RowSpan>& out)
 {
     double area = 0.0;
     for (const bool clipping : { clip, false }) {
@@ -54,10 +64,9 @@ double clip_sub_rows(const std::vector<RowSpan>& sub, double r, bool clip, const
             const double y = double(s.row) / sub_rows;  // the sub-row's middle
             double left = s.left / sub_rows, right = s.right / sub_rows;
             if (clipping) {
-                const double dy = y - d.y;
-                if (std::abs(dy) >= r)
+                const double h = clip_half_chord(r, y - d.y, clip_aspect);
+                if (h < 0.0)
                     continue;
-                const double h = std::sqrt(r * r - dy * dy);
                 left = std::max(left, d.x - h);
                 right = std::min(right, d.x + h);
                 if (right <= left)
@@ -80,7 +89,7 @@ void clipped_intervals(const RowProfile& profile, const CatEye& cateye, const V2
 {
     const bool clip = cateye.amount > 0.0 && r >= cateye_min_radius;
     const V2d d = clip ? cateye.offset(at, r) : V2d(0.0, 0.0);
-    const double area = clip_sub_rows(cache.at(profile, r), r, clip, d, out);
+    const double area = clip_sub_rows(cache.at(profile, r), r, clip, d, cateye.clip_aspect, out);
     for (RowSpan& i : out)
         i.weight /= area;
 }
@@ -127,9 +136,10 @@ V2d cateye_cell_offset(const CatEyeCell& cell)
 }
 
 ClippedProfile::ClippedProfile(std::shared_ptr<const RowProfile> aperture,
-                               const V2d& offset_per_radius, bool clip)
+                               const V2d& offset_per_radius, double clip_aspect, bool clip)
     : m_aperture(std::move(aperture))
     , m_offset(offset_per_radius)
+    , m_clip_aspect(clip_aspect)
     , m_clip(clip)
 {
 }
@@ -138,7 +148,8 @@ double ClippedProfile::rows(double r, std::vector<RowSpan>& spans) const
 {
     std::vector<RowSpan> sub;
     m_aperture->rows(sub_rows * r, sub);
-    return clip_sub_rows(sub, r, m_clip && r >= cateye_min_radius, m_offset * r, spans);
+    return clip_sub_rows(sub, r, m_clip && r >= cateye_min_radius, m_offset * r, m_clip_aspect,
+                         spans);
 }
 
 bool spread_cateye(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
@@ -177,7 +188,8 @@ bool spread_cateye(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, c
                     for (int i = 0; i < fp.width; ++i) {
                         double& w = fp.weights[size_t(j) * fp.width + i];
                         all += w;
-                        if ((V2d(fp.x0 + i, fp.y0 + j) - d).length2() > r * r)
+                        const double h = clip_half_chord(r, fp.y0 + j - d.y, cateye.clip_aspect);
+                        if (std::abs(fp.x0 + i - d.x) > h)
                             w = 0.0;
                         kept += w;
                     }

@@ -75,7 +75,8 @@ ShapePrograms::ShapePrograms(std::shared_ptr<const RowProfile> profile, double m
 {
     // Clipped shapes are cut in sub-rows: their uncut sub-rows bound them.
     const std::shared_ptr<const RowProfile> bound =
-        clipped() ? std::make_shared<ClippedProfile>(m_profile, Imath::V2d(0.0, 0.0), false)
+        clipped() ? std::make_shared<ClippedProfile>(m_profile, Imath::V2d(0.0, 0.0),
+                                                     cateye.clip_aspect, false)
                   : m_profile;
     for (int level = 0; level <= max_level; ++level)
         m_families.push_back(std::make_unique<ProgramFamily>(
@@ -94,7 +95,9 @@ const ProgramFamily& ShapePrograms::clipped_blocks(int level, const CatEyeCell& 
     std::unique_ptr<ProgramFamily>& family = m_clipped[key];
     if (!family)
         family = std::make_unique<ProgramFamily>(
-            std::make_shared<ClippedProfile>(m_profile, cateye_cell_offset(cell)), 1 << level,
+            std::make_shared<ClippedProfile>(m_profile, cateye_cell_offset(cell),
+                                             m_cateye.clip_aspect),
+            1 << level,
             (1 << level) / radius_bins_per_pixel, m_max_radius);
     return *family;
 }

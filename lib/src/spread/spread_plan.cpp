@@ -104,7 +104,7 @@ bool plan_spread(const SpreadOptions& options, const ApertureImages& images,
     double max_radius = 0.0;
     for (const LayerReport& d : reports)
         max_radius = std::max({ max_radius, 0.5 * std::abs(d.coc_min), 0.5 * std::abs(d.coc_max) });
-    const Aperture& aperture = options.aperture;
+    const Aperture aperture = effective_aperture(options.aperture, camera.pixel_aspect);
     if (aperture.shape == ApertureShape::Disc || aperture.shape == ApertureShape::Polygon) {
         plan.profile = std::make_shared<ApertureProfile>(aperture);
     } else if (aperture.shape == ApertureShape::Mask) {
@@ -112,7 +112,8 @@ bool plan_spread(const SpreadOptions& options, const ApertureImages& images,
             error = "a mask aperture needs its shape (read_aperture_mask)";
             return false;
         }
-        plan.profile = images.mask;
+        plan.profile = camera.pixel_aspect == 1.0 ? images.mask
+                                                  : images.mask->squeezed(1.0 / camera.pixel_aspect);
     }
     plan.method = aperture.shape == ApertureShape::Box ? SpreadMethod::Box
                   : options.exact_shape                ? SpreadMethod::Exact
@@ -120,10 +121,14 @@ bool plan_spread(const SpreadOptions& options, const ApertureImages& images,
     const Imath::V2d centre = optical_centre(camera, display);
     plan.cateye.amount = camera.cateye;
     plan.cateye.centre = centre;
+    const double aspect = camera.pixel_aspect;
     for (const int x : { display.xbegin, display.xend })
         for (const int y : { display.ybegin, display.yend })
-            plan.cateye.corner_distance = std::max(plan.cateye.corner_distance,
-                                                   (Imath::V2d(x, y) - centre).length());
+            plan.cateye.corner_distance
+                = std::max(plan.cateye.corner_distance,
+                           Imath::V2d((x - centre.x) * aspect, y - centre.y).length()
+                               / std::sqrt(aspect));
+    plan.cateye.clip_aspect = 1.0 / aspect;
     // A cat's eye goes through the engine with merged blocks only: exact
     // spreading and the box take it pixel by pixel.
     const bool clipped = plan.cateye.amount != 0.0;

@@ -13,13 +13,14 @@ namespace defocus {
 
 /// The depth of the front-most opaque surface at display-window pixel
 /// (x, y) (0,0 = the display window's top left), as the median over the
-/// `window` x `window` pixels around it. A pixel's front-most opaque
+/// `window` rows around it and as many columns as make a square on the
+/// desqueezed image (window / `pixel_aspect`, odd). A pixel's front-most opaque
 /// surface is where its layers, flat renders and deep samples, composited
 /// front to back, first reach half coverage. Works on a sanitized scene
 /// before slicing. False with `error` when (x, y) is outside the display
 /// window or nothing there is opaque at a finite depth.
 bool focus_distance_at(const Scene& scene, double x, double y, double& distance,
-                       std::string& error, int window = 5);
+                       std::string& error, int window = 5, double pixel_aspect = 1.0);
 
 /// The camera of a shot at `frame` before its focus is known: camera_at();
 /// with camera_from_file, the values `header` records (camera_from_header)

@@ -25,6 +25,11 @@ struct Aperture {
     std::string mask_file;      ///< mask: the image of the shape
 };
 
+/// The aperture as a plate's pixels draw it: squeezed by a further
+/// 1 / `pixel_aspect` (keeping its area), so that the desqueezed image
+/// shows its own shape. Box, tent and smooth take no squeeze.
+Aperture effective_aperture(const Aperture& aperture, double pixel_aspect);
+
 /// "box", "disc", "polygon", "tent", "smooth" or "mask"; false for any
 /// other name.
 bool parse_aperture_shape(const std::string& name, ApertureShape& shape);

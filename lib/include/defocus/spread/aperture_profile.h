@@ -83,10 +83,17 @@ public:
     bool set_shape(const OIIO::ImageBuf& mask, double aspect, const Imath::V3d& luma,
                    std::string& error);
 
+    /// The same shape squeezed horizontally by a further `factor`, keeping
+    /// its area.
+    std::shared_ptr<const MaskProfile> squeezed(double factor) const;
+
     double rows(double r, std::vector<RowSpan>& spans) const override;
     double extent() const override { return m_extent; }
 
 private:
+    /// m_extent from the runs and the scales.
+    void measure_extent();
+
     struct Run {
         int begin, end;  ///< mask columns [begin, end)
     };

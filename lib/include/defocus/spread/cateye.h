@@ -23,7 +23,14 @@ struct CatEye {
     /// disc's edge reaches the aperture's centre.
     double amount = 0.0;
     Imath::V2d centre { 0.0, 0.0 };  ///< the optical centre
-    double corner_distance = 1.0;    ///< from the centre to the farthest display corner
+    /// From the centre to the farthest display corner; on a plate of
+    /// pixel aspect a, measured on the desqueezed image and divided by
+    /// sqrt(a), so that offset() is that of the desqueezed image.
+    double corner_distance = 1.0;
+    /// The clip's width over its height in pixels: 1 / the pixel aspect,
+    /// as the aperture is squeezed (effective_aperture). The clip has the
+    /// area of the CoC disc.
+    double clip_aspect = 1.0;
 
     /// The clip disc's centre relative to the footprint's centre, for a
     /// pixel centred at `at` with CoC radius r: towards the optical centre,
@@ -80,7 +87,7 @@ Imath::V2d cateye_cell_offset(const CatEyeCell& cell);
 class ClippedProfile final : public RowProfile {
 public:
     ClippedProfile(std::shared_ptr<const RowProfile> aperture,
-                   const Imath::V2d& offset_per_radius, bool clip = true);
+                   const Imath::V2d& offset_per_radius, double clip_aspect, bool clip = true);
 
     double rows(double r, std::vector<RowSpan>& spans) const override;
     double extent() const override { return m_aperture->extent(); }
@@ -88,6 +95,7 @@ public:
 private:
     std::shared_ptr<const RowProfile> m_aperture;
     Imath::V2d m_offset;
+    double m_clip_aspect;
     bool m_clip;
 };
 
