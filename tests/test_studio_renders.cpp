@@ -8,6 +8,7 @@
 
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/strutil.h>
 
 #include <defocus/color/bloom.h>
 #include <defocus/render_frame.h>
@@ -17,6 +18,7 @@
 using namespace defocus;
 using namespace defocus_test;
 using namespace OIIO;
+using Strutil::fmt::format;
 
 namespace {
 
@@ -241,4 +243,113 @@ TEST_CASE("an anamorphic plate's bokeh is round on the desqueezed image")
     const double lens_squeezed = width_over_height(
         render_ok(dir + "/squeezed.exr", with(settings, { { "aspect", "2" } })).image);
     CHECK(lens_squeezed == Approx(1.0).margin(0.1));
+}
+
+namespace {
+
+/// The light's centroid and spread across and down, in the desqueezed
+/// image's units (a column `pixel_aspect` wide, a row 1 high).
+struct Bokeh {
+    Imath::V2d centre, spread;
+};
+
+Bokeh desqueezed_bokeh(const ImageBuf& image, double pixel_aspect)
+{
+    double sum = 0, sx = 0, sy = 0, sxx = 0, syy = 0;
+    for (ImageBuf::ConstIterator<float> it(image); !it.done(); ++it) {
+        const double w = it[0], x = (it.x() + 0.5) * pixel_aspect, y = it.y() + 0.5;
+        sum += w;
+        sx += w * x;
+        sy += w * y;
+        sxx += w * x * x;
+        syy += w * y * y;
+    }
+    const Imath::V2d centre(sx / sum, sy / sum);
+    return { centre, { std::sqrt(sxx / sum - centre.x * centre.x),
+                       std::sqrt(syy / sum - centre.y * centre.y) } };
+}
+
+/// The bokeh of one bright point at display position `at` (units of
+/// rows) on a plate 256 columns of pixel aspect 2 wide, and on the same
+/// plate desqueezed: 512 square columns, the filmback twice as wide.
+/// `settings(aspect)` are the shot's for the plate of that pixel aspect.
+std::pair<Bokeh, Bokeh> squeezed_and_desqueezed(const std::string& dir, const Imath::V2i& at,
+                                                const std::function<Settings(int)>& settings)
+{
+    Bokeh bokeh[2];
+    for (const int aspect : { 2, 1 }) {
+        ImageSpec spec = rgbaz_spec(512 / aspect, 256);
+        spec.attribute("PixelAspectRatio", float(aspect));
+        ImageBuf plate(spec);
+        ImageBufAlgo::fill(plate, { 0.0f, 0.0f, 0.0f, 1.0f, 20.0f });
+        ImageBufAlgo::fill(plate, { 100.0f, 100.0f, 100.0f, 1.0f, 20.0f },
+                           ROI(at.x / aspect, at.x / aspect + 2 / aspect, at.y, at.y + 1));
+        const std::string path = dir + format("/aspect{}.exr", aspect);
+        REQUIRE(plate.write(path));
+        bokeh[aspect - 1] = desqueezed_bokeh(
+            render_ok(path, with(settings(aspect), { { "focal", "50" }, { "fstop", "1.4" },
+                                                     { "sensor", std::to_string(72 / aspect) },
+                                                     { "focus", "0.5" } }))
+                .image,
+            aspect);
+    }
+    return { bokeh[1], bokeh[0] };
+}
+
+}  // namespace
+
+TEST_CASE("on an anamorphic plate, the cat's eye, tilt and diopter act as on the desqueezed one")
+{
+    const std::string dir = scratch_dir("desqueezed");
+    struct Case {
+        const char* what;
+        std::function<Settings(int)> settings;
+        Imath::V2i at;
+    };
+    const Case cases[] = {
+        { "cat's eye", [](int) { return Settings { { "cateye", "1" } }; }, { 440, 40 } },
+        { "tilt", [](int) { return Settings { { "focus-tilt", "0,20" } }; }, { 400, 128 } },
+    };
+    for (const Case& c : cases) {
+        const auto [squeezed, desqueezed] = squeezed_and_desqueezed(dir, c.at, c.settings);
+        INFO(c.what << ": centre " << squeezed.centre << " against " << desqueezed.centre
+                    << ", spread " << squeezed.spread << " against " << desqueezed.spread);
+        CHECK((squeezed.centre - desqueezed.centre).length() < 0.3);
+        CHECK(squeezed.spread.x == Approx(desqueezed.spread.x).epsilon(0.08));
+        CHECK(squeezed.spread.y == Approx(desqueezed.spread.y).epsilon(0.08));
+    }
+}
+
+TEST_CASE("on an anamorphic plate, a diopter's focus changes over 4 px of the desqueezed image")
+{
+    // A vertical line through pixel centres: 4 px across on the desqueezed
+    // image are 2 columns of pixel aspect 2, with 1 centre strictly inside.
+    for (const double aspect : { 1.0, 2.0 }) {
+        Camera camera;
+        camera.focus_distance = 1.0;
+        camera.split = { 100, 0, 100, 50, 2.0 };
+        camera.pixel_aspect = aspect;
+        const CircleOfConfusion coc(camera, ROI(0, 200, 0, 50));
+        int changing = 0;
+        for (int x = 90; x < 110; ++x) {
+            const double f = coc.inverse_focus(x, 10);
+            changing += f != coc.inverse_focus(0, 10) && f != coc.inverse_focus(199, 10);
+        }
+        INFO("pixel aspect " << aspect);
+        CHECK(changing == int(CircleOfConfusion::split_transition_px / aspect) - 1);
+    }
+}
+
+TEST_CASE("ray distance on an anamorphic plate: a column spans pixel aspect times the field")
+{
+    Camera squeezed, square;
+    squeezed.pixel_aspect = 2.0;
+    squeezed.axis_pixel = square.axis_pixel = Imath::V2d(49.0, 24.5);  // centre 49.5, 25
+    const ROI display(0, 100, 0, 50);
+    const PlanarDepth from_squeezed(DepthKind::Distance, squeezed, display, 1.0);
+    const PlanarDepth from_square(DepthKind::Distance, square, display, 1.0);
+    // Column 80's centre is 31 columns right of the centre: 62 on the
+    // desqueezed image, where the square plate's column 111 is.
+    CHECK(from_squeezed(10.0, 80, 7) == Approx(from_square(10.0, 111, 7)).epsilon(1e-12));
+    CHECK(from_squeezed(10.0, 80, 7) < from_square(10.0, 80, 7));
 }

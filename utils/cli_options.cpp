@@ -147,23 +147,33 @@ std::string unknown_option_hint(const ArgParse& ap, const std::string& error)
 {
     static const std::regex invalid("Invalid option \"(-[^\"]*)\"");
     std::smatch m;
-    // OIIO's own guess, when it has one, is already in the message.
-    if (!std::regex_search(error, m, invalid) || OIIO::Strutil::contains(error, "did you mean"))
+    if (!std::regex_search(error, m, invalid))
         return error;
+    // OIIO's own guess takes the first of equally near names (--focsu:
+    // --focal before --focus); a swap of two letters is the likelier typo.
+    const std::string oiio_guess = error;
+    const std::string plain = error.substr(0, size_t(m.position(0) + m.length(0)));
     const std::string given = m[1];
     std::string nearest;
+    // Two letters swapped: the same letters in another order.
+    auto letters = [](std::string s) {
+        std::sort(s.begin(), s.end());
+        return s;
+    };
     if (OIIO::Strutil::starts_with(given, "--")) {
         size_t best = std::max<size_t>(2, given.size() / 3) + 1;  // farther is no typo
         for (const std::string& name : option_names(ap)) {
             const size_t d = OIIO::Strutil::edit_distance(given, name);
-            // Among equals, a name of the same length: two letters swapped.
-            if (d < best || (d == best && !nearest.empty() && name.size() == given.size())) {
+            if (d < best || (d == best && letters(name) == letters(given))) {
                 best = d;
                 nearest = name;
             }
         }
     }
-    return nearest.empty() ? error + " (see --help)" : error + ": did you mean " + nearest + "?";
+    if (nearest.empty())
+        return OIIO::Strutil::contains(oiio_guess, "did you mean") ? oiio_guess
+                                                                   : plain + " (see --help)";
+    return plain + ": did you mean " + nearest + "?";
 }
 
 void add_help_option(ArgParse& ap)

@@ -23,9 +23,9 @@ std::string colour_name(int index)
     return format("#{:02x}{:02x}{:02x}", byte(c.x), byte(c.y), byte(c.z));
 }
 
-}  // namespace
-
-std::string frame_report(const FrameResult& frame, const Shot& shot, const std::string& output)
+/// The lines of -v on the depth, the camera, the pixel aspect and the
+/// focal surface.
+std::string camera_report(const FrameResult& frame, const Shot& shot)
 {
     const Camera& c = frame.camera;
     std::string r;
@@ -45,15 +45,31 @@ std::string frame_report(const FrameResult& frame, const Shot& shot, const std::
         r += format("  camera values from: focal {}, f-number {}, focus {}, sensor {}\n",
                     o.focal_length, o.fstop, o.focus, o.sensor_width);
     }
-    if (c.pixel_aspect != 1.0)
+    if (c.pixel_aspect != 1.0) {
+        const ApertureShape shape = shot.spread.aperture.shape;
+        const bool square = shape == ApertureShape::Box || shape == ApertureShape::Tent
+                            || shape == ApertureShape::Smooth || !shot.spread.psf_image.empty();
         r += format("  pixels {:.4g} times as wide as tall (the file's pixelAspectRatio): "
-                    "blurred as the desqueezed image shows them\n", c.pixel_aspect);
+                    "blurred as the desqueezed image shows them{}\n",
+                    c.pixel_aspect,
+                    square ? format(", but the {} stays square in the file's pixels",
+                                    shot.spread.psf_image.empty() ? "aperture" : "PSF image")
+                           : "");
+    }
     if (c.tilt_deg[0] != 0.0 || c.tilt_deg[1] != 0.0)
         r += format("  plane of focus tilted {:.4g},{:.4g} degrees\n", c.tilt_deg[0],
                     c.tilt_deg[1]);
     if (c.split.distance > 0.0)
         r += format("  split diopter beyond {:.6g},{:.6g} -> {:.6g},{:.6g}: focus {:.4g}\n",
                     c.split.x0, c.split.y0, c.split.x1, c.split.y1, c.split.distance);
+    return r;
+}
+
+}  // namespace
+
+std::string frame_report(const FrameResult& frame, const Shot& shot, const std::string& output)
+{
+    std::string r = camera_report(frame, shot);
     for (const std::string& note : frame.notes)
         r += "  " + note + "\n";
     r += "  " + frame.color.summary + "\n";

@@ -5,7 +5,6 @@
 #include <OpenImageIO/timer.h>
 
 #include <defocus/color/bloom.h>
-#include <defocus/color/primaries.h>
 #include <defocus/composite/coc_aov.h>
 #include <defocus/composite/confidence.h>
 #include <defocus/composite/data_channels.h>
@@ -20,11 +19,10 @@
 #include <defocus/layers/edges.h>
 #include <defocus/layers/layer_view.h>
 #include <defocus/layers/layering.h>
-#include <defocus/io/settings_hash.h>
 #include <defocus/shot/setting_words.h>
-#include <defocus/version.h>
 
 #include "composite/spread_memory.h"
+#include "io/output_metadata.h"
 
 namespace defocus {
 
@@ -47,81 +45,6 @@ TypeDesc output_pixel_type(const Shot& shot, const ImageSpec& input)
 TypeDesc deep_color_type(const Shot& shot, const ImageSpec& input)
 {
     return output_pixel_type(shot, input) == TypeHalf ? TypeHalf : TypeFloat;
-}
-
-/// One line of an image's history for this render: the version, the files
-/// the frame reads and the settings given, as the defocus command takes
-/// them ("--crop", "--aperture mask:FILE").
-std::string history_line(const Shot& shot, int frame)
-{
-    std::string line = format("defocus {}: {}", version(),
-                              Strutil::join(files_read(shot, { frame }), " "));
-    for (const ShotSetting& setting : shot_settings()) {
-        const std::string name = setting.name;
-        std::string value = shot_setting(shot, name);
-        // A switch's default, given, is the same as none (and has no flag);
-        // the mask's file is given with its shape, as mask:FILE.
-        if (!is_given(shot, name) || (!setting.option && value == shot_setting(Shot(), name))
-            || name == "aperture-mask")
-            continue;
-        if (name == "aperture" && shot.spread.aperture.shape == ApertureShape::Mask)
-            value += ":" + shot.spread.aperture.mask_file;
-        if (value.find_first_of(" \t") != std::string::npos)
-            value = "'" + value + "'";
-        line += " " + setting_words(name, value, SettingForm::CommandLine);
-    }
-    return line;
-}
-
-/// The metadata of a result: the input's (less what describes one part),
-/// its colour space, and the settings used.
-void describe_output(ImageSpec& spec, const ImageSpec& input, const Shot& shot,
-                     const Camera& camera, const ColorPlan& color, int frame)
-{
-    const DepthKind depth_kind = frame_depth_kind(shot, input).kind;
-    spec.extra_attribs = input.extra_attribs;
-    erase_part_attributes(spec);
-    if (shot.output != OutputKind::Image) {
-        // A focus map is false colour: it has no colour space.
-        spec.erase_attribute("chromaticities");
-        spec.erase_attribute("colorInteropID");
-    } else if (color.config) {
-        spec.attribute("oiio:ColorSpace", color.output);
-        record_color_space(spec, *color.config, color.output);
-    }
-    if (shot.deep)
-        spec.attribute("compression",
-                       deep_compression(shot.compression, input.get_string_attribute("compression")));
-    else if (!shot.compression.empty())
-        spec.attribute("compression", shot.compression);
-    // A CoC map's camera is only a means to draw its blur.
-    if (depth_kind != DepthKind::Coc)
-        record_camera(spec, camera);
-    spec.erase_attribute(depth_kind_attribute);  // the output has no depth
-    const Aperture& aperture = shot.spread.aperture;
-    spec.attribute("defocus:aperture", aperture_shape_name(aperture.shape));
-    spec.attribute("defocus:aspect", float(aperture.aspect));
-    if (aperture.shape == ApertureShape::Mask)
-        spec.attribute("defocus:apertureMask", aperture.mask_file);
-    if (aperture.shape == ApertureShape::Polygon) {
-        spec.attribute("defocus:blades", aperture.blades);
-        spec.attribute("defocus:rotation", float(aperture.rotation_deg));
-        spec.attribute("defocus:roundness", float(aperture.roundness));
-    }
-    if (is_sequence(shot))
-        spec.attribute("defocus:frame", frame);
-    spec.attribute("defocus:settingsHash", settings_hash(shot, frame));
-    // Provenance, as oiiotool keeps it: the software that made the input
-    // stays named, and the image's history gains how this step was made.
-    const std::string ours = std::string("defocus ") + version();
-    const std::string software = input.get_string_attribute("Software");
-    spec.attribute("Software", software.empty()                    ? ours
-                               : Strutil::ends_with(software, ours) ? software
-                                                                    : software + "; " + ours);
-    std::string history = input.get_string_attribute("Exif:ImageHistory");
-    if (!history.empty() && !Strutil::ends_with(history, "\n"))
-        history += "\n";
-    spec.attribute("Exif:ImageHistory", history + history_line(shot, frame));
 }
 
 /// Whether stage `name` may start; false with `error` where the callback
@@ -497,6 +420,20 @@ bool spread_frame(const Shot& shot, const ApertureImages& images, LayeredScene& 
     return true;
 }
 
+/// The focus map or the layer view of a frame, as the shot's output says.
+bool false_colour_picture(const Shot& shot, const LayeredScene& layered, FrameResult& out,
+                          std::string& error, int nthreads)
+{
+    if (shot.output == OutputKind::Layers) {
+        out.layers = layered.reports;
+        return layer_view(out.image, layered, nthreads);
+    }
+    if (focus_map(out.image, layered, out.camera, 8.0, nthreads))
+        return true;
+    error = out.image.geterror();
+    return false;
+}
+
 /// A frame from its prepared layers to the image to write. Errors do not
 /// name the source: the caller does.
 bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
@@ -510,16 +447,10 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
     if (!run_stage(on_stage, "render", error))
         return false;
     ImageBuf& image = out.image;
-    if (shot.output == OutputKind::FocusMap) {
-        if (!focus_map(image, layered, out.camera, 8.0, nthreads)) {
-            error = image.geterror();
+    if (shot.output != OutputKind::Image) {
+        if (!false_colour_picture(shot, layered, out, error, nthreads))
             return false;
-        }
-        lap("focus map");
-    } else if (shot.output == OutputKind::Layers) {
-        layer_view(image, layered, nthreads);
-        out.layers = layered.reports;
-        lap("layer view");
+        lap(shot.output == OutputKind::FocusMap ? "focus map" : "layer view");
     } else {
         DataPlan plan;
         if (!read_holdout(shot, frame, layered.spec, layered.holdout, error)
@@ -598,7 +529,8 @@ bool frame_spec(const Shot& shot, int frame, const ShotAssets& assets, ImageSpec
         return false;
     const ROI display(input.full_x, input.full_x + input.full_width, input.full_y,
                       input.full_y + input.full_height, 0, 1, 0, 4);
-    const Camera camera = camera_at(shot, frame);
+    Camera camera = camera_at(shot, frame);
+    camera.pixel_aspect = header_pixel_aspect(input);
     ROI window = display;
     if (shot.output == OutputKind::Image && shot.window == OutputWindow::Input)
         window = input.roi();

@@ -1,7 +1,7 @@
 // One frame of a shot, from its files to the image to write:
 //
-//   read -> sanitize -> to scene-linear -> focus -> layers -> spread each
-//   layer -> composite -> from scene-linear -> metadata
+//   read -> planar depth -> sanitize -> to scene-linear (bloom) -> focus ->
+//   layers -> spread each layer -> composite -> from scene-linear -> metadata
 //
 // The defocus command and the OpenImageIO plugin both render through here.
 #pragma once
