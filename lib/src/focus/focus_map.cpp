@@ -16,16 +16,10 @@ using namespace OIIO;
 bool focus_map(ImageBuf& dst, const LayeredScene& scene, const Camera& camera,
                double in_focus_px, int nthreads)
 {
-    const ImageSpec& s = scene.spec;
-    const ROI display(s.full_x, s.full_x + s.full_width, s.full_y, s.full_y + s.full_height,
-                      0, 1, 0, 4);
-    ImageSpec spec(display, TypeFloat);
-    spec.full_x = display.xbegin;
-    spec.full_y = display.ybegin;
-    spec.channelnames = { "R", "G", "B", "A" };
-    spec.alpha_channel = 3;
+    const ImageSpec spec = display_picture_spec(scene);
+    const ROI display = spec.roi();
     dst.reset(spec, InitializePixels::No);  // every pixel is written below
-    const CircleOfConfusion coc(camera, s.roi_full());
+    const CircleOfConfusion coc(camera, scene.spec.roi_full());
     const double max_blur = std::max(camera.max_blur_px, 1e-6);
     parallel_for(display.ybegin, display.yend, [&](int y) {
         for (int x = display.xbegin; x < display.xend; ++x) {

@@ -30,14 +30,8 @@ Imath::V3f layer_colour(int index)
 
 bool layer_view(ImageBuf& dst, const LayeredScene& scene, int nthreads)
 {
-    const ImageSpec& s = scene.spec;
-    const ROI display(s.full_x, s.full_x + s.full_width, s.full_y, s.full_y + s.full_height,
-                      0, 1, 0, 4);
-    ImageSpec spec(display, TypeFloat);
-    spec.full_x = display.xbegin;
-    spec.full_y = display.ybegin;
-    spec.channelnames = { "R", "G", "B", "A" };
-    spec.alpha_channel = 3;
+    const ImageSpec spec = display_picture_spec(scene);
+    const ROI display = spec.roi();
     dst.reset(spec);  // transparent where no layer covers
     parallel_for(display.ybegin, display.yend, [&](int y) {
         for (int x = display.xbegin; x < display.xend; ++x) {

@@ -90,6 +90,17 @@ LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc, int
     return rep;
 }
 
+OIIO::ImageSpec display_picture_spec(const LayeredScene& scene)
+{
+    const OIIO::ImageSpec& s = scene.spec;
+    OIIO::ImageSpec spec(s.full_width, s.full_height, 4, OIIO::TypeFloat);
+    spec.x = spec.full_x = s.full_x;
+    spec.y = spec.full_y = s.full_y;
+    spec.channelnames = { "R", "G", "B", "A" };
+    spec.alpha_channel = 3;
+    return spec;
+}
+
 void crop_to_content(Layer& layer, int nthreads)
 {
     const ROI roi = layer.color.roi();

@@ -49,6 +49,10 @@ struct LayeredScene {
     std::shared_ptr<const DeepImage> holdout;
 };
 
+/// The spec of a false-colour picture of `scene` (the focus map, the
+/// layer view): float RGBA over its display window.
+OIIO::ImageSpec display_picture_spec(const LayeredScene& scene);
+
 /// Crops a layer (colour, depth and rebuilt) to the pixels that carry
 /// light, as layering hands layers on.
 void crop_to_content(Layer& layer, int nthreads = 0);
