@@ -313,6 +313,16 @@ TEST_CASE("every bad input ends in a one-line error and no output")
           "out.png: png files do not keep channel names" },
         { example_scene() + " -o " + dir + "/out.jpg" + camera + " --data-channels auto",
           "out.jpg: jpeg files do not keep channel names, which --data-channels auto needs" },
+        // Renderers' conventions: bad kinds and values, and a focus on a
+        // CoC map.
+        { example_scene() + " -o " + out + camera + " --depth-kind far",
+          "--depth-kind: unknown depth kind 'far' (choose z, inverse, distance or coc)" },
+        { example_scene() + " -o " + out + camera + " --depth-kind coc",
+          "--focus has no meaning for a depth that is a CoC map (--depth-kind coc)" },
+        { example_scene() + " -o " + out + camera + " --bloom 0.9", "--bloom: '0.9' is not" },
+        { example_scene() + " -o " + out + camera + " --bloom 0,4", "--bloom: 0 is out of range" },
+        { example_scene() + " -o " + out + camera + " --output layers --aov coc",
+          "--aov applies to the defocused image, not to --output layers" },
         // Conflicting or unused options.
         { example_scene() + " -o " + out + camera + " --crop --grow",
           "--crop and --grow contradict each other" },

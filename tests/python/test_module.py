@@ -375,6 +375,8 @@ def test_errors_name_python_keywords(example, tmp_path):
          "focus_at=(5000, 10) is outside the 1280x720 display window"),
         (defocus.Shot(inputs=[example], focus=3, memory_limit="1M"),
          "more than the memory limit of 1 MB (memory_limit)"),
+        (defocus.Shot(inputs=[example], focus=3, depth_kind="coc"),
+         'focus has no meaning for a depth that is a CoC map (depth_kind="coc")'),
     ]
     for shot, words in cases:
         with pytest.raises(defocus.Error) as raised:
@@ -383,6 +385,10 @@ def test_errors_name_python_keywords(example, tmp_path):
         assert "--" not in str(raised.value)
     with pytest.raises(defocus.Error, match=r"^focus_at: expected a pixel \(x, y\), got 'a'$"):
         defocus.Shot(focus_at="a")
+    with pytest.raises(defocus.Error, match=r"^depth_kind: unknown depth kind 'far' \(choose z, "):
+        defocus.Shot(depth_kind="far")
+    with pytest.raises(defocus.Error, match=r"^bloom: 0 is out of range"):
+        defocus.Shot(bloom=(0, 4))
     # Arguments of the wrong type name the keyword and what it takes, never
     # pybind's NativeShot and arg0.
     shot = defocus.Shot(inputs=[example], focus=3)
