@@ -18,6 +18,7 @@
 #include <OpenImageIO/strutil.h>
 
 #include <defocus/io/image_input.h>
+#include <defocus/optics/depth_kind.h>
 
 #include "io/exr_input.h"
 #include "io/half_pixels.h"
@@ -427,6 +428,7 @@ bool write_layers_atomic(const std::vector<Layer>& layers, const ImageSpec& scen
         spec.alpha_channel = 3;
         spec.z_channel = 4;
         erase_part_attributes(spec);
+        spec.erase_attribute(depth_kind_attribute);  // Z is planar now
         spec.attribute("name", layer.name);
         specs.push_back(spec);
         parts.push_back(std::move(part));
