@@ -77,6 +77,13 @@ TEST_CASE("depth as 1/z, ray distance or CoC renders as planar Z does, kind from
     CHECK(inverse.depth.kind == DepthKind::Inverse);
     CHECK(inverse.depth.origin == "file: defocus:depthKind");
     CHECK(largest_difference(inverse.image, expected) < 1e-5f);
+    // layerize writes planar Z, and so no longer says the depth is 1/z.
+    std::string log;
+    REQUIRE(run(format("{} {}/inverse.exr -o {}/layers.exr --focal 50 --fstop 2 --focus 3",
+                       LAYERIZE_BIN, dir, dir),
+                log) == 0);
+    CHECK(read_spec(dir + "/layers.exr").get_string_attribute(depth_kind_attribute).empty());
+    CHECK(largest_difference(render_ok(dir + "/layers.exr", camera).image, expected) < 1e-4f);
     // The flag wins over the header: the same file read as planar is wrong.
     const FrameResult overridden = render_ok(dir + "/inverse.exr",
                                              with(camera, { { "depth-kind", "z" } }));
