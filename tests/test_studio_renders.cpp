@@ -113,6 +113,19 @@ TEST_CASE("depth as 1/z, ray distance or CoC renders as planar Z does, kind from
     CHECK(largest_difference(from_coc.image, expected) < 1e-4f);
 }
 
+TEST_CASE("the coc AOV of one render is the depth of the next, with no camera")
+{
+    const std::string dir = scratch_dir("coc_aov_depth");
+    const Settings camera = with(lens, { { "focus", "3" } });
+    const std::string planar = depth_scene(dir + "/z.exr", [](float z, int, int) { return z; });
+    const FrameResult first = render_ok(planar, with(camera, { { "aov", "coc" } }));
+    REQUIRE(first.image.write(dir + "/with_coc.exr"));
+    const FrameResult again = render_ok(dir + "/with_coc.exr", { { "depth", "coc" } });
+    CHECK(again.depth.kind == DepthKind::Coc);
+    CHECK(command_line_words(again.depth.origin) == "--depth coc: the coc AOV's channel");
+    CHECK(no_nan(again.image));
+}
+
 TEST_CASE("depth kinds: nonsense depth and a focus on a CoC map are one-line errors")
 {
     const std::string dir = scratch_dir("depth_kind_errors");

@@ -110,10 +110,13 @@ bool to_planar_depth(Scene& scene, const PlanarDepth& planar, std::string& error
 DepthChoice frame_depth_kind(const Shot& shot, const OIIO::ImageSpec& header)
 {
     DepthChoice choice;
+    const std::string coc_channel = aov_name(Aov::Coc);
     if (is_given(shot, "depth-kind"))
         choice = { shot.depth_kind, setting_origin(shot, "depth-kind") };
     else if (header_depth_kind(header, choice.kind))
         choice.origin = std::string("file: ") + depth_kind_attribute;
+    else if (shot.read.depth == coc_channel && header.channelindex(coc_channel) >= 0)
+        choice = { DepthKind::Coc, format("{}: the coc AOV's channel", mention("depth", "coc")) };
     return choice;
 }
 

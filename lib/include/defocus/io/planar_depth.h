@@ -25,7 +25,8 @@ struct DepthChoice {
 };
 
 /// What the depth of a shot's inputs holds, whose (first) header is
-/// `header`: the shot's setting when given, else what the header declares.
+/// `header`: the shot's setting when given, else what the header declares,
+/// else a CoC map when the depth is the channel the coc AOV writes.
 DepthChoice frame_depth_kind(const Shot& shot, const OIIO::ImageSpec& header);
 
 /// to_planar_depth() of a read scene of `shot` at `frame`, as `depth`
