@@ -126,6 +126,47 @@ TEST_CASE("the coc AOV of one render is the depth of the next, with no camera")
     CHECK(no_nan(again.image));
 }
 
+TEST_CASE("a deep image's samples with 1/z depth render as with planar Z")
+{
+    // Each pixel: a half-covering sample at 2 m (on the left half) over an
+    // opaque one at 6 m, Z and ZBack rewritten by `depth_of`.
+    const std::string dir = scratch_dir("deep_depth_kinds");
+    auto deep_scene = [&](const std::string& name, float (*depth_of)(float)) {
+        ImageSpec spec(40, 30, 6, TypeFloat);
+        spec.channelnames = { "R", "G", "B", "A", "Z", "ZBack" };
+        spec.deep = true;
+        DeepData data(spec);
+        for (int y = 0; y < 30; ++y)
+            for (int x = 0; x < 40; ++x) {
+                const int64_t p = int64_t(y) * 40 + x;
+                const bool near = x < 20;
+                data.set_samples(p, near ? 2 : 1);
+                int s = 0;
+                if (near) {
+                    for (int c = 0; c < 6; ++c)
+                        data.set_deep_value(p, c, s, c < 4 ? 0.5f : depth_of(2.0f));
+                    ++s;
+                }
+                const float wall[6] = { 0.1f, 0.4f, 0.2f, 1.0f, depth_of(6.0f), depth_of(6.0f) };
+                for (int c = 0; c < 6; ++c)
+                    data.set_deep_value(p, c, s, wall[c]);
+            }
+        const std::string path = dir + "/" + name + ".exr";
+        auto out = ImageOutput::create(path);
+        REQUIRE(out->open(path, spec));
+        REQUIRE(out->write_deep_image(data));
+        REQUIRE(out->close());
+        return path;
+    };
+    const Settings camera = with(lens, { { "focus", "3" } });
+    const ImageBuf planar
+        = render_ok(deep_scene("z", [](float z) { return z; }), camera).image;
+    const ImageBuf inverse = render_ok(deep_scene("inverse", [](float z) { return 1.0f / z; }),
+                                       with(camera, { { "depth-kind", "inverse" } }))
+                                 .image;
+    CHECK(largest_difference(inverse, planar) < 1e-5f);
+}
+
 TEST_CASE("depth kinds: nonsense depth and a focus on a CoC map are one-line errors")
 {
     const std::string dir = scratch_dir("depth_kind_errors");
