@@ -73,6 +73,26 @@ TEST_CASE("spreading equals the direct reference at integer and fractional radii
     }
 }
 
+TEST_CASE("squeezed boxes equal the direct reference of their rectangles")
+{
+    const ROI roi(-7, 57, 3, 51);
+    for (const double aspect : { 0.5, 0.3, 2.0, 3.7 }) {
+        INFO("aspect " << aspect);
+        RandomLayer layer(roi, 0.01, 10.0, 0.0, 11.5, unsigned(aspect * 10));
+        ImageBuf fast, direct;
+        REQUIRE(spread_box(fast, layer.color, layer.radius, aspect));
+        REQUIRE(spread_direct(direct, layer.color, layer.radius,
+                              [aspect](double r) { return rectangle_footprint(r, aspect); }));
+        CHECK(fast.roi() == direct.roi());
+        CHECK(worst_relative_error(fast, direct, 1e-5, 1e-7) <= 1.0);
+    }
+    // Of the disc's area, and as wide as tall only at aspect 1.
+    const Footprint wide = rectangle_footprint(20.0, 4.0);
+    CHECK(wide.width == Approx(4 * wide.height).epsilon(0.1));
+    const BoxHalfWidths h = box_half_widths(20.0, 4.0);
+    CHECK(4 * h.x * h.y == Approx(3.14159265358979 * 400));
+}
+
 TEST_CASE("spreading conserves energy and grows the data window")
 {
     const ROI roi(0, 40, 0, 30);

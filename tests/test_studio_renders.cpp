@@ -304,6 +304,15 @@ TEST_CASE("an anamorphic plate's bokeh is round on the desqueezed image")
     const double lens_squeezed = width_over_height(
         render_ok(dir + "/squeezed.exr", with(settings, { { "aspect", "2" } })).image);
     CHECK(lens_squeezed == Approx(1.0).margin(0.1));
+    // The box, the polygon and the mask are squeezed alike.
+    const std::string mask = "mask:" + std::string(EXAMPLES_DIR) + "/psf/blades7.exr";
+    for (const std::string& aperture : { std::string("box"), std::string("polygon"), mask }) {
+        INFO(aperture);
+        CHECK(width_over_height(render_ok(dir + "/squeezed.exr",
+                                          with(settings, { { "aperture", aperture } }))
+                                    .image)
+              == Approx(0.5).margin(0.1));
+    }
 }
 
 namespace {

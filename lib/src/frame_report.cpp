@@ -47,8 +47,8 @@ std::string camera_report(const FrameResult& frame, const Shot& shot)
     }
     if (c.pixel_aspect != 1.0) {
         const ApertureShape shape = shot.spread.aperture.shape;
-        const bool square = shape == ApertureShape::Box || shape == ApertureShape::Tent
-                            || shape == ApertureShape::Smooth || !shot.spread.psf_image.empty();
+        const bool square = shape == ApertureShape::Tent || shape == ApertureShape::Smooth
+                            || !shot.spread.psf_image.empty();
         r += format("  pixels {:.4g} times as wide as tall (the file's pixelAspectRatio): "
                     "blurred as the desqueezed image shows them{}\n",
                     c.pixel_aspect,

@@ -425,7 +425,7 @@ void compute_cells(SubApertureLayers& cells, const LayeredScene& scene, const Ca
                    const SpreadOptions& spread, const SpreadPlan& plan, OutputWindow window,
                    const ROI& display, int nthreads)
 {
-    const BoxProfile box;
+    const BoxProfile box(plan.aspect);
     const RowProfile* shape = plan.profile ? plan.profile.get()
                               : spread.aperture.shape == ApertureShape::Box ? &box
                                                                              : nullptr;

@@ -367,7 +367,9 @@ std::vector<SettingRule> aperture_rules()
                  "Polygon: 0 = straight blades, 1 = a disc (default: 0)" },
                [](auto& s) -> auto& { return s.spread.aperture.roundness; }, 0, 1),
         number({ "aspect", "aperture", "aspect", K::Number, G::Aperture, "--aspect A",
-                 "Anamorphic squeeze: < 1 narrows the bokeh horizontally (default: 1)" },
+                 "The lens's anamorphic squeeze of the bokeh (disc, polygon, mask, box): < 1 "
+                 "narrows it horizontally, keeping its area; the plate's own "
+                 "pixelAspectRatio is taken from its header (default: 1)" },
                [](auto& s) -> auto& { return s.spread.aperture.aspect; }, 0.05, 20),
     };
 }

@@ -162,20 +162,20 @@ double ApertureProfile::rows(double r, std::vector<RowSpan>& spans) const
 
 double BoxProfile::rows(double r, std::vector<RowSpan>& spans) const
 {
-    const double h = box_half_width(r);
+    const BoxHalfWidths h = box_half_widths(r, m_aspect);
     spans.clear();
     double area = 0.0;
-    for (int j = -int(std::ceil(h - 0.5)); j <= int(std::ceil(h - 0.5)); ++j) {
-        const double height = std::min(j + 0.5, h) - std::max(j - 0.5, -h);
-        spans.push_back({ j, -h, h, height });
-        area += 2.0 * h * height;
+    for (int j = -int(std::ceil(h.y - 0.5)); j <= int(std::ceil(h.y - 0.5)); ++j) {
+        const double height = std::min(j + 0.5, h.y) - std::max(j - 0.5, -h.y);
+        spans.push_back({ j, -h.x, h.x, height });
+        area += 2.0 * h.x * height;
     }
     return area;
 }
 
 double BoxProfile::extent() const
 {
-    return 0.5 * std::sqrt(pi);
+    return 0.5 * std::sqrt(pi) * std::max(std::sqrt(m_aspect), 1.0 / std::sqrt(m_aspect));
 }
 
 bool MaskProfile::set_shape(const OIIO::ImageBuf& image, double aspect, const Imath::V3d& luma,

@@ -117,10 +117,11 @@ struct Reach {
     int first_row, last_row, first_column, last_column;
 };
 
-inline Reach box_reach(float max_radius)
+inline Reach box_reach(float max_radius, double aspect)
 {
-    const BoxEdges e = box_edges(box_half_width(max_radius));
-    return { e.first, e.last + 1, e.first, e.last + 1 };
+    const BoxHalfWidths h = box_half_widths(max_radius, aspect);
+    const BoxEdges ex = box_edges(h.x), ey = box_edges(h.y);
+    return { ey.first, ey.last + 1, ex.first, ex.last + 1 };
 }
 
 inline Reach program_reach(const FootprintProgram& p)

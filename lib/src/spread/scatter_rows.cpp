@@ -339,25 +339,28 @@ void scatter_box_row(const SpreadSource& src, int sy, int x0, int x1, double* ro
         const float* v = src.color + (base + x) * 4;
         if (is_zero(v))
             continue;
-        const double h = box_half_width(src.radius[base + x]);
-        const BoxEdges e = box_edges(h);
-        const int at[4] = { e.first, e.first + 1, e.last, e.last + 1 };
-        const double step[4] = { e.first_cover, 1.0 - e.first_cover, e.last_cover - 1.0,
-                                 -e.last_cover };
-        const d4 value = load4(v) * splat(1.0 / (4.0 * h * h));
+        const BoxHalfWidths h = box_half_widths(src.radius[base + x], src.box_aspect);
+        const BoxEdges ex = box_edges(h.x), ey = box_edges(h.y);
+        const int at_x[4] = { ex.first, ex.first + 1, ex.last, ex.last + 1 };
+        const int at_y[4] = { ey.first, ey.first + 1, ey.last, ey.last + 1 };
+        const double step_x[4] = { ex.first_cover, 1.0 - ex.first_cover, ex.last_cover - 1.0,
+                                   -ex.last_cover };
+        const double step_y[4] = { ey.first_cover, 1.0 - ey.first_cover, ey.last_cover - 1.0,
+                                   -ey.last_cover };
+        const d4 value = load4(v) * splat(1.0 / (4.0 * h.x * h.y));
         int cell[4];
         for (int i = 0; i < 4; ++i)
-            cell[i] = tile.cell(x + at[i]);
+            cell[i] = tile.cell(x + at_x[i]);
         for (int j = 0; j < 4; ++j) {
-            const int y = sy + at[j];
+            const int y = sy + at_y[j];
             if (y >= tile.y_end)
                 continue;
             double* row = y < tile.y_begin ? column_carry : rows + (y - tile.y_begin) * row_size;
-            const d4 vy = value * splat(step[j]);
+            const d4 vy = value * splat(step_y[j]);
             for (int i = 0; i < 4; ++i)
                 if (cell[i] >= 0) {
                     double* p = row + size_t(cell[i]) * 4;
-                    store4(p, load4(p) + vy * splat(step[i]));
+                    store4(p, load4(p) + vy * splat(step_x[i]));
                 }
         }
     }

@@ -10,7 +10,14 @@ namespace defocus {
 bool spread_box(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, ROI roi,
                 int nthreads)
 {
-    return spread_image(dst, src, radius, roi, nthreads, SpreadMethod::Box);
+    return spread_box(dst, src, radius, 1.0, roi, nthreads);
+}
+
+bool spread_box(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, double aspect,
+                ROI roi, int nthreads)
+{
+    return spread_image(dst, src, radius, roi, nthreads, SpreadMethod::Box, nullptr, {}, {},
+                        aspect);
 }
 
 }  // namespace defocus

@@ -126,7 +126,7 @@ std::shared_ptr<const RowProfile> borrow(const RowProfile& profile)
 
 bool spread_image(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const OIIO::ImageBuf& radius,
                   ROI roi, int nthreads, SpreadMethod method, const RowProfile* shape,
-                  const HighlightTest& highlights, const CatEye& cateye)
+                  const HighlightTest& highlights, const CatEye& cateye, double box_aspect)
 {
     const SpreadInputs in = prepare_spread(dst, src, radius, roi, nthreads);
     if (!in.valid)
@@ -150,6 +150,7 @@ bool spread_image(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const OIIO::Im
     source.roi = roi;
     source.color = color;
     source.radius = in.radii(roi.xbegin, roi.ybegin);
+    source.box_aspect = box_aspect;
     std::vector<uint8_t> visible;
     if (highlights.threshold > 0.0 && in.max_radius >= smallest_merged_radius()) {
         auto view = [&](int nchannels, const float* pixels) {

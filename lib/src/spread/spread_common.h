@@ -45,9 +45,10 @@ ImageSpec output_spec(const OIIO::ImageBuf& src, const OIIO::ROI& window);
 /// pixel the spread lights, with the engine `method`; `shape` for the
 /// shape methods, clipped by `cateye` when its amount is not 0. The pixels
 /// that pass `highlights` (see visible_bokeh) are never merged into blocks.
+/// The box's rectangles are `box_aspect` times as wide as tall.
 bool spread_image(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const OIIO::ImageBuf& radius,
                   OIIO::ROI roi, int nthreads, SpreadMethod method,
                   const RowProfile* shape = nullptr, const HighlightTest& highlights = {},
-                  const CatEye& cateye = {});
+                  const CatEye& cateye = {}, double box_aspect = 1.0);
 
 }  // namespace defocus

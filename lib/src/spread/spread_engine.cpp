@@ -150,7 +150,7 @@ SpreadEngine::SpreadEngine(const SpreadSource& source, SpreadMethod method,
     };
     if (m_dense.max_radius >= 0.0f) {
         const Reach reach = method == SpreadMethod::Box
-                                ? box_reach(m_dense.max_radius)
+                                ? box_reach(m_dense.max_radius, source.box_aspect)
                                 : program_reach(shape->pixels().program(
                                     shape->pixels().pick(m_dense.max_radius).k));
         m_dense.first_row = reach.first_row;
@@ -216,9 +216,10 @@ void SpreadEngine::run(const ROI& window_in, RowSink& sink, int nthreads) const
     const bool half = std::any_of(m_sparse.begin(), m_sparse.end(),
                                   [](const std::unique_ptr<Sparse>& level) { return level->half; });
     const ROI& roi = m_source.roi;
-    const int box_reach = box ? m_dense.last_row - m_dense.first_row : 0;
-    const int band_rows = std::clamp(box_tile_reaches * box_reach, tile_rows, box_tile_limit);
-    const int tile_width = std::clamp(box_tile_reaches * box_reach, tile_columns, box_tile_limit);
+    const int box_rows = box ? m_dense.last_row - m_dense.first_row : 0;
+    const int box_columns = box ? m_dense.last_column - m_dense.first_column : 0;
+    const int band_rows = std::clamp(box_tile_reaches * box_rows, tile_rows, box_tile_limit);
+    const int tile_width = std::clamp(box_tile_reaches * box_columns, tile_columns, box_tile_limit);
     const int bands = (window.height() + band_rows - 1) / band_rows;
     parallel_for_each_item(0, bands, [&](int64_t i) {
         thread_local Workspace ws;

@@ -137,6 +137,8 @@ struct SpreadSource {
     /// Optional, 1 byte per pixel: pixels never merged into blocks
     /// (highlights whose bokeh is visible, see visible_bokeh).
     const uint8_t* keep_exact = nullptr;
+    /// The box's rectangles: width over height, of the CoC disc's area.
+    double box_aspect = 1.0;
 };
 
 /// The smallest CoC radius the Bounded method merges into blocks: below

@@ -19,18 +19,19 @@ namespace {
 
 /// A layer spread on its own, as an image: the hybrid method (highlights
 /// with the PSF image, the rest with the aperture's filter), the smooth
-/// filters, or exact spreading and the box clipped by a cat's eye.
+/// filters, or exact spreading and the box clipped by a cat's eye. The box
+/// takes the aperture's squeeze `aspect`.
 bool spread_apart(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
                   const SpreadOptions& spread, const ApertureImages& images,
-                  const RowProfile* profile, const CatEye& cateye, const Imath::V3d& luma,
-                  int64_t& psf_pixels, int nthreads)
+                  const RowProfile* profile, double aspect, const CatEye& cateye,
+                  const Imath::V3d& luma, int64_t& psf_pixels, int nthreads)
 {
     const bool clipped = cateye.amount > 0.0;
     auto fast = [&](ImageBuf& out, const ImageBuf& in) {
         if (clipped) {
             switch (spread.aperture.shape) {
             case ApertureShape::Box:
-                return spread_cateye(out, in, radius, BoxProfile(), cateye, {}, nthreads);
+                return spread_cateye(out, in, radius, BoxProfile(aspect), cateye, {}, nthreads);
             case ApertureShape::Tent:
             case ApertureShape::Smooth: {
                 const int order = spread.aperture.shape == ApertureShape::Tent ? 2 : 3;
@@ -46,7 +47,7 @@ bool spread_apart(ImageBuf& dst, const ImageBuf& color, const ImageBuf& radius,
             }
         }
         switch (spread.aperture.shape) {
-        case ApertureShape::Box: return spread_box(out, in, radius, {}, nthreads);
+        case ApertureShape::Box: return spread_box(out, in, radius, aspect, {}, nthreads);
         case ApertureShape::Tent: return spread_smooth(out, in, radius, 2, {}, nthreads);
         case ApertureShape::Smooth: return spread_smooth(out, in, radius, 3, {}, nthreads);
         default:
@@ -105,6 +106,7 @@ bool plan_spread(const SpreadOptions& options, const ApertureImages& images,
     for (const LayerReport& d : reports)
         max_radius = std::max({ max_radius, 0.5 * std::abs(d.coc_min), 0.5 * std::abs(d.coc_max) });
     const Aperture aperture = effective_aperture(options.aperture, camera.pixel_aspect);
+    plan.aspect = aperture.aspect;
     if (aperture.shape == ApertureShape::Disc || aperture.shape == ApertureShape::Polygon) {
         plan.profile = std::make_shared<ApertureProfile>(aperture);
     } else if (aperture.shape == ApertureShape::Mask) {
@@ -148,7 +150,8 @@ bool spread_pass(const SpreadPlan& plan, const Layer& layer, const FloatPixels& 
     out.radius = std::move(radius);
     if (!plan.in_engine) {
         if (!spread_apart(out.apart, layer.color, out.radius, *plan.options, *plan.images,
-                          plan.profile.get(), plan.cateye, plan.luma, out.psf_pixels, nthreads)) {
+                          plan.profile.get(), plan.aspect, plan.cateye, plan.luma, out.psf_pixels,
+                          nthreads)) {
             error = out.apart.geterror();
             return false;
         }
@@ -161,6 +164,7 @@ bool spread_pass(const SpreadPlan& plan, const Layer& layer, const FloatPixels& 
     source.roi = roi;
     source.color = color(roi.xbegin, roi.ybegin);
     source.radius = out.radius_pixels(roi.xbegin, roi.ybegin);
+    source.box_aspect = plan.aspect;
     const double layer_radius = 0.5 * std::max(std::abs(report.coc_min), std::abs(report.coc_max));
     if (plan.method == SpreadMethod::Bounded && layer_radius >= smallest_merged_radius()) {
         out.highlights = visible_bokeh(layer.color, out.radius,

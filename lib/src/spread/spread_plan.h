@@ -32,6 +32,9 @@ struct SpreadPlan {
     std::shared_ptr<const RowProfile> profile;
     std::unique_ptr<ShapePrograms> programs;
     SpreadMethod method = SpreadMethod::Box;
+    /// The aperture's squeeze, the pixel aspect's included
+    /// (effective_aperture): the box's rectangles take it.
+    double aspect = 1.0;
     CatEye cateye;
     /// Layers go through the engine, composited as they are spread; else
     /// each is spread apart, as an image (the hybrid method, tent and

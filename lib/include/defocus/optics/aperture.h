@@ -21,13 +21,15 @@ struct Aperture {
     /// vertex pointing right
     double rotation_deg = 0.0;
     double roundness = 0.0;     ///< polygon: 0 = straight edges, 1 = a disc
-    double aspect = 1.0;        ///< anamorphic squeeze: < 1 narrows the bokeh horizontally
+    /// Anamorphic squeeze: < 1 narrows the bokeh horizontally (disc,
+    /// polygon, mask and box; tent and smooth stay round)
+    double aspect = 1.0;
     std::string mask_file;      ///< mask: the image of the shape
 };
 
 /// The aperture as a plate's pixels draw it: squeezed by a further
 /// 1 / `pixel_aspect` (keeping its area), so that the desqueezed image
-/// shows its own shape. Box, tent and smooth take no squeeze.
+/// shows its own shape. Tent and smooth take no squeeze.
 Aperture effective_aperture(const Aperture& aperture, double pixel_aspect);
 
 /// "box", "disc", "polygon", "tent", "smooth" or "mask"; false for any

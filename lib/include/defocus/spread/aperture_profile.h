@@ -62,11 +62,20 @@ private:
 };
 
 /// The box aperture as rows: the square of the CoC disc's area
-/// (box_footprint), for filters that cut shapes row by row.
+/// (box_footprint), or the rectangle `aspect` times as wide as tall of that
+/// area, for filters that cut shapes row by row.
 class BoxProfile final : public RowProfile {
 public:
+    explicit BoxProfile(double aspect = 1.0)
+        : m_aspect(aspect)
+    {
+    }
+
     double rows(double r, std::vector<RowSpan>& spans) const override;
     double extent() const override;
+
+private:
+    double m_aspect;
 };
 
 /// An aperture shape taken from an image (`--aperture mask:FILE`): its

@@ -25,9 +25,21 @@ using Psf = std::function<Footprint(double radius)>;
 /// exactly itself.
 double box_half_width(double coc_radius);
 
+/// The half-widths across and down of the rectangle `aspect` times as wide
+/// as tall with the area of a CoC disc of radius r (the box squeezed as
+/// --aspect squeezes the other apertures), each at least half a pixel.
+struct BoxHalfWidths {
+    double x, y;
+};
+BoxHalfWidths box_half_widths(double coc_radius, double aspect);
+
 /// The box PSF: a square of half-width box_half_width(r) centred on the
 /// pixel centre, each pixel weighted by the area of it the square covers.
 Footprint box_footprint(double coc_radius);
+
+/// The squeezed box's PSF: the rectangle of box_half_widths(r, aspect),
+/// weighted so.
+Footprint rectangle_footprint(double coc_radius, double aspect);
 
 /// The pixel columns that a 1-D box [centre - h, centre + h] touches, for a
 /// pixel centre at index 0 + 0.5, with the covered length of each.

@@ -29,6 +29,12 @@ using OIIO::ROI;
 bool spread_box(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius,
                 ROI roi = {}, int nthreads = 0);
 
+/// spread_box() with rectangles `aspect` times as wide as tall, of the same
+/// area (box_half_widths): the box squeezed as --aspect squeezes the other
+/// apertures.
+bool spread_box(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, double aspect,
+                ROI roi = {}, int nthreads = 0);
+
 /// Exact scanline spreading of a constant-intensity shape (Kosloff, Tao &
 /// Barsky 2009, sec. 4.1): each row of each pixel's footprint is an
 /// interval written as edge deltas with fractional coverage, integrated
