@@ -17,11 +17,13 @@ Keyframes::Keyframes(double constant)
 }
 
 bool Keyframes::parse(const std::string& option, const std::string& text, int arity,
-                      double lo, double hi, Keyframes& result, std::string& error)
+                      double lo, double hi, Keyframes& result, std::string& error,
+                      const std::string& value)
 {
     const std::vector<std::string> tokens = OIIO::Strutil::splits(text, ",");
     const bool keyed = OIIO::Strutil::contains(text, ":");
-    const char* form = arity == 1 ? "V or F:V,F:V,..." : "X,Y or F:X,Y,F:X,Y,...";
+    const std::string v = !value.empty() ? value : arity == 1 ? "V" : "X,Y";
+    const std::string form = format("{0} or F:{0},F:{0},...", v);
     if (tokens.empty() || tokens.size() % arity != 0) {
         error = format("{}: '{}' is not {}", option, text, form);
         return false;

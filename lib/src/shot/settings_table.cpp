@@ -87,11 +87,15 @@ SettingRule either(ShotSetting s, Member member, const char* what,
 SettingRule keyframes(ShotSetting s, Keyframes Shot::*member, int arity, double lo,
                       double hi, Keyframes Shot::*other = nullptr)
 {
+    // The value as the option's help names it: "--bloom THRESHOLD,GAIN".
+    const std::string option = s.option ? s.option : "";
+    const std::string placeholder
+        = option.find(' ') == std::string::npos ? "" : option.substr(option.find(' ') + 1);
     return { s,
              [=](Shot& shot, const std::string& label, const std::string& value,
                  std::string& error) {
-                 if (!Keyframes::parse(label, value, arity, lo, hi, shot.*member,
-                                       error))
+                 if (!Keyframes::parse(label, value, arity, lo, hi, shot.*member, error,
+                                       placeholder))
                      return false;
                  if (other)
                      shot.*other = Keyframes();

@@ -35,9 +35,12 @@ public:
     /// Parses "V" (or "X,Y" when `arity` is 2) as a constant, or keys
     /// "F:V,F:V,..." (or "F:X,Y,F:X,Y,...") at strictly increasing frames.
     /// Every number must be finite and within [lo, hi]. On failure sets
-    /// `error` to a message naming `option` and returns false.
+    /// `error` to a message naming `option`, and the form with `value` (as
+    /// the option's help writes it: "THRESHOLD,GAIN"; "" = "V" or "X,Y"),
+    /// and returns false.
     static bool parse(const std::string& option, const std::string& text, int arity,
-                      double lo, double hi, Keyframes& result, std::string& error);
+                      double lo, double hi, Keyframes& result, std::string& error,
+                      const std::string& value = "");
 
     bool empty() const { return m_keys.empty(); }
     /// True when the keys give more than one frame.
