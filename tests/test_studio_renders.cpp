@@ -167,6 +167,37 @@ TEST_CASE("a deep image's samples with 1/z depth render as with planar Z")
     CHECK(largest_difference(inverse, planar) < 1e-5f);
 }
 
+TEST_CASE("a holdout whose header says its depth is 1/z holds out as its planar twin")
+{
+    const std::string dir = scratch_dir("holdout_depth_kind");
+    const Settings camera = with(lens, { { "focus", "3" } });
+    const std::string scene = depth_scene(dir + "/z.exr", [](float z, int, int) { return z; });
+    auto holdout = [&](const std::string& name, float depth, const std::string& declared) {
+        ImageSpec spec = rgbaz_spec(40, 30);
+        if (!declared.empty())
+            spec.attribute(depth_kind_attribute, declared);
+        ImageBuf card(spec);
+        ImageBufAlgo::fill(card, { 0.0f, 0.0f, 0.0f, 0.0f, depth });
+        ImageBufAlgo::fill(card, { 0.2f, 0.2f, 0.2f, 1.0f, depth }, ROI(0, 25, 0, 30));
+        REQUIRE(card.write(dir + "/" + name));
+        return dir + "/" + name;
+    };
+    const ImageBuf planar
+        = render_ok(scene, with(camera, { { "holdout", holdout("planar.exr", 4.0f, "") } })).image;
+    const ImageBuf inverse = render_ok(
+        scene, with(camera, { { "holdout", holdout("inverse.exr", 0.25f, "inverse") } })).image;
+    CHECK(largest_difference(inverse, planar) < 1e-6f);
+    // Read as metres, 0.25 m would hold out everything behind it.
+    const ImageBuf wrong = render_ok(
+        scene, with(camera, { { "holdout", holdout("untagged.exr", 0.25f, "") } })).image;
+    CHECK(largest_difference(wrong, planar) > 0.05f);
+    FrameResult result;
+    std::string error;
+    CHECK_FALSE(render_with(scene, with(camera, { { "holdout", holdout("coc.exr", 4.0f, "coc") } }),
+                            result, error));
+    CHECK(one_line_error(error, "coc.exr: a holdout's depth must be a distance"));
+}
+
 TEST_CASE("depth kinds: nonsense depth and a focus on a CoC map are one-line errors")
 {
     const std::string dir = scratch_dir("depth_kind_errors");

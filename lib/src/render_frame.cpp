@@ -295,6 +295,22 @@ bool read_holdout(const Shot& shot, int frame, const ImageSpec& scene,
                        scene.full_height);
         return false;
     }
+    // --depth-kind is the input's: a holdout's own header may say its kind.
+    // Its depths are compared with the scene's, so a CoC map cannot be one.
+    DepthChoice depth;
+    if (header_depth_kind(h, depth.kind)) {
+        depth.origin = std::string("file: ") + depth_kind_attribute;
+        if (depth.kind == DepthKind::Coc) {
+            error = format("{}: a holdout's depth must be a distance, and its header says it "
+                           "is a CoC map ({} coc)",
+                           read.source, depth_kind_attribute);
+            return false;
+        }
+        if (!planar_scene_depth(shot, frame, depth, read, error)) {
+            error = read.source + ": " + error;
+            return false;
+        }
+    }
     sanitize(read);
     holdout = std::make_shared<const DeepImage>(holdout_image(read));
     return true;
