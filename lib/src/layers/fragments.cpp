@@ -5,6 +5,7 @@
 
 #include <OpenImageIO/parallel.h>
 
+#include "layers/deep_volume.h"
 #include "util/parallel_rows.h"
 
 namespace defocus {
@@ -69,13 +70,8 @@ public:
                 if (c > c_near && c < c_far)
                     m_cuts.push_back(c);
         std::sort(m_cuts.begin(), m_cuts.end());
-        const double density = -std::log1p(-std::min(double(s.a), 1.0 - 1e-7))
-                               / (double(s.zback) - s.z);
-        // CoC is affine in 1/z at a pixel.
-        const double inv_near = 1.0 / s.z, inv_far = 1.0 / s.zback;
-        auto depth = [&](double c) {
-            return 1.0 / (inv_near + (inv_far - inv_near) * (c - c_near) / (c_far - c_near));
-        };
+        const DeepVolume volume(s);
+        auto depth = [&](double c) { return volume.depth_at((c - c_near) / (c_far - c_near)); };
         const int first = m_bounds.share(c_near).front;
         m_shares.clear();
         for (size_t i = 0; i + 1 < m_cuts.size(); ++i) {
@@ -96,8 +92,8 @@ public:
                 if (m_shares.size() < k + 2)
                     m_shares.resize(k + 2);
                 const double za = depth(ca), zb = depth(cb);
-                m_shares[k].add(za, zb, share.front_weight, density);
-                m_shares[k + 1].add(za, zb, 1.0 - share.front_weight, density);
+                m_shares[k].add(za, zb, share.front_weight, volume.density);
+                m_shares[k + 1].add(za, zb, 1.0 - share.front_weight, volume.density);
             }
         }
         const double colour = s.a > 0.0f ? 1.0 / s.a : 0.0;

@@ -8,6 +8,7 @@
 
 #include <OpenImageIO/parallel.h>
 
+#include "layers/deep_volume.h"
 #include "util/parallel_rows.h"
 
 namespace defocus {
@@ -96,15 +97,12 @@ void tally_deep_cocs(const Scene& scene, const CircleOfConfusion& coc, double st
                     const double c_far = coc.diameter(s.zback, x, y);
                     const double steps = std::ceil((c_far - c_near) / step);
                     const int pieces = steps < 4096.0 ? std::max(1, int(steps)) : 4096;
-                    const double optical_depth = -std::log1p(-std::min(double(s.a), 1.0 - 1e-7));
-                    const double inv_near = 1.0 / s.z, inv_far = 1.0 / s.zback;
-                    const double per_depth = optical_depth / (double(s.zback) - s.z);
+                    const DeepVolume volume(s);
                     double z = s.z;
                     for (int k = 0; k < pieces; ++k) {
-                        const double t = double(k + 1) / pieces;
-                        const double z_end = 1.0 / (inv_near + (inv_far - inv_near) * t);
+                        const double z_end = volume.depth_at(double(k + 1) / pieces);
                         visit(tally, c_near + (c_far - c_near) * k / pieces,
-                              float(per_depth * (z_end - z)));
+                              float(volume.density * (z_end - z)));
                         z = z_end;
                     }
                     visit(tally, c_far, 0.0f);
