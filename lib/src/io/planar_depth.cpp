@@ -129,11 +129,9 @@ bool planar_scene_depth(const Shot& shot, int frame, const DepthChoice& depth, S
     CameraOrigins origins;
     lens_camera(shot, scene.spec, frame, camera, origins);
     const OIIO::ROI display = scene.spec.roi_full();
-    if (depth.kind == DepthKind::Coc) {
-        if (error = coc_map_conflict(shot); !error.empty())
-            return false;
+    // A CoC map's conflicts with focus settings are shot_camera's to refuse.
+    if (depth.kind == DepthKind::Coc)
         camera = coc_map_camera(shot.camera, display);
-    }
     if (to_planar_depth(scene, PlanarDepth(depth.kind, camera, display, shot.read.depth_scale),
                         error, nthreads))
         return true;
