@@ -291,63 +291,6 @@ std::string point_plate(const std::string& path, float pixel_aspect)
     return path;
 }
 
-/// The standard deviations of the light in channel R across and down.
-Imath::V2d light_spread(const ImageBuf& image)
-{
-    double sum = 0, sx = 0, sy = 0, sxx = 0, syy = 0;
-    for (ImageBuf::ConstIterator<float> it(image); !it.done(); ++it) {
-        const double w = it[0], x = it.x() + 0.5, y = it.y() + 0.5;
-        sum += w;
-        sx += w * x;
-        sy += w * y;
-        sxx += w * x * x;
-        syy += w * y * y;
-    }
-    const double mx = sx / sum, my = sy / sum;
-    return { std::sqrt(sxx / sum - mx * mx), std::sqrt(syy / sum - my * my) };
-}
-
-double width_over_height(const ImageBuf& image)
-{
-    const Imath::V2d spread = light_spread(image);
-    return spread.x / spread.y;
-}
-
-}  // namespace
-
-TEST_CASE("an anamorphic plate's bokeh is round on the desqueezed image")
-{
-    const std::string dir = scratch_dir("pixel_aspect");
-    const Settings settings = with(lens, { { "focus", "1" } });
-    const FrameResult squeezed = render_ok(point_plate(dir + "/squeezed.exr", 2.0f), settings);
-    const FrameResult square = render_ok(point_plate(dir + "/square.exr", 1.0f), settings);
-    const double ratio = width_over_height(squeezed.image);
-    WARN("bokeh width over height: " << ratio << " (pixel aspect 2), "
-                                     << width_over_height(square.image) << " (1)");
-    CHECK(ratio == Approx(0.5).margin(0.1));
-    CHECK(width_over_height(square.image) == Approx(1.0).margin(0.02));
-    CHECK(squeezed.camera.pixel_aspect == 2.0);
-    // The light is kept, and its height is the square plate's: the lens
-    // blurs a point by as many rows either way.
-    CHECK(channel_sum(squeezed.image, 0) == Approx(100.0).epsilon(1e-4));
-    CHECK(light_spread(squeezed.image).y == Approx(light_spread(square.image).y).epsilon(0.05));
-    // --aspect, the lens's own squeeze, multiplies in.
-    const double lens_squeezed = width_over_height(
-        render_ok(dir + "/squeezed.exr", with(settings, { { "aspect", "2" } })).image);
-    CHECK(lens_squeezed == Approx(1.0).margin(0.1));
-    // The box, the polygon and the mask are squeezed alike.
-    const std::string mask = "mask:" + std::string(EXAMPLES_DIR) + "/psf/blades7.exr";
-    for (const std::string& aperture : { std::string("box"), std::string("polygon"), mask }) {
-        INFO(aperture);
-        CHECK(width_over_height(render_ok(dir + "/squeezed.exr",
-                                          with(settings, { { "aperture", aperture } }))
-                                    .image)
-              == Approx(0.5).margin(0.1));
-    }
-}
-
-namespace {
-
 /// The light's centroid and spread across and down, in the desqueezed
 /// image's units (a column `pixel_aspect` wide, a row 1 high).
 struct Bokeh {
@@ -369,6 +312,50 @@ Bokeh desqueezed_bokeh(const ImageBuf& image, double pixel_aspect)
     return { centre, { std::sqrt(sxx / sum - centre.x * centre.x),
                        std::sqrt(syy / sum - centre.y * centre.y) } };
 }
+
+/// The width over the height of the light in channel R, in the file's
+/// pixels: the ratio of its standard deviations across and down.
+double width_over_height(const ImageBuf& image)
+{
+    const Imath::V2d spread = desqueezed_bokeh(image, 1.0).spread;
+    return spread.x / spread.y;
+}
+
+}  // namespace
+
+TEST_CASE("an anamorphic plate's bokeh is round on the desqueezed image")
+{
+    const std::string dir = scratch_dir("pixel_aspect");
+    const Settings settings = with(lens, { { "focus", "1" } });
+    const FrameResult squeezed = render_ok(point_plate(dir + "/squeezed.exr", 2.0f), settings);
+    const FrameResult square = render_ok(point_plate(dir + "/square.exr", 1.0f), settings);
+    const double ratio = width_over_height(squeezed.image);
+    WARN("bokeh width over height: " << ratio << " (pixel aspect 2), "
+                                     << width_over_height(square.image) << " (1)");
+    CHECK(ratio == Approx(0.5).margin(0.1));
+    CHECK(width_over_height(square.image) == Approx(1.0).margin(0.02));
+    CHECK(squeezed.camera.pixel_aspect == 2.0);
+    // The light is kept, and its height is the square plate's: the lens
+    // blurs a point by as many rows either way.
+    CHECK(channel_sum(squeezed.image, 0) == Approx(100.0).epsilon(1e-4));
+    CHECK(desqueezed_bokeh(squeezed.image, 2.0).spread.y
+          == Approx(desqueezed_bokeh(square.image, 1.0).spread.y).epsilon(0.05));
+    // --aspect, the lens's own squeeze, multiplies in.
+    const double lens_squeezed = width_over_height(
+        render_ok(dir + "/squeezed.exr", with(settings, { { "aspect", "2" } })).image);
+    CHECK(lens_squeezed == Approx(1.0).margin(0.1));
+    // The box, the polygon and the mask are squeezed alike.
+    const std::string mask = "mask:" + std::string(EXAMPLES_DIR) + "/psf/blades7.exr";
+    for (const std::string& aperture : { std::string("box"), std::string("polygon"), mask }) {
+        INFO(aperture);
+        CHECK(width_over_height(render_ok(dir + "/squeezed.exr",
+                                          with(settings, { { "aperture", aperture } }))
+                                    .image)
+              == Approx(0.5).margin(0.1));
+    }
+}
+
+namespace {
 
 /// The bokeh of one bright point at display position `at` (units of
 /// rows) on a plate 256 columns of pixel aspect 2 wide, and on the same
