@@ -411,7 +411,8 @@ bool deep_frame(const Shot& shot, int frame, const ApertureImages& images,
     out.pixel_type = deep_color_type(shot, layered.spec);
     out.image = deep_buffer(std::move(deep), layered.spec, out.pixel_type, nthreads);
     out.timings.emplace_back("deep image", timer.lap());
-    describe_output(out.image.specmod(), layered.spec, shot, out.camera, color, frame);
+    describe_output(out.image.specmod(), layered.spec, shot, out.camera, out.depth.kind, color,
+                    frame);
     return true;
 }
 
@@ -526,7 +527,8 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
         out.data_channels = data.initialized() ? data.nchannels() : 0;
         lap("colour out");
     }
-    describe_output(image.specmod(), layered.spec, shot, out.camera, color, frame);
+    describe_output(image.specmod(), layered.spec, shot, out.camera, out.depth.kind, color,
+                    frame);
     out.pixel_type = output_pixel_type(shot, layered.spec);
     return true;
 }
@@ -599,7 +601,7 @@ bool frame_spec(const Shot& shot, int frame, const ShotAssets& assets, ImageSpec
         // spec's format: float keeps the IDs whole.
         spec.format = TypeFloat;
     }
-    describe_output(spec, input, shot, camera, color, frame);
+    describe_output(spec, input, shot, camera, frame_depth_kind(shot, input).kind, color, frame);
     // Focusing at a pixel measures the focus from the pixels.
     if (!shot.focus_at.empty())
         spec.erase_attribute("defocus:focusDistance");

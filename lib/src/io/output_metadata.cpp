@@ -5,7 +5,6 @@
 #include <defocus/color/primaries.h>
 #include <defocus/io/frames.h>
 #include <defocus/io/image_output.h>
-#include <defocus/io/planar_depth.h>
 #include <defocus/io/settings_hash.h>
 #include <defocus/scene.h>
 #include <defocus/shot/setting_words.h>
@@ -45,9 +44,9 @@ std::string history_line(const Shot& shot, int frame)
 }  // namespace
 
 void describe_output(ImageSpec& spec, const ImageSpec& input, const Shot& shot,
-                     const Camera& camera, const ColorPlan& color, int frame)
+                     const Camera& camera, DepthKind depth_kind, const ColorPlan& color,
+                     int frame)
 {
-    const DepthKind depth_kind = frame_depth_kind(shot, input).kind;
     spec.extra_attribs = input.extra_attribs;
     erase_part_attributes(spec);
     if (shot.output != OutputKind::Image) {
