@@ -35,21 +35,25 @@ void describe_defocus(OIIO::ArgParse& ap)
         "cores and memory allow; a bad frame is reported and the others are\n"
         "still written.\n"
         "\n"
-        "A .dof scene file (JSON, see the README) holds the inputs and all the\n"
-        "settings below; options given with it override its values.");
+        "A .dof scene file (JSON; the manual's page docs/reference/dof-format.md)\n"
+        "holds the inputs and all the settings below; options given with it\n"
+        "override its values.");
     ap.epilog(
         "Examples:\n"
         "  defocus shot.exr -o shot_dof.exr --focal 85 --fstop 1.4 --focus 3\n"
         "  defocus render.#.exr --frames 1001-1100 -o dof.#.exr --focal 35 --fstop 2 \\\n"
         "          --focus 1001:3.0,1040:1.2 -d half --compression dwaa\n"
-        "  defocus shot.exr --frames 1-24 -o pull.#.exr --focus-at 1:640,360,24:200,300\n"
-        "  defocus shot.exr -o focus.png --output focusmap --focal 85 --fstop 1.4 --focus 3\n"
-        "  defocus nuke.exr -o out.exr --depth-kind inverse --focal 35 --fstop 2 --focus 4\n"
+        "  defocus shot.exr --frames 1-24 -o pull.#.exr --focus-at 1:300,160,24:100,150\n"
+        "  defocus shot.exr -o focus.png --output focusmap \\\n"
+        "          --focal 85 --fstop 1.4 --focus 3\n"
+        "  defocus nuke.exr -o out.exr --depth-kind inverse \\\n"
+        "          --focal 35 --fstop 2 --focus 4\n"
         "  defocus plate.jpg --depth z.exr -o out.exr --tocolorspace lin_rec709 \\\n"
         "          --focal 35 --fstop 1.8 --focus 2 --bloom 0.9,4\n"
         "  defocus shot.exr --focal 85 --fstop 1.4 --focus 3 --save-scene shot.dof\n"
         "  defocus shot.dof -o out.exr --fstop 2.8\n"
-        "  defocus stereo.#.exr --view right -o right.#.exr --focal 35 --fstop 4 --focus 3\n"
+        "  defocus stereo.#.exr --view right -o right.#.exr \\\n"
+        "          --focal 35 --fstop 4 --focus 3\n"
         "  defocus bg.exr mid.exr fg.exr -o comp.exr --focal 50 --fstop 2 --focus 4\n");
 }
 
