@@ -18,6 +18,7 @@ packages=(
     pybind11-dev python3-dev               # the Python module (import defocus)
     python3-numpy python3-pytest           # its arrays, and its tests
     help2man                               # man pages made from --help
+    python3-sphinx python3-myst-parser furo # the manual (docs/): Sphinx, Markdown pages, its theme
     bash-completion                        # tests: completion as bash runs it
     slurm-wlm munge                        # tests: defocus-submit on a one-node Slurm cluster
 )

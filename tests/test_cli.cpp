@@ -177,7 +177,7 @@ TEST_CASE("a deep result is written as a deep EXR: half colour, float depths, zi
     CHECK_THAT(log, Catch::Contains("skipped"));
 
     // Flattened, the file is the flat file: to 1e-5 in float; in half, each
-    // sample is rounded on its own (the README says so).
+    // sample is rounded on its own (the manual says so).
     auto difference = [&](const std::string& type) {
         REQUIRE(run_defocus(example_scene() + " -o " + dir + "/d.exr" + camera + " --deep -d "
                                 + type,
@@ -593,7 +593,7 @@ TEST_CASE("colour: any format OIIO writes, e.g. an sRGB JPEG proxy")
 namespace {
 
 /// The option names a text lists: at a line's start for --help, in the
-/// first column of a table for the README.
+/// first column of a table for the manual.
 std::set<std::string> option_names(const std::string& text, const std::string& before)
 {
     std::set<std::string> names;
@@ -735,17 +735,21 @@ TEST_CASE(".dof scene files: saved, rendered, overridden by flags, errors in one
     CHECK_FALSE(Filesystem::exists(dir + "/x.exr"));
 }
 
-TEST_CASE("the help and the README document the same options")
+// The manual's settings reference is generated from the table; the guide's
+// table explains the options in more words, and must name none that the
+// tool does not take.
+TEST_CASE("the manual's option table names only options the help lists")
 {
-    std::string help, readme;
+    std::string help, guide;
     REQUIRE(run_defocus("--help", help) == 0);
-    REQUIRE(Filesystem::read_text_file(README_FILE, readme));
-    const size_t table = readme.find("### Options");
+    REQUIRE(Filesystem::read_text_file(COMMAND_LINE_GUIDE, guide));
+    const size_t table = guide.find("## Options");
     REQUIRE(table != std::string::npos);
     const std::set<std::string> in_help = option_names(help, "\\s+");
-    const std::set<std::string> in_readme = option_names(readme.substr(table), "\\| `");
-    CHECK(in_help.size() > 30);
-    CHECK(in_help == in_readme);
+    const std::set<std::string> in_guide = option_names(guide.substr(table), "\\| `");
+    CHECK(in_guide.size() > 30);
+    for (const std::string& name : in_guide)
+        CHECK(in_help.count(name) == 1);
     CHECK(Strutil::contains(help, "Examples:"));
 }
 
