@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Sets up a fresh Debian 12 machine, builds defocus and runs the whole test
 # suite. Tests that need ../shared/data skip with a message when it is absent.
-# The suite's budget is 5 minutes on a 2-core machine (README, Tests): a
+# The suite's budget is 5 minutes on a 2-core machine (the manual's Architecture page): a
 # longer check belongs in a benchmark or a nightly script.
 set -euo pipefail
 cd "$(dirname "$0")/.."

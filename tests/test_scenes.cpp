@@ -63,7 +63,7 @@ TEST_CASE("our path-traced scenes, split into what the pinhole view knows and wh
     // Thin poles and a lattice before lights, textures and curved surfaces:
     // the layered model dims what they hide evenly, where each part of the
     // lens sees it cut differently; flat and deep input must also rebuild
-    // what the poles hide. The numbers go in the README and the notes.
+    // what the poles hide. The numbers go in the manual and the notes.
     const std::string dir = scratch_dir("scenes_split");
     for (const Scene& scene : scenes)
         for (const double focus : scene.foci) {

@@ -65,7 +65,7 @@ size_t help_column(const std::string& line)
 /// `line` cut into lines of at most `width` characters, the later ones
 /// indented to where its text starts: after the option for an option's
 /// line, else its own indent. No later line starts with '-', which would
-/// read as an option (to the README's and the completion's readers too).
+/// read as an option (to the manual's and the completion's readers too).
 std::string wrap_help_line(const std::string& line, size_t width)
 {
     if (line.size() <= width)

@@ -18,7 +18,7 @@ namespace defocus {
 // sequence's CPU time. One arena that never maps blocks of their own nor
 // trims its top reuses what the last layer or frame freed: a sequence of
 // 4K frames took 0.82x the time, for 5% more peak memory (22% for a deep
-// file, whose sample lists fragment the heap; see README, Performance).
+// file, whose sample lists fragment the heap; see CHANGELOG.md, speed).
 // The smallest blocks, the most frequent, come from each thread's cache
 // without taking the arena's lock.
 void keep_freed_memory()
