@@ -19,6 +19,14 @@ rm -rf "$src"
 mkdir -p "$src/reference/generated"
 cp -r "$docs"/. "$src"
 "$build/bin/settings_reference" > "$src/reference/settings.md"
+"$build/bin/settings_reference" dof-keys > "$build/docs/dof-keys.md"
+marker='<!-- the table of keys: docs/build.sh puts it here -->'
+grep -qF "$marker" "$src/reference/dof-format.md" || {
+    echo "docs/reference/dof-format.md: the line '$marker' is missing" >&2
+    exit 1
+}
+sed -i -e '/<!-- the table of keys: docs\/build.sh puts it here -->/{r '"$build/docs/dof-keys.md" \
+       -e 'd}' "$src/reference/dof-format.md"
 for tool in defocus layerize defocus-submit; do
     COLUMNS=100 "$build/bin/$tool" --help > "$src/reference/generated/$tool.txt"
 done

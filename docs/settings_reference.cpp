@@ -64,9 +64,20 @@ void write_setting(const ShotSetting& s)
     std::printf("- plugin hint: `--iconfig dof:%s VALUE`\n\n", s.name);
 }
 
-}  // namespace
+/// The `.dof` keys, one row each, for the format's page.
+void write_dof_keys()
+{
+    std::printf("| key | value | command line |\n|---|---|---|\n");
+    for (const ShotSetting& s : shot_settings()) {
+        std::string flags = s.option ? format("`{}`", s.option) : "";
+        for (const SettingSwitch& sw : s.switches)
+            flags += format("{}`{}` ({})", flags.empty() ? "" : ", ", sw.flag, sw.value);
+        std::printf("| [`%s.%s`](settings.md#%s) | %s | %s |\n", s.section, s.key, s.name,
+                    dof_value(s.kind), OIIO::Strutil::replace(flags, "|", "\\|", true).c_str());
+    }
+}
 
-int main()
+void write_settings()
 {
     std::printf("# Settings\n\n"
                 "Every setting of a shot, as the command line, `.dof` scene files, Python "
@@ -83,5 +94,17 @@ int main()
             if (s.group == group)
                 write_setting(s);
     }
+}
+
+}  // namespace
+
+/// settings_reference: the settings page; settings_reference dof-keys: the
+/// table of .dof keys.
+int main(int argc, char** argv)
+{
+    if (argc > 1 && std::string(argv[1]) == "dof-keys")
+        write_dof_keys();
+    else
+        write_settings();
     return 0;
 }
