@@ -365,9 +365,9 @@ TEST_CASE("pixels of a textured background beside an edge are not taken for mixe
 TEST_CASE("the confidence AOV is the share of light from rebuilt surfaces, and 0 where all was seen")
 {
     // In-focus stripes behind a pole blurred to 30 px: the stripes the
-    // pole hides are rebuilt, and show through its blurred edges. Behind a
-    // pole 2 px wide nothing is filled: the stripes are continued behind
-    // its edge pixels, which is as made up.
+    // pole hides are rebuilt, along lines across it, and show through its
+    // blurred edges. Behind a pole 2 px wide nothing is filled: the
+    // stripes are continued behind its edge pixels, which is as made up.
     const int width = GENERATE(10, 2);
     const float pole_z = 1.0f / 2.9f, stripes_z = 0.5f;
     auto shade = [&](int x, int y, float* rgba, float& z) {
@@ -387,14 +387,20 @@ TEST_CASE("the confidence AOV is the share of light from rebuilt surfaces, and 0
         FrameResult result;
         std::string error;
         REQUIRE(render_scene(std::move(scene), shot, 0, {}, result, error));
-        REQUIRE(result.image.nchannels() == 5);
-        CHECK(result.image.spec().channelnames[4] == "confidence");
+        REQUIRE(result.image.nchannels() == 9);
+        CHECK(std::vector<std::string>(result.image.spec().channelnames.begin() + 4,
+                                       result.image.spec().channelnames.end())
+              == std::vector<std::string> { "confidence", "confidence.continued",
+                                            "confidence.lines", "confidence.patterns",
+                                            "confidence.smooth" });
         return result.image;
     };
 
     const ImageBuf flat = confidence(flat_scene(shade));
     INFO("pole " << width << " px wide: confidence " << flat.getchannel(60, 40, 0, 4));
-    auto at = [&](const ImageBuf& image, int x, int y) { return image.getchannel(x, y, 0, 4); };
+    auto at = [&](const ImageBuf& image, int x, int y, int c = 4) {
+        return image.getchannel(x, y, 0, c);
+    };
     // Behind the pole the light is the rebuilt stripes' as much as the
     // pole's; beyond the blur's reach all of it was seen.
     CHECK(at(flat, 60, 40) > 0.2f);
@@ -402,6 +408,24 @@ TEST_CASE("the confidence AOV is the share of light from rebuilt surfaces, and 0
     for (int y = 0; y < 80; y += 7)
         for (int x : { 0, 10, 30, 90, 110, 119 })
             CHECK(at(flat, x, y) == 0.0f);
+    // The shares by method add up to it; behind the wide pole the stripes
+    // came from the fill's structure (lines and patterns), behind the thin
+    // one from its edges.
+    for (int y = 0; y < 80; y += 7)
+        for (int x = 0; x < 120; x += 3) {
+            float sum = 0.0f;
+            for (int c = 5; c < 9; ++c) {
+                CHECK(at(flat, x, y, c) >= 0.0f);
+                sum += at(flat, x, y, c);
+            }
+            CHECK(sum == Approx(at(flat, x, y)).margin(1e-5));
+        }
+    const float continued = at(flat, 60, 40, 5), smooth = at(flat, 60, 40, 8),
+                structure = at(flat, 60, 40, 6) + at(flat, 60, 40, 7);  // lines, patterns
+    if (width == 10)
+        CHECK(continued + smooth < 0.25f * structure);
+    else
+        CHECK(structure + smooth < 0.25f * continued);
 
     // The same scene given as layers hides nothing: nothing is rebuilt.
     Scene layers = flat_scene(shade);
@@ -409,7 +433,8 @@ TEST_CASE("the confidence AOV is the share of light from rebuilt surfaces, and 0
     layers.flat.clear();
     const ImageBuf given = confidence(std::move(layers));
     const auto stats = OIIO::ImageBufAlgo::computePixelStats(given);
-    CHECK(stats.max[4] == 0.0f);
+    for (int c = 4; c < 9; ++c)
+        CHECK(stats.max[c] == 0.0f);
 }
 
 TEST_CASE("stripes behind a thin blurred pole keep their contrast")

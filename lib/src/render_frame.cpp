@@ -189,13 +189,12 @@ namespace {
 bool frame_data_plan(const Shot& shot, int frame, const ImageSpec& input, DataPlan& plan,
                      std::string& error)
 {
-    const std::string aov = aov_channel(shot);
     const std::string files = Strutil::join(frame_inputs(shot, frame), " ");
     if (!plan_data_channels(input, shot.data_channels, plan, error)) {
         error = format("{}: {}", files, error);
         return false;
     }
-    if (!plan.distinct_names(aov, error)) {
+    if (!plan.distinct_names(output_aov(shot), error)) {
         error = format("{}: {}: {}", files, mention("data-channels", shot.data_channels), error);
         return false;
     }
@@ -326,20 +325,24 @@ std::string holdout_line(const Shot& shot, int frame, const DeepImage* holdout)
 }
 
 /// The confidence AOV of `image`, defocused from `layered` as the shot
-/// says: the scene's rebuilt part spread and composited the same way.
+/// says: the scene's rebuilt part, and that part by method, each spread and
+/// composited the same way.
 bool confidence_aov(ImageBuf& confidence, const ImageBuf& image, const LayeredScene& layered,
                     const Shot& shot, const Camera& camera, const ApertureImages& images,
                     std::string& error, int nthreads)
 {
-    LayeredScene part;
-    ImageBuf light(image.spec());  // none, unless something was rebuilt
-    if (rebuilt_part(layered, part, nthreads)
-        && !defocus_layers(light, part, camera, shot.spread, images, shot.window, nullptr,
-                           nullptr, nthreads)) {
-        error = light.geterror();
-        return false;
+    ImageBuf light(image.spec()), by_method(image.spec());  // none, unless something was rebuilt
+    for (auto [part_of, spread] : { std::pair { rebuilt_part, &light },
+                                    std::pair { rebuilt_by_method, &by_method } }) {
+        LayeredScene part;
+        if (part_of(layered, part, nthreads)
+            && !defocus_layers(*spread, part, camera, shot.spread, images, shot.window, nullptr,
+                               nullptr, nthreads)) {
+            error = spread->geterror();
+            return false;
+        }
     }
-    if (!light_fraction(confidence, image, light, layered.luma, nthreads)) {
+    if (!light_fraction(confidence, image, light, by_method, layered.luma, nthreads)) {
         error = confidence.geterror();
         return false;
     }
@@ -582,9 +585,9 @@ bool frame_spec(const Shot& shot, int frame, const ShotAssets& assets, ImageSpec
     }
     spec = shot.deep ? deep_result_spec(input, window, deep_color_type(shot, input))
                      : result_spec(input, window, output_pixel_type(shot, input));
-    if (const std::string aov = aov_channel(shot); !aov.empty()) {
+    for (const std::string& name : aov_channel_names(output_aov(shot))) {
         spec.nchannels += 1;
-        spec.channelnames.push_back(aov);
+        spec.channelnames.push_back(name);
     }
     DataPlan plan;
     if (!frame_data_plan(shot, frame, input, plan, error))

@@ -42,8 +42,8 @@ bool check_outputs(const Shot& shot, const RunRequest& request, const RunPlan& p
                    std::string& error)
 {
     std::vector<std::string> named;
-    if (const std::string aov = aov_channel(shot); !aov.empty())
-        named.push_back(mention("aov", aov));
+    if (const Aov aov = output_aov(shot); aov != Aov::None)
+        named.push_back(mention("aov", aov_name(aov)));
     if (shot.data_channels != Shot().data_channels)
         named.push_back(mention("data-channels", shot.data_channels));
     const std::string named_channels = Strutil::join(named, " and ");

@@ -342,8 +342,10 @@ def render(shot: _ShotArg, frame: Optional[int] = None, crop: bool = False) -> n
     """Renders a frame of a shot (a Shot or a .dof file) as defocus does.
 
     Returns float32 pixels, height x width x 4 (premultiplied R,G,B,A in the
-    output colour space; a fifth channel with aov="confidence", the share of
-    each pixel's light from rebuilt hidden surfaces, or with aov="coc", the
+    output colour space; with aov="confidence", five more channels: the
+    share of each pixel's light from rebuilt hidden surfaces, then that
+    share by how they were rebuilt, continued behind edges, along lines,
+    as copied patterns and by the smooth fill; with aov="coc", a fifth: the
     signed CoC in pixels of the front-most layer reaching it) over the
     result's data window, or with crop=True
     over the display window (black outside the data). frame=None renders

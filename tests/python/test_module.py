@@ -409,7 +409,7 @@ def test_errors_name_python_keywords(example, tmp_path):
 def test_the_confidence_aov_marks_rebuilt_light_as_the_command_does(example, tmp_path):
     # Layered input hides nothing: the channel is there, and 0.
     layered = defocus.render(defocus.Shot(inputs=[example], aov="confidence", **CAMERA))
-    assert layered.shape[2] == 5 and not layered[..., 4].any()
+    assert layered.shape[2] == 9 and not layered[..., 4:].any()
     # A flat render: a near bar, blurred, hides part of a striped wall.
     height, width = 64, 96
     rgba, z = striped_wall_behind_a_bar(height, width)
@@ -417,10 +417,12 @@ def test_the_confidence_aov_marks_rebuilt_light_as_the_command_does(example, tmp
     camera = {**SMALL_CAMERA, "focus": 20.0}
     ours = defocus.render(defocus.Shot(inputs=[tmp_path / "flat.exr"], aov="confidence",
                                        **camera))
-    assert ours.shape == (height, width, 5)
+    assert ours.shape == (height, width, 9)
     confidence = ours[..., 4]
     assert confidence[32, 45] > 0.1 and confidence.max() <= 1.0
     assert not confidence[:, :20].any()  # beyond the bar's blur all was seen
+    # Then that share by method (continued, lines, patterns, smooth): their sum.
+    assert np.allclose(ours[..., 5:].sum(axis=2), confidence, atol=1e-5)
     args = [f"--{k}={v}" for k, v in camera.items()]
     assert cli(tmp_path / "flat.exr", "-o", tmp_path / "cli.exr", "--aov", "confidence",
                "-d", "float", *args) == (0, "")

@@ -11,6 +11,16 @@
 
 namespace defocus {
 
+/// How a pixel that a render did not show was rebuilt (Layer::rebuilt):
+/// by the estimate that weighs most in it.
+enum class RebuiltBy : uint8_t {
+    Seen = 0,   ///< not rebuilt
+    Smooth,     ///< the push-pull average
+    Lines,      ///< structure continued along lines across a thin hole
+    Patterns,   ///< a pattern copied from one period along
+    Continued,  ///< a surface continued behind a nearer edge (mixed pixels)
+};
+
 /// One layer: premultiplied colour and its planar camera-space depth over
 /// the same data window. A layer need not be planar.
 struct Layer {
@@ -19,8 +29,8 @@ struct Layer {
     OIIO::ImageBuf depth;  ///< float Z
     /// Where the colour is rebuilt, not seen: the background a flat render
     /// or a deep image hides behind nearer layers, filled in by slicing.
-    /// One channel, nonzero there, over part of the layer's window; empty
-    /// when nothing is.
+    /// One uint8 channel, nonzero there (the RebuiltBy of each pixel),
+    /// over part of the layer's window; empty when nothing is.
     OIIO::ImageBuf rebuilt {};
     /// The data channels (IDs, cryptomatte, P, N: see
     /// composite/data_channels.h) of the render or part the layer was cut

@@ -102,13 +102,13 @@ std::vector<std::string> DataPlan::output_channels() const
     return names;
 }
 
-bool DataPlan::distinct_names(const std::string& aov, std::string& error) const
+bool DataPlan::distinct_names(Aov aov, std::string& error) const
 {
     std::map<std::string, std::string> owner
         = { { "R", "the colour" }, { "G", "the colour" }, { "B", "the colour" },
             { "A", "the colour" } };
-    if (!aov.empty())
-        owner[aov] = mention("aov", aov);
+    for (const std::string& name : aov_channel_names(aov))
+        owner[name] = mention("aov", aov_name(aov));
     const std::vector<std::string> names = output_channels();
     for (size_t i = 0; i < names.size(); ++i) {
         // The depth's two channels come first.

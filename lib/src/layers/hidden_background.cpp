@@ -287,9 +287,14 @@ void fill_holes(Layer& layer, const HoleMap& holes, const ROI& hidden, const ROI
                 continue;
             std::copy(mean, mean + 4, color_row + 4 * size_t(i));
             depth_row[i] = mean[4] / mean[3];
-            rebuilt_row[i] = 1;
             const int most = int(std::max_element(weight, weight + 3) - weight);
-            ++(most == 0 ? counts.smooth : most == 1 ? counts.lines : counts.patterns);
+            const RebuiltBy by = most == 0   ? RebuiltBy::Smooth
+                                 : most == 1 ? RebuiltBy::Lines
+                                             : RebuiltBy::Patterns;
+            rebuilt_row[i] = uint8_t(by);
+            ++(by == RebuiltBy::Smooth ? counts.smooth
+               : by == RebuiltBy::Lines ? counts.lines
+                                        : counts.patterns);
         }
     }, by_rows(nthreads));
     for (const RebuiltPixels& row : rows)
@@ -330,7 +335,7 @@ RebuiltPixels fill_hidden_background(Layer& layer, const HiddenPixels& hidden_pi
                 = static_cast<uint8_t*>(layer.rebuilt.pixeladdr(continued.xbegin, y));
             for (int i = 0; i < continued.width(); ++i)
                 if (flags[i] == HiddenPixels::continued) {
-                    rebuilt_row[i] = 1;
+                    rebuilt_row[i] = uint8_t(RebuiltBy::Continued);
                     ++rows[size_t(y - continued.ybegin)];
                 }
         }, by_rows(nthreads));

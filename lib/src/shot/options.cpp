@@ -58,6 +58,19 @@ const char* aov_name(Aov aov)
     }
 }
 
+const std::vector<std::string>& aov_channel_names(Aov aov)
+{
+    // In OpenEXR's order (it sorts a file's channels by name), so that an
+    // image and its file agree.
+    static const std::vector<std::string> none, coc = { "coc" },
+                                                confidence = { "confidence",
+                                                               "confidence.continued",
+                                                               "confidence.lines",
+                                                               "confidence.patterns",
+                                                               "confidence.smooth" };
+    return aov == Aov::Confidence ? confidence : aov == Aov::Coc ? coc : none;
+}
+
 const char* output_window_name(OutputWindow window)
 {
     switch (window) {

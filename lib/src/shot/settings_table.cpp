@@ -473,11 +473,13 @@ std::vector<SettingRule> output_rules()
                "Output compression, e.g. zip, piz, dwaa (default: the input's)" },
              [](auto& s) -> auto& { return s.compression; }),
         choice({ "aov", "output", "aov", K::Text, G::Output, "--aov NAME",
-                 "An extra channel: confidence, named 'confidence', the fraction of each "
+                 "Extra channels: confidence, named 'confidence', the fraction of each "
                  "pixel's light that came from surfaces the input hides (behind nearer "
                  "objects of a flat render or deep image) and defocus rebuilt: 0 where all "
                  "of it was seen, as everywhere for layered input; where it is high, look "
-                 "closely; coc, named 'coc', the signed CoC diameter in pixels (negative in "
+                 "closely; then that fraction by how it was rebuilt, in channels named "
+                 "confidence.continued (behind an edge), .lines, .patterns and .smooth; "
+                 "coc, named 'coc', the signed CoC diameter in pixels (negative in "
                  "front of the focus) of the front-most layer that reaches each pixel, to "
                  "drive other blurs from (default: none)" },
                [](auto& s) -> auto& { return s.aov; }, parse_aov, aov_name, "AOV",

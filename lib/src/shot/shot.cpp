@@ -192,9 +192,9 @@ bool is_animated(const Shot& shot)
            || shot.optical_centre.animated() || shot.bloom.animated();
 }
 
-std::string aov_channel(const Shot& shot)
+Aov output_aov(const Shot& shot)
 {
-    return shot.output == OutputKind::Image && shot.aov != Aov::None ? aov_name(shot.aov) : "";
+    return shot.output == OutputKind::Image ? shot.aov : Aov::None;
 }
 
 Camera camera_at(const Shot& shot, int frame)

@@ -59,10 +59,10 @@ struct DataPlan {
     /// The channels data_channels() makes, in order.
     std::vector<std::string> output_channels() const;
     /// Whether each channel output_channels() names is a name of its own,
-    /// beside the colour's and the AOV `aov` ("" for none): a second
+    /// beside the colour's and the channels of the AOV `aov`: a second
     /// channel of a name is written as "channelN". Else false with `error`
     /// naming both.
-    bool distinct_names(const std::string& aov, std::string& error) const;
+    bool distinct_names(Aov aov, std::string& error) const;
     /// What is carried and as what, for -v ("" for nothing).
     std::string summary() const;
 };

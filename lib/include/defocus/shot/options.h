@@ -103,11 +103,12 @@ enum class OutputWindow {
 bool parse_output_window(const std::string& name, OutputWindow& window);
 const char* output_window_name(OutputWindow window);
 
-/// An extra channel written beside the image.
+/// Extra channels written beside the image.
 enum class Aov {
     None,
     /// "confidence": the fraction of each pixel's light that came from
-    /// rebuilt surfaces (Layer::rebuilt), 0 where all of it was seen.
+    /// rebuilt surfaces (Layer::rebuilt), 0 where all of it was seen; then
+    /// that fraction split by how they were rebuilt.
     Confidence,
     /// "coc": the signed CoC diameter of the front-most layer that reaches
     /// each pixel (see coc_aov), to drive other blurs from.
@@ -115,6 +116,10 @@ enum class Aov {
 };
 bool parse_aov(const std::string& name, Aov& aov);
 const char* aov_name(Aov aov);
+/// The channels `aov` adds, in order: none; "confidence" and its shares
+/// by method (RebuiltBy) "confidence.continued", "confidence.lines",
+/// "confidence.patterns" and "confidence.smooth"; "coc".
+const std::vector<std::string>& aov_channel_names(Aov aov);
 
 /// How a data channel read from the input is carried through defocus
 /// (composite/data_channels.h).

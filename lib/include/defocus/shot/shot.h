@@ -190,9 +190,9 @@ std::string coc_map_conflict(const Shot& shot);
 /// True when a setting changes over frames.
 bool is_animated(const Shot& shot);
 
-/// The name of the AOV channel the shot's output carries (an image's only;
-/// a focus map carries none), "" for none.
-std::string aov_channel(const Shot& shot);
+/// The AOV the shot's output carries: an image's, none for a focus map or
+/// the layer view.
+Aov output_aov(const Shot& shot);
 
 /// The camera at `frame`. Its focus distance is the focus keyframes' (when
 /// the shot focuses at a pixel, the caller measures it).
