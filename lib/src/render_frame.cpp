@@ -332,8 +332,10 @@ bool confidence_aov(ImageBuf& confidence, const ImageBuf& image, const LayeredSc
                     std::string& error, int nthreads)
 {
     ImageBuf light(image.spec()), by_method(image.spec());  // none, unless something was rebuilt
-    for (auto [part_of, spread] : { std::pair { rebuilt_part, &light },
-                                    std::pair { rebuilt_by_method, &by_method } }) {
+    using PartOf = bool (*)(const LayeredScene&, LayeredScene&, int);
+    const std::pair<PartOf, ImageBuf*> parts[]
+        = { { rebuilt_part, &light }, { rebuilt_by_method, &by_method } };
+    for (const auto& [part_of, spread] : parts) {
         LayeredScene part;
         if (part_of(layered, part, nthreads)
             && !defocus_layers(*spread, part, camera, shot.spread, images, shot.window, nullptr,
