@@ -21,12 +21,12 @@ bool rebuilt_part(const LayeredScene& scene, LayeredScene& part, int nthreads = 
 /// smooth fill; none for surfaces continued behind edges (the rest).
 bool rebuilt_by_method(const LayeredScene& scene, LayeredScene& part, int nthreads = 0);
 
-/// The confidence AOV's channels (aov_channel_names) of `all`: the share of its light (its luma)
-/// that `part` holds, within [0, 1], 0 where `all` has no light or `part`
-/// less than a millionth of it; then that share split by method, from
-/// `by_method` (rebuilt_by_method spread and composited), the surfaces
-/// continued behind edges taking the rest. All three are composited RGBA
-/// over the same window.
+/// The confidence AOV's channels (aov_channel_names) of `all`: the share
+/// of its light (its luma) that `part` holds, within [0, 1], 0 where `all`
+/// has no light or `part` less than a millionth of it; then that share
+/// split by method, from `by_method` (rebuilt_by_method spread and
+/// composited), the surfaces continued behind edges taking the rest. All
+/// three are composited RGBA over the same window.
 bool light_fraction(OIIO::ImageBuf& dst, const OIIO::ImageBuf& all, const OIIO::ImageBuf& part,
                     const OIIO::ImageBuf& by_method, const Imath::V3d& luma,
                     int nthreads = 0);

@@ -18,9 +18,9 @@ struct HeaderValue {
 };
 
 /// The camera values of a header. Each is looked up in a table of the
-/// attributes renderers write (the manual's Inputs page lists it): OpenEXR's
-/// standard `focus` and `aperture`, Unreal Movie Render Queue's `unreal/camera/...`,
-/// Arnold's `CameraFocalLength` and `CameraFilmApertureHorizontal`,
+/// attributes renderers write (the manual's Inputs page lists it):
+/// OpenEXR's standard `focus` and `aperture`, Unreal Movie Render Queue's
+/// `unreal/camera/...`, Arnold's `CameraFocalLength` and `CameraFilmApertureHorizontal`,
 /// V-Ray's `cameraFocalLength` and `cameraAperture`. Values that are not
 /// finite and positive are ignored.
 struct HeaderCamera {
