@@ -266,7 +266,8 @@ void fill_holes(Layer& layer, const HoleMap& holes, const ROI& hidden, const ROI
             // `weight` keeps each one's share.
             float mean[5], estimate[5], trust = 0.0f;
             bool found = pull(pyramid[0], i, y - window.ybegin, mean);
-            float weight[3] = { found ? 1.0f : 0.0f, 0.0f, 0.0f };  // smooth, lines, patterns
+            // In RebuiltBy's order from Smooth: smooth, lines, patterns.
+            float weight[3] = { found ? 1.0f : 0.0f, 0.0f, 0.0f };
             auto blend = [&](int method) {
                 if (!found)
                     trust = 1.0f;
@@ -287,14 +288,10 @@ void fill_holes(Layer& layer, const HoleMap& holes, const ROI& hidden, const ROI
                 continue;
             std::copy(mean, mean + 4, color_row + 4 * size_t(i));
             depth_row[i] = mean[4] / mean[3];
-            const int most = int(std::max_element(weight, weight + 3) - weight);
-            const RebuiltBy by = most == 0   ? RebuiltBy::Smooth
-                                 : most == 1 ? RebuiltBy::Lines
-                                             : RebuiltBy::Patterns;
+            const RebuiltBy by = RebuiltBy(int(RebuiltBy::Smooth)
+                                           + (std::max_element(weight, weight + 3) - weight));
             rebuilt_row[i] = uint8_t(by);
-            ++(by == RebuiltBy::Smooth ? counts.smooth
-               : by == RebuiltBy::Lines ? counts.lines
-                                        : counts.patterns);
+            counts.add(by);
         }
     }, by_rows(nthreads));
     for (const RebuiltPixels& row : rows)

@@ -74,6 +74,14 @@ struct RebuiltPixels {
     int64_t continued = 0;  ///< a surface continued behind a nearer edge (mixed pixels)
 
     int64_t total() const { return smooth + lines + patterns + continued; }
+    /// One more pixel rebuilt by `by` (not RebuiltBy::Seen).
+    void add(RebuiltBy by)
+    {
+        ++(by == RebuiltBy::Smooth     ? smooth
+           : by == RebuiltBy::Lines    ? lines
+           : by == RebuiltBy::Patterns ? patterns
+                                       : continued);
+    }
     void add(const RebuiltPixels& other)
     {
         smooth += other.smooth;
