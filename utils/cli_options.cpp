@@ -151,7 +151,6 @@ std::string unknown_option_hint(const ArgParse& ap, const std::string& error)
         return error;
     // OIIO's own guess takes the first of equally near names (--focsu:
     // --focal before --focus); a swap of two letters is the likelier typo.
-    const std::string oiio_guess = error;
     const std::string plain = error.substr(0, size_t(m.position(0) + m.length(0)));
     const std::string given = m[1];
     std::string nearest;
@@ -171,8 +170,7 @@ std::string unknown_option_hint(const ArgParse& ap, const std::string& error)
         }
     }
     if (nearest.empty())
-        return OIIO::Strutil::contains(oiio_guess, "did you mean") ? oiio_guess
-                                                                   : plain + " (see --help)";
+        return OIIO::Strutil::contains(error, "did you mean") ? error : plain + " (see --help)";
     return plain + ": did you mean " + nearest + "?";
 }
 
