@@ -413,6 +413,41 @@ TEST_CASE("the data channels' spreads say how far they are, and stop when cancel
     CHECK(said.size() == 2);
 }
 
+TEST_CASE("an object that is all of its layer's light is matted by the layer's own spread")
+{
+    // A part per object, as a layered render is often written: each
+    // object's matte is its part's alpha, already spread once. It needs no
+    // spread of its own (the layered section above checks that the mattes
+    // are still each card's alpha); two objects at one depth share a layer
+    // and need theirs.
+    const std::string dir = scratch_dir("data_whole_objects");
+    auto spreads = [&](const std::string& scene) {
+        // One spread for the layers' alphas (and no quantities), then the
+        // IDs' mattes.
+        const Shot shot = shot_with({ scene }, with_data("objectId:id"));
+        ShotAssets assets;
+        std::string error;
+        REQUIRE(read_shot_assets(shot, assets, error));
+        int said = 0;
+        FrameResult result;
+        REQUIRE(render_frame(shot, 1, assets, result, error, [&](const char* stage) {
+            said += stage && Strutil::starts_with(stage, "data channels");
+            return true;
+        }));
+        return said;
+    };
+    CHECK(spreads(layered_scene(dir, true, true)) == 1);
+    ImageBuf one_depth(scene_spec());
+    std::vector<float> empty(channels.size(), 0.0f), front = object_pixel(true);
+    empty[4] = 1e10f;
+    front[4] = object_pixel(false)[4];
+    ImageBufAlgo::fill(one_depth, empty);
+    ImageBufAlgo::fill(one_depth, object_pixel(false), back_card);
+    ImageBufAlgo::fill(one_depth, front, front_card);
+    REQUIRE(one_depth.write(dir + "/one_depth.exr"));
+    CHECK(spreads(dir + "/one_depth.exr") == 2);
+}
+
 TEST_CASE("bad data values never reach the output, and integer IDs come out whole")
 {
     const std::string dir = scratch_dir("data_bad");
