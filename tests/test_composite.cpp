@@ -7,6 +7,7 @@
 
 #include <OpenImageIO/imagebufalgo.h>
 
+#include <defocus/composite/deep_result.h>
 #include <defocus/composite/defocus_layers.h>
 #include <defocus/focus/focus_map.h>
 #include <defocus/spread/spread.h>
@@ -168,7 +169,7 @@ TEST_CASE("a frame rendered into the last frame's image comes out as into a new 
 }
 
 TEST_CASE("each layer composited over the ones behind it gives the frame, and freeing the "
-          "layers as they go changes no pixel")
+          "layers as they go changes no pixel, flat or deep")
 {
     // Three layers, each set up only when its turn comes: a blurred wall, a
     // card in focus and a blurred card in front of part of it.
@@ -228,6 +229,26 @@ TEST_CASE("each layer composited over the ones behind it gives the frame, and fr
         CHECK(freed.layers[i].name == layers.layers[i].name);
         CHECK_FALSE(freed.layers[i].color.initialized());
         CHECK_FALSE(freed.layers[i].depth.initialized());
+    }
+
+    // The deep result, its samples made as each layer is spread apart.
+    DeepResult deep, deep_freed;
+    REQUIRE(defocus_deep(deep, layers, camera, {}, {}, OutputWindow::Input, error));
+    LayeredScene freed_deep = layers;
+    REQUIRE(defocus_deep_freeing(deep_freed, freed_deep, camera, {}, {}, OutputWindow::Input,
+                                 error));
+    CHECK(deep_freed.window == deep.window);
+    REQUIRE(deep_freed.layers.size() == 3);
+    REQUIRE(deep_freed.layers.size() == deep.layers.size());
+    for (size_t i = 0; i < deep.layers.size(); ++i) {
+        CHECK(deep_freed.layers[i].pixels == deep.layers[i].pixels);
+        CHECK(deep_freed.layers[i].rgba == deep.layers[i].rgba);
+        CHECK(deep_freed.layers[i].z == deep.layers[i].z);
+        CHECK(deep_freed.layers[i].zback == deep.layers[i].zback);
+    }
+    for (const Layer& layer : freed_deep.layers) {
+        CHECK_FALSE(layer.color.initialized());
+        CHECK_FALSE(layer.depth.initialized());
     }
 }
 

@@ -384,8 +384,8 @@ bool deep_frame(const Shot& shot, int frame, const ApertureImages& images,
     Timer timer;
     SpreadStats stats;
     DeepResult deep;
-    if (!defocus_deep(deep, layered, out.camera, shot.spread, images, shot.window, error,
-                      &out.layers, &stats, nthreads))
+    if (!defocus_deep_freeing(deep, layered, out.camera, shot.spread, images, shot.window,
+                              error, &out.layers, &stats, nthreads))
         return false;
     out.timings.emplace_back("spread and composite", stats.spread);
     out.cells = stats.cells;

@@ -86,12 +86,11 @@ ROI unlit_window(const ImageSpec& scene, OutputWindow window)
     return window == OutputWindow::Input ? scene.roi() : scene.roi_full();
 }
 
-}  // namespace
-
-bool defocus_deep(DeepResult& dst, const LayeredScene& scene, const Camera& camera,
-                  const SpreadOptions& spread, const ApertureImages& images,
-                  OutputWindow window, std::string& error, std::vector<LayerReport>* report,
-                  SpreadStats* stats, int nthreads)
+/// defocus_deep(), the layers spread apart by `spread_apart(sink)`.
+template<typename SpreadApart>
+bool deep_samples(DeepResult& dst, const LayeredScene& scene, const Camera& camera,
+                  OutputWindow window, std::string& error, SpreadApart&& spread_apart,
+                  int nthreads)
 {
     if (camera.axial_ca != 0.0 || camera.lateral_ca != 0.0) {
         error = "a deep result cannot hold chromatic aberration: each colour has its own alpha";
@@ -110,8 +109,7 @@ bool defocus_deep(DeepResult& dst, const LayeredScene& scene, const Camera& came
         indices.push_back(layer);
         return true;
     };
-    if (!spread_layers_apart(scene, camera, spread, images, window, keep, error, report, stats,
-                             nthreads))
+    if (!spread_apart(keep))
         return false;
     // Back to front as spread; front to back as deep samples run.
     std::reverse(dst.layers.begin(), dst.layers.end());
@@ -126,6 +124,30 @@ bool defocus_deep(DeepResult& dst, const LayeredScene& scene, const Camera& came
     }
     drop_empty_samples(dst.layers, dst.window);
     return true;
+}
+
+}  // namespace
+
+bool defocus_deep(DeepResult& dst, const LayeredScene& scene, const Camera& camera,
+                  const SpreadOptions& spread, const ApertureImages& images,
+                  OutputWindow window, std::string& error, std::vector<LayerReport>* report,
+                  SpreadStats* stats, int nthreads)
+{
+    return deep_samples(dst, scene, camera, window, error, [&](const LayerSink& keep) {
+        return spread_layers_apart(scene, camera, spread, images, window, keep, error, report,
+                                   stats, nthreads);
+    }, nthreads);
+}
+
+bool defocus_deep_freeing(DeepResult& dst, LayeredScene& scene, const Camera& camera,
+                          const SpreadOptions& spread, const ApertureImages& images,
+                          OutputWindow window, std::string& error,
+                          std::vector<LayerReport>* report, SpreadStats* stats, int nthreads)
+{
+    return deep_samples(dst, scene, camera, window, error, [&](const LayerSink& keep) {
+        return spread_layers_apart_freeing(scene, camera, spread, images, window, keep, error,
+                                           report, stats, nthreads);
+    }, nthreads);
 }
 
 ImageSpec deep_result_spec(const ImageSpec& scene, const ROI& window, TypeDesc color_type)

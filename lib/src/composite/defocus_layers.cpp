@@ -585,19 +585,43 @@ bool defocus_layers_freeing(ImageBuf& dst, LayeredScene& scene, const Camera& ca
                           &scene.layers, nthreads);
 }
 
+namespace {
+
+/// spread_layers_apart(), freeing `freeing` (the scene's layers) when given.
+bool spread_apart(const LayeredScene& scene, const Camera& camera, const SpreadOptions& spread,
+                  const ApertureImages& images, OutputWindow window, const LayerSink& sink,
+                  std::string& error, std::vector<LayerReport>* report, SpreadStats* stats,
+                  std::vector<Layer>* freeing, int nthreads)
+{
+    ImageBuf errors;
+    if (spread_guarded(errors, scene, camera, spread, images, window, report, stats, &sink,
+                       freeing, nthreads))
+        return true;
+    if (errors.has_error())
+        error = errors.geterror();
+    return false;
+}
+
+}  // namespace
+
 bool spread_layers_apart(const LayeredScene& scene, const Camera& camera,
                          const SpreadOptions& spread, const ApertureImages& images,
                          OutputWindow window, const LayerSink& sink, std::string& error,
                          std::vector<LayerReport>* report, SpreadStats* stats,
                          int nthreads)
 {
-    ImageBuf errors;
-    if (spread_guarded(errors, scene, camera, spread, images, window, report, stats, &sink,
-                       nullptr, nthreads))
-        return true;
-    if (errors.has_error())
-        error = errors.geterror();
-    return false;
+    return spread_apart(scene, camera, spread, images, window, sink, error, report, stats,
+                        nullptr, nthreads);
+}
+
+bool spread_layers_apart_freeing(LayeredScene& scene, const Camera& camera,
+                                 const SpreadOptions& spread, const ApertureImages& images,
+                                 OutputWindow window, const LayerSink& sink,
+                                 std::string& error, std::vector<LayerReport>* report,
+                                 SpreadStats* stats, int nthreads)
+{
+    return spread_apart(scene, camera, spread, images, window, sink, error, report, stats,
+                        &scene.layers, nthreads);
 }
 
 bool largest_grown_window(ROI& window, const ImageSpec& scene, const Camera& camera,

@@ -50,6 +50,16 @@ bool defocus_deep(DeepResult& dst, const LayeredScene& scene, const Camera& came
                   std::vector<LayerReport>* report = nullptr, SpreadStats* stats = nullptr,
                   int nthreads = 0);
 
+/// defocus_deep() for a caller done with the layers' pixels, freed as
+/// defocus_layers_freeing() frees them: each layer's colour is gone before
+/// the next one's samples are made. A 4K frame's peak memory falls by a
+/// fifth. On failure the layers may be part freed.
+bool defocus_deep_freeing(DeepResult& dst, LayeredScene& scene, const Camera& camera,
+                          const SpreadOptions& spread, const ApertureImages& images,
+                          OutputWindow window, std::string& error,
+                          std::vector<LayerReport>* report = nullptr,
+                          SpreadStats* stats = nullptr, int nthreads = 0);
+
 /// The spec of a deep result over `window`: R, G, B, A of `color_type` and
 /// Z, ZBack of float, in the display window of `scene` (a scene's spec),
 /// with its metadata.

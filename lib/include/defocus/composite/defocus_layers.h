@@ -91,6 +91,16 @@ bool spread_layers_apart(const LayeredScene& scene, const Camera& camera,
                          std::vector<LayerReport>* report = nullptr,
                          SpreadStats* stats = nullptr, int nthreads = 0);
 
+/// spread_layers_apart() for a caller done with the layers' pixels, freed
+/// as defocus_layers_freeing() frees them: each before the next layer is
+/// spread. On failure the layers may be part freed.
+bool spread_layers_apart_freeing(LayeredScene& scene, const Camera& camera,
+                                 const SpreadOptions& spread, const ApertureImages& images,
+                                 OutputWindow window, const LayerSink& sink,
+                                 std::string& error,
+                                 std::vector<LayerReport>* report = nullptr,
+                                 SpreadStats* stats = nullptr, int nthreads = 0);
+
 /// A layer's spread reaches a pixel where its coverage there is above
 /// this: below it, float noise of the spread is too large a part of a
 /// quantity spread times alpha (the CoC AOV, data channels).
