@@ -213,7 +213,7 @@ bool data_channels(ImageBuf& dst, const ImageBuf& result, const LayeredScene& sc
     auto spreads = [](size_t items) { return int((items + per_spread - 1) / per_spread); };
     spreader.total = std::max(1, spreads(targets.size()));
     for (const ObjectSet& set : sets) {
-        objects.push_back(find_objects(set, scene, lookups));
+        objects.push_back(find_objects(set, scene, lookups, nthreads));
         if (!plausible_ids(set, objects.back(), roi, error)) {
             dst.errorfmt("{}", error);
             return false;

@@ -81,6 +81,55 @@ struct FoundObjects {
     }
 };
 
+/// The objects a band of rows of one layer shows, in the order a pass
+/// over its rows meets them, and its pixels with alpha.
+struct BandObjects {
+    std::vector<std::pair<uint32_t, Presence>> found;
+    std::unordered_map<uint32_t, size_t> index;  ///< into `found`
+    int64_t lit = 0;
+
+    /// Rows [y0, y1), columns [x0, x1): objects hold over most of a row,
+    /// so each run of pixels that shows the same ones is taken at once.
+    void find(const ObjectSet& set, const DataLookup& lookup, const std::vector<int>& channels,
+              const FloatPixels& color, int x0, int x1, int y0, int y1)
+    {
+        auto add_run = [&](const FoundObjects& run, int begin, int end, int y) {
+            const ROI pixels(begin, end, y, y + 1);
+            for (int k = 0; k < run.n; ++k) {
+                auto [it, added] = index.emplace(run.objects[k].id, found.size());
+                if (added)
+                    found.push_back({ run.objects[k].id, {} });
+                Presence& p = found[it->second].second;
+                p.roi = roi_union(p.roi, pixels);
+                p.whole_pixels += run.objects[k].fraction == 1.0f ? end - begin : 0;
+            }
+        };
+        for (int y = y0; y < y1; ++y) {
+            FoundObjects run, pixel;
+            int run_begin = x0;
+            bool in_run = false;
+            for (int x = x0; x < x1; ++x) {
+                const bool has_alpha = color(x, y)[3] > 0.0f;
+                if (has_alpha) {
+                    ++lit;
+                    pixel.n = pixel_objects(set, lookup(x, y), channels, pixel.objects);
+                }
+                if (in_run && (!has_alpha || !(pixel == run))) {
+                    add_run(run, run_begin, x, y);
+                    in_run = false;
+                }
+                if (has_alpha && !in_run) {
+                    run = pixel;
+                    run_begin = x;
+                    in_run = true;
+                }
+            }
+            if (in_run)
+                add_run(run, run_begin, x1, y);
+        }
+    }
+};
+
 /// `roi` of `layer`, grown so that its pixels spread as they do in the
 /// whole layer: by the layer's largest CoC radius (the highlight test
 /// compares each pixel with the mean over its CoC), then out to whole
@@ -143,7 +192,7 @@ bool plausible_ids(const ObjectSet& set, const std::vector<ObjectExtent>& object
 }
 
 std::vector<ObjectExtent> find_objects(const ObjectSet& set, const LayeredScene& scene,
-                                       const std::vector<DataLookup>& lookups)
+                                       const std::vector<DataLookup>& lookups, int nthreads)
 {
     std::vector<ObjectExtent> objects;
     std::unordered_map<uint32_t, size_t> index;
@@ -156,42 +205,28 @@ std::vector<ObjectExtent> find_objects(const ObjectSet& set, const LayeredScene&
             channels.push_back(lookup.channel(name));
         const ROI roi = scene.layers[i].color.roi();
         const FloatPixels color(scene.layers[i].color, roi);
+        // Bands of rows side by side, joined in order: the objects are met
+        // in the order one pass over the rows meets them.
+        constexpr int band_rows = 32;
+        std::vector<BandObjects> bands(size_t((roi.height() + band_rows - 1) / band_rows));
+        parallel_for_each_item(0, int64_t(bands.size()), [&](int64_t b) {
+            const int y0 = roi.ybegin + int(b) * band_rows;
+            bands[size_t(b)].find(set, lookup, channels, color, roi.xbegin, roi.xend, y0,
+                                  std::min(roi.yend, y0 + band_rows));
+        }, nthreads);
         int64_t lit = 0;
-        auto add_run = [&](const FoundObjects& found, int x0, int x1, int y) {
-            const ROI run(x0, x1, y, y + 1);
-            for (int k = 0; k < found.n; ++k) {
-                auto [it, added] = index.emplace(found.objects[k].id, objects.size());
+        for (const BandObjects& band : bands) {
+            lit += band.lit;
+            for (const auto& [id, presence] : band.found) {
+                auto [it, added] = index.emplace(id, objects.size());
                 if (added)
-                    objects.push_back({ found.objects[k].id, {}, {} });
+                    objects.push_back({ id, {}, {} });
                 ObjectExtent& o = objects[it->second];
                 Presence& p = o.layers[i];
-                p.roi = roi_union(p.roi, run);
-                p.whole_pixels += found.objects[k].fraction == 1.0f ? x1 - x0 : 0;
-                o.all = roi_union(o.all, run);
+                p.roi = roi_union(p.roi, presence.roi);
+                p.whole_pixels += presence.whole_pixels;
+                o.all = roi_union(o.all, presence.roi);
             }
-        };
-        for (int y = roi.ybegin; y < roi.yend; ++y) {
-            FoundObjects run, pixel;
-            int run_begin = roi.xbegin;
-            bool in_run = false;
-            for (int x = roi.xbegin; x < roi.xend; ++x) {
-                const bool has_alpha = color(x, y)[3] > 0.0f;
-                if (has_alpha) {
-                    ++lit;
-                    pixel.n = pixel_objects(set, lookup(x, y), channels, pixel.objects);
-                }
-                if (in_run && (!has_alpha || !(pixel == run))) {
-                    add_run(run, run_begin, x, y);
-                    in_run = false;
-                }
-                if (has_alpha && !in_run) {
-                    run = pixel;
-                    run_begin = x;
-                    in_run = true;
-                }
-            }
-            if (in_run)
-                add_run(run, run_begin, roi.xend, y);
         }
         for (ObjectExtent& o : objects)
             if (auto it = o.layers.find(i); it != o.layers.end())
@@ -200,7 +235,7 @@ std::vector<ObjectExtent> find_objects(const ObjectSet& set, const LayeredScene&
     std::sort(objects.begin(), objects.end(), [](const ObjectExtent& a, const ObjectExtent& b) {
         return std::pair(a.all.ybegin, a.all.xbegin) < std::pair(b.all.ybegin, b.all.xbegin);
     });
-    // Those whose mattes are spread first, so that they share spreads.
+    // Those whose mattes are spread at all first, so that they share spreads.
     std::stable_partition(objects.begin(), objects.end(),
                           [](const ObjectExtent& o) { return o.spreads(); });
     return objects;

@@ -93,11 +93,9 @@ bool plausible_ids(const ObjectSet& set, const std::vector<ObjectExtent>& object
                    const OIIO::ROI& frame, std::string& error);
 
 /// Every object of `set` the scene's layers show, ordered by place so that
-/// objects spread together lie close, those spread at all first. Objects
-/// hold over most of a row: each run of pixels that shows the same ones is
-/// taken at once.
+/// objects spread together lie close, those spread at all first.
 std::vector<ObjectExtent> find_objects(const ObjectSet& set, const LayeredScene& scene,
-                                       const std::vector<DataLookup>& lookups);
+                                       const std::vector<DataLookup>& lookups, int nthreads);
 
 /// The spreads spread_objects() makes of `objects`: one for each three of
 /// them of which one is not all of the light of some layer it lies in.
