@@ -270,6 +270,23 @@ TEST_CASE("the camera a render recorded in its header is used frame by frame, se
     CHECK(one_line_error(error, "or --focus-at X,Y is required"));
 }
 
+TEST_CASE("a frame whose header gives no focus distance is refused before its pixels are read")
+{
+    // A header without pixels: were they read first, the error would be
+    // the missing pixels (or, on a 4K frame, a second and 540 MB later,
+    // the focus).
+    const std::string dir = scratch_dir("render_no_focus");
+    const std::string file = dir + "/header_only.exr";
+    write_exr_header_only(file, 64, 48);
+    FrameResult result;
+    std::string error;
+    CHECK_FALSE(render_with(file, {}, result, error));
+    CHECK(one_line_error(error, "header_only.exr: no focus distance: give --focus DIST"));
+    // With a focus, the pixels are read and found missing.
+    CHECK_FALSE(render_with(file, { { "focus", "3" } }, result, error));
+    CHECK(one_line_error(error, "header_only.exr: corrupt or truncated"));
+}
+
 TEST_CASE("a result keeps the software that made its input, and adds a line to its history")
 {
     const std::string dir = scratch_dir("render_provenance");

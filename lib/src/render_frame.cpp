@@ -225,8 +225,14 @@ bool prepare_layers(const Shot& shot, int frame, const ShotAssets& assets, Layer
     Timer timer;
     Scene scene;
     ReadOptions options;
-    if (!run_stage(on_stage, "read", error) || !frame_fits(shot, frame, error)
-        || !frame_reading(shot, frame, options, error)
+    // A focus the shot does not give must come from the headers: where
+    // they have none, that is said before the pixels are read.
+    Camera camera;
+    CameraOrigins origins;
+    if (!run_stage(on_stage, "read", error)
+        || (shot.focus.empty() && shot.focus_at.empty()
+            && !frame_camera(shot, frame, camera, origins, error))
+        || !frame_fits(shot, frame, error) || !frame_reading(shot, frame, options, error)
         || !read_scene(frame_inputs(shot, frame), options, scene, error))
         return false;
     return layer_scene(std::move(scene), shot, frame, assets, layered, out, error, on_stage,
