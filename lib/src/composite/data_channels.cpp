@@ -58,8 +58,9 @@ void composite_quantities(ImageBuf& dst, Coverage& cov, const ImageBuf& spread, 
              ++x, s += spread.nchannels(), out += dst.nchannels()) {
             const size_t i = cov.index(x, y);
             const float a = s[3];
-            if (first) {
+            if (first)
                 cov.alpha[i] = a + (1.0f - a) * cov.alpha[i];
+            if (first && !cov.best_layer.empty()) {
                 cov.best_weight[i] *= 1.0f - a;
                 if (a > cov.best_weight[i] && a > reach_coverage) {
                     cov.best_weight[i] = a;
@@ -200,14 +201,21 @@ bool data_channels(ImageBuf& dst, const ImageBuf& result, const LayeredScene& sc
     std::vector<DataLookup> lookups;
     for (const Layer& layer : scene.layers)
         lookups.emplace_back(layer);
-    const size_t pixels = size_t(roi.npixels());
-    Coverage cov { roi, std::vector<float>(pixels, 0.0f), std::vector<float>(pixels, 0.0f),
-                   std::vector<int>(pixels, -1), std::vector<ImageBuf>(scene.layers.size()) };
     std::vector<QuantityTarget> targets;
     std::vector<ObjectSet> sets;
     std::vector<int> averages;
     std::vector<std::array<int, 3>> normals;
     lay_out(plan, names, targets, sets, averages, normals);
+    // Which layer weighs most is asked only for the Dominant channels.
+    const size_t pixels = size_t(roi.npixels());
+    const size_t ranked = std::any_of(targets.begin(), targets.end(),
+                                      [](const QuantityTarget& t) {
+                                          return t.kind == DataKind::Dominant;
+                                      })
+                              ? pixels
+                              : 0;
+    Coverage cov { roi, std::vector<float>(pixels, 0.0f), std::vector<float>(ranked, 0.0f),
+                   std::vector<int>(ranked, -1), std::vector<ImageBuf>(scene.layers.size()) };
     std::string error;
     std::vector<std::vector<ObjectExtent>> objects;
     auto spreads = [](size_t items) { return int((items + per_spread - 1) / per_spread); };

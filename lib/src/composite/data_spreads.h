@@ -51,8 +51,10 @@ struct Spreader {
 struct Coverage {
     OIIO::ROI roi;
     std::vector<float> alpha;        ///< the data spread's composite alpha
-    std::vector<float> best_weight;  ///< the largest share of any layer so far
-    std::vector<int> best_layer;     ///< whose it is (-1: none)
+    /// The largest share of any layer so far, and whose it is (-1: none);
+    /// empty without Dominant channels, which alone ask for them.
+    std::vector<float> best_weight;
+    std::vector<int> best_layer;
     /// Each layer's spread alpha, over what it lights.
     std::vector<OIIO::ImageBuf> layer_alpha;
 
