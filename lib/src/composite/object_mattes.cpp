@@ -266,6 +266,9 @@ bool spread_objects(const ObjectSet& set, const std::vector<ObjectExtent>& objec
         for (size_t i : lit_layers(scene)) {
             ROI crop;
             bool all_of_layer = true;
+            // When each of these objects that lies in the layer is all of
+            // its light, their shares there are the layer's spread alpha
+            // (channel 0 of cov.layer_alpha).
             std::array<int, per_spread> alpha;
             alpha.fill(-1);
             for (size_t m = 0; m < count; ++m)
