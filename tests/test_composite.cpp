@@ -252,6 +252,48 @@ TEST_CASE("each layer composited over the ones behind it gives the frame, and fr
     }
 }
 
+TEST_CASE("tent and smooth layers are composited row by row as spread_smooth spreads them")
+{
+    // Tent and smooth hand their rows to the compositing as they are made,
+    // without an image of the layer's spread: each layer alone must come
+    // out as spread_smooth's image of it, every pixel of the frame.
+    const Camera camera = synthetic_camera(3.0);
+    const LayeredScene layers = layered_scene(two_layer_scene(), camera);
+    const CircleOfConfusion coc(camera, layers.spec.roi_full());
+    for (const ApertureShape shape : { ApertureShape::Tent, ApertureShape::Smooth }) {
+        SpreadOptions options;
+        options.aperture.shape = shape;
+        std::string error;
+        size_t seen = 0;
+        REQUIRE(spread_layers_apart(
+            layers, camera, options, {}, OutputWindow::Input,
+            [&](size_t i, const ImageBuf& spread, const ROI& window) {
+                ++seen;
+                const Layer& layer = layers.layers[i];
+                ImageBuf radius, expected;
+                REQUIRE(coc_radius(radius, layer.depth, coc));
+                REQUIRE(spread_smooth(expected, layer.color, radius,
+                                      shape == ApertureShape::Tent ? 2 : 3));
+                for (int y = window.ybegin; y < window.yend; ++y)
+                    for (int x = window.xbegin; x < window.xend; ++x)
+                        for (int c = 0; c < 4; ++c) {
+                            const float want = expected.roi().contains(x, y)
+                                                   ? channel_at(expected, x, y, c)
+                                                   : 0.0f;
+                            const float got = spread.roi().contains(x, y)
+                                                  ? channel_at(spread, x, y, c)
+                                                  : 0.0f;
+                            if (got != want)
+                                FAIL_CHECK("layer " << i << " at " << x << "," << y << " channel "
+                                                    << c << ": " << got << " != " << want);
+                        }
+                return true;
+            },
+            error));
+        CHECK(seen == layers.layers.size());
+    }
+}
+
 TEST_CASE("the focus map shows in-focus green, in front red, behind blue")
 {
     auto colour_at = [](const ImageBuf& map, int x, int y, float rgba[4]) {

@@ -315,9 +315,9 @@ void composite_pass(ImageBuf& frame, LayerPass& p, bool onto_black, const ImageS
     if (p.channels.magnified) {
         const ChannelPass& c = p.channels;
         const bool direct = c.alpha || c.colour[0] || c.colour[1] || c.colour[2];
-        if (p.spread.engine) {
+        if (p.spread.rows) {
             // Kept where it lights anything: the rest is nothing to composite.
-            ROI lit = roi_intersection(reach, p.spread.engine->extent());
+            ROI lit = roi_intersection(reach, p.spread.rows->extent());
             lit.chbegin = 0;
             lit.chend = 4;
             if (lit.npixels() <= 0)
@@ -325,16 +325,16 @@ void composite_pass(ImageBuf& frame, LayerPass& p, bool onto_black, const ImageS
             reset_zeroed(p.spread.apart, result_spec(scene, lit, TypeFloat), nthreads);
             Keep keep(p.spread.apart);
             KeepAndOver keep_and_over(p.spread.apart, frame, c);
-            p.spread.engine->run(lit, direct ? static_cast<RowSink&>(keep_and_over) : keep,
+            p.spread.rows->run(lit, direct ? static_cast<RowSink&>(keep_and_over) : keep,
                                  nthreads);
         } else if (direct) {
             composite_image(frame, p.spread.apart, c, cells, layer, nthreads);
         }
         composite_magnified(frame, p.spread.apart, 0, 1.0 + lateral_ca, centre, nthreads);
         composite_magnified(frame, p.spread.apart, 2, 1.0 - lateral_ca, centre, nthreads);
-    } else if (p.spread.engine) {
+    } else if (p.spread.rows) {
         Over over(frame, p.channels, onto_black, &cells, layer);
-        p.spread.engine->run(window, over, nthreads);
+        p.spread.rows->run(window, over, nthreads);
     } else if (p.spread.apart.initialized()) {
         composite_image(frame, p.spread.apart, p.channels, cells, layer, nthreads);
     }
@@ -406,7 +406,7 @@ bool composite_apart(const LayeredScene& scene, FrameSpreads& layers,
             continue;
         const LayerPass* alone = storable_pass(layers[i]);
         ImageBuf frame(result_spec(scene.spec, lit, TypeFloat), pixels.get());
-        zero_except(frame, alone ? alone->spread.engine->extent() : ROI(), nthreads);
+        zero_except(frame, alone ? alone->spread.rows->extent() : ROI(), nthreads);
         for (LayerPass& p : layers[i].passes)
             composite_pass(frame, p, &p == alone, scene.spec, lit, reach, lateral_ca, centre,
                            cells, i, nthreads);
@@ -506,7 +506,7 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
     ImageBuf frame;
     if (holds_pixels_like(dst, frame_spec))
         frame.swap(dst);
-    reset_zeroed_except(frame, frame_spec, stored ? stored->spread.engine->extent() : ROI(),
+    reset_zeroed_except(frame, frame_spec, stored ? stored->spread.rows->extent() : ROI(),
                         nthreads);
     if (!composite_layers(frame, scene, layers, cells, back, window, reach, camera.lateral_ca,
                           centre, error, nthreads)) {

@@ -26,7 +26,7 @@ std::vector<ChannelPass> channel_passes(const Camera& camera)
 
 const LayerPass* storable_pass(const LayerSpreads& layer)
 {
-    return layer.passes.size() == 1 && layer.passes[0].spread.engine
+    return layer.passes.size() == 1 && layer.passes[0].spread.rows
                    && !layer.passes[0].channels.magnified
                ? &layer.passes[0]
                : nullptr;

@@ -59,6 +59,19 @@ public:
     virtual void dark(int /*y*/, int /*x_begin*/, int /*x_end*/) {}
 };
 
+/// A layer's spread, handed to a sink a row at a time as it is made, so
+/// that compositing needs no layer-sized buffer: the engine's, and tent's
+/// and smooth's (SmoothRows).
+class RowSpread {
+public:
+    virtual ~RowSpread() = default;
+    /// Every pixel the spread can light.
+    virtual const OIIO::ROI& extent() const = 0;
+    /// Spreads into the sink the rows of `window` (within the extent).
+    /// Light from pixels outside it still counts where it falls inside.
+    virtual void run(const OIIO::ROI& window, RowSink& sink, int nthreads) const = 0;
+};
+
 /// The footprints of one aperture shape, for single pixels and for merged
 /// blocks of every size, built as spreading needs them and shared by all
 /// layers of a frame. With a cat's eye, each pixel or block takes the shape
@@ -153,7 +166,7 @@ enum class SpreadMethod {
 
 struct Tile;
 
-class SpreadEngine {
+class SpreadEngine final : public RowSpread {
 public:
     /// `shape` is needed (and must outlive the engine) unless the method is
     /// Box.
@@ -161,12 +174,8 @@ public:
                  int nthreads);
     ~SpreadEngine();
 
-    /// Every pixel the spread can light.
-    const OIIO::ROI& extent() const { return m_extent; }
-
-    /// Spreads the pixels of `window` into the sink. Light from pixels
-    /// outside it still counts where it falls inside.
-    void run(const OIIO::ROI& window, RowSink& sink, int nthreads) const;
+    const OIIO::ROI& extent() const override { return m_extent; }
+    void run(const OIIO::ROI& window, RowSink& sink, int nthreads) const override;
 
     struct Sparse;
 

@@ -9,6 +9,7 @@
 #include <defocus/spread/spread.h>
 
 #include "spread/pixels_alone.h"
+#include "spread/smooth_rows.h"
 #include "util/parallel_rows.h"
 
 namespace defocus {
@@ -137,6 +138,10 @@ bool plan_spread(const SpreadOptions& options, const ApertureImages& images,
     plan.in_engine = !images.psf && aperture.shape != ApertureShape::Tent
                      && aperture.shape != ApertureShape::Smooth
                      && (!clipped || plan.method == SpreadMethod::Bounded);
+    plan.smooth_order = images.psf || clipped                 ? 0
+                        : aperture.shape == ApertureShape::Tent   ? 2
+                        : aperture.shape == ApertureShape::Smooth ? 3
+                                                                  : 0;
     if (plan.profile)
         plan.programs = std::make_unique<ShapePrograms>(
             plan.profile, max_radius, plan.in_engine ? plan.cateye : CatEye {});
@@ -148,6 +153,11 @@ bool spread_pass(const SpreadPlan& plan, const Layer& layer, const FloatPixels& 
                  std::string& error, int nthreads)
 {
     out.radius = std::move(radius);
+    if (plan.smooth_order) {
+        out.rows = SmoothRows::make(layer.color, out.radius, plan.smooth_order, {}, error,
+                                    nthreads);
+        return out.rows != nullptr;
+    }
     if (!plan.in_engine) {
         if (!spread_apart(out.apart, layer.color, out.radius, *plan.options, *plan.images,
                           plan.profile.get(), plan.aspect, plan.cateye, plan.luma, out.psf_pixels,
@@ -172,7 +182,7 @@ bool spread_pass(const SpreadPlan& plan, const Layer& layer, const FloatPixels& 
         add_pixels_alone(source, out.highlights, nthreads);
         source.keep_exact = out.highlights.data();
     }
-    out.engine = std::make_unique<SpreadEngine>(source, plan.method, plan.programs.get(), nthreads);
+    out.rows = std::make_unique<SpreadEngine>(source, plan.method, plan.programs.get(), nthreads);
     return true;
 }
 

@@ -37,9 +37,14 @@ struct SpreadPlan {
     double aspect = 1.0;
     CatEye cateye;
     /// Layers go through the engine, composited as they are spread; else
-    /// each is spread apart, as an image (the hybrid method, tent and
-    /// smooth, a cat's eye with the box or exact spreading).
+    /// through tent's or smooth's own passes (`smooth_order`), composited
+    /// as they are spread too; else each is spread apart, as an image (the
+    /// hybrid method, a cat's eye with the box, exact spreading, tent or
+    /// smooth).
     bool in_engine = false;
+    /// Tent (2) or smooth (3) handed on a row at a time (SmoothRows); 0
+    /// otherwise.
+    int smooth_order = 0;
 };
 
 /// The plan for a frame whose layers' reports are `reports`, through
@@ -51,24 +56,26 @@ bool plan_spread(const SpreadOptions& options, const ApertureImages& images,
                  const std::vector<LayerReport>& reports, const Imath::V3d& luma,
                  SpreadPlan& plan, std::string& error);
 
-/// One spread of a layer: set up in the engine (with the radii, float
-/// radii and highlights it reads while it lives), or done apart into
-/// `apart`.
+/// One spread of a layer: set up to be handed on a row at a time (by the
+/// engine, with the radii, float radii and highlights it reads while it
+/// lives, or by tent's and smooth's passes, with the radii), or done apart
+/// into `apart`.
 struct PassSpread {
     OIIO::ImageBuf radius;
     FloatPixels radius_pixels;
     std::vector<uint8_t> highlights;
-    std::unique_ptr<SpreadEngine> engine;
+    std::unique_ptr<RowSpread> rows;  ///< the engine's, or tent's and smooth's
     OIIO::ImageBuf apart;
     int64_t psf_pixels = 0;  ///< pixels spread with the PSF image (hybrid)
 
     /// Every pixel the spread can light.
-    OIIO::ROI extent() const { return engine ? engine->extent() : apart.roi(); }
+    OIIO::ROI extent() const { return rows ? rows->extent() : apart.roi(); }
 };
 
 /// Spreads `layer` (described by `report`) with CoC radii `radius` as
 /// `plan` says, into `out`. With the engine, `color` holds the layer's
-/// float colour, and must outlive `out`. False with `error`.
+/// float colour, and must outlive `out`; so must the layer, for tent and
+/// smooth. False with `error`.
 bool spread_pass(const SpreadPlan& plan, const Layer& layer, const FloatPixels& color,
                  const LayerReport& report, OIIO::ImageBuf&& radius, PassSpread& out,
                  std::string& error, int nthreads);

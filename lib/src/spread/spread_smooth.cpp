@@ -27,6 +27,7 @@
 #include <cmath>
 #include <climits>
 #include <cstring>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <type_traits>
@@ -35,8 +36,10 @@
 #include <immintrin.h>
 
 #include <OpenImageIO/parallel.h>
+#include <OpenImageIO/strutil.h>
 
 #include "spread/smooth_psf.h"
+#include "spread/smooth_rows.h"
 #include "spread/spread_common.h"
 #include "util/fresh_array.h"
 #include "util/fresh_image.h"
@@ -237,6 +240,9 @@ void integrate_down(uint64_t* sums, uint64_t* deltas, int order, size_t n, doubl
 /// most this many times its length beyond each end (see spread_smooth).
 constexpr int profile_stretch = 64;
 
+/// Where row r (of the accumulation's extent, from 0) of the spread goes.
+using OutputRows = std::function<float*(int r)>;
+
 /// What one source row adds to the accumulation: the row profiles of its
 /// runs (64-bit fixed point, one after another in `fixed`) and its pixels
 /// in short runs, each spread by its corner deltas.
@@ -279,7 +285,7 @@ public:
                       int source_rows, int nthreads)
         : m_ext(ext), m_nc(nc), m_order(order), m_scale(scale)
         , m_row_len(size_t(ext.width()) * nc)
-        , m_ring_rows(std::min(ext.height(), source_rows + 2 * reach + order + 1))
+        , m_ring_rows(ring_rows(ext, reach, order, source_rows))
         , m_profiles(fresh_array<uint64_t>(size_t(m_ring_rows) * m_row_len, nthreads))
         , m_has_corners(size_t(m_ring_rows), 0)
     {
@@ -304,7 +310,17 @@ public:
     /// then integrates the rows before `complete`, which no source row still
     /// to come reaches, into `out` (rows of ext).
     void add(const std::vector<SourceRow>& rows, size_t count, const SpreadInputs& in,
-             int complete, float* out, int nthreads);
+             int complete, const OutputRows& out, int nthreads);
+
+    /// The rows integrated so far: rows [0, done()) of ext.
+    int done() const { return m_done; }
+
+    /// The rows the ring holds: every row a chunk of `source_rows` can
+    /// write, and at most as many as one add() integrates.
+    static int ring_rows(const ROI& ext, int reach, int order, int source_rows)
+    {
+        return std::min(ext.height(), source_rows + 2 * reach + order + 1);
+    }
 
 private:
     struct Columns {
@@ -329,7 +345,7 @@ private:
     void add_deltas(const SourceRow& row, const SpreadInputs& in, size_t k0, size_t k1);
     /// Integrates rows [first, end) of the columns `c` into `out`, clearing
     /// their deltas.
-    void integrate(Columns& c, int first, int end, float* out);
+    void integrate(Columns& c, int first, int end, const OutputRows& out);
 
     ROI m_ext;
     int m_nc, m_order;
@@ -489,7 +505,8 @@ void SmoothAccumulator::add_deltas(const SourceRow& row, const SpreadInputs& in,
 }
 
 void SmoothAccumulator::add(const std::vector<SourceRow>& rows, size_t count,
-                            const SpreadInputs& in, int complete, float* out, int nthreads)
+                            const SpreadInputs& in, int complete, const OutputRows& out,
+                            int nthreads)
 {
     const int height = m_ext.height();
     for (size_t i = 0; i < count; ++i)
@@ -540,7 +557,7 @@ void SmoothAccumulator::add(const std::vector<SourceRow>& rows, size_t count,
     m_done = complete;
 }
 
-void SmoothAccumulator::integrate(Columns& c, int first, int end, float* out)
+void SmoothAccumulator::integrate(Columns& c, int first, int end, const OutputRows& out)
 {
     const size_t n = c.k1 - c.k0;
     const int order = m_order;
@@ -566,52 +583,117 @@ void SmoothAccumulator::integrate(Columns& c, int first, int end, float* out)
         }
         uint64_t* deltas = profile_row(r) + c.k0;
         integrate_down(c.sums.data(), deltas, order, n, m_scale, exact,
-                       out + size_t(r) * m_row_len + c.k0);
+                       out(r) + c.k0);
     }
 }
 
 }  // namespace
 
+std::unique_ptr<SmoothRows> SmoothRows::make(const ImageBuf& src, const ImageBuf& radius,
+                                             int order, ROI roi, std::string& error,
+                                             int nthreads)
+{
+    if (order < 2 || order > 3) {
+        error = Strutil::fmt::format("spread_smooth: order {} (2: tent, 3: smooth)", order);
+        return nullptr;
+    }
+    ImageBuf failed;
+    SpreadInputs in = prepare_spread(failed, src, radius, roi, nthreads);
+    if (!in.valid) {
+        error = failed.geterror();
+        return nullptr;
+    }
+    if (in.nchannels > 8) {
+        error = Strutil::fmt::format("spread_smooth: {} channels (at most 8)", in.nchannels);
+        return nullptr;
+    }
+    return std::unique_ptr<SmoothRows>(new SmoothRows(std::move(in), order));
+}
+
+SmoothRows::SmoothRows(SpreadInputs&& in, int order)
+    : m_in(std::move(in))
+    , m_order(order)
+    , m_reach(half_support(order, smooth_widths(order, m_in.max_radius).w[1]))
+{
+    const ROI& roi = m_in.roi;
+    m_ext = ROI(roi.xbegin - m_reach, roi.xend + m_reach, roi.ybegin - m_reach,
+                roi.yend + m_reach, 0, 1, 0, m_in.nchannels);
+}
+
+// Source rows are read a chunk at a time, their row profiles made side by
+// side. Small chunks keep the ring in the caches: interleaved runs against
+// the whole accumulation held at once took 0.91x the time on a 1024x540
+// layer at radius 128 and the same on the 4K example with 16 rows; 1.05x
+// and 1.15x on the 4K example with 32 and 128.
+constexpr int chunk_rows = 16;
+
+void SmoothRows::make_rows(const std::function<float*(int)>& out,
+                           const std::function<void(int, int)>& written, int nthreads) const
+{
+    const ROI& roi = m_in.roi;
+    SmoothAccumulator acc(m_ext, m_reach, m_in.nchannels, m_order,
+                          profile_scale(largest_magnitude(m_in, nthreads)), chunk_rows, nthreads);
+    std::vector<SourceRow> rows(chunk_rows);
+    auto add = [&](size_t count, int complete) {
+        const int first = acc.done();
+        acc.add(rows, count, m_in, complete, out, nthreads);
+        if (acc.done() > first)
+            written(first, acc.done());
+    };
+    for (int y0 = roi.ybegin; y0 < roi.yend; y0 += chunk_rows) {
+        const int y1 = std::min(roi.yend, y0 + chunk_rows);
+        parallel_for_each_item(y0, y1, [&](int64_t y) {
+            acc.read_row(int(y), m_in, rows[size_t(y - y0)]);
+        }, nthreads);
+        // The rows above the next source row's reach are complete.
+        add(size_t(y1 - y0), y1 == roi.yend ? m_ext.height() : y1 - m_ext.ybegin - m_reach);
+    }
+    if (roi.yend <= roi.ybegin)
+        add(0, m_ext.height());
+}
+
+void SmoothRows::run(const ROI& window, RowSink& sink, int nthreads) const
+{
+    const ROI both = roi_intersection(window, m_ext);
+    if (both.width() <= 0 || both.height() <= 0)
+        return;
+    // A ring of rows as they are made, each batch handed on before the
+    // next: the rows of one batch are fewer than the ring's.
+    const int nc = m_in.nchannels;
+    const size_t row_len = size_t(m_ext.width()) * nc;
+    const int ring = SmoothAccumulator::ring_rows(m_ext, m_reach, m_order, chunk_rows);
+    const std::unique_ptr<float[]> made(new float[size_t(ring) * row_len]);
+    auto row = [&](int r) { return &made[size_t(r % ring) * row_len]; };
+    make_rows(row, [&](int first, int end) {
+        first = std::max(first, both.ybegin - m_ext.ybegin);
+        end = std::min(end, both.yend - m_ext.ybegin);
+        parallel_for(first, end, [&](int64_t r) {
+            std::vector<double> light(size_t(both.width()) * 4, 0.0);
+            const float* values = row(int(r)) + size_t(both.xbegin - m_ext.xbegin) * nc;
+            for (int x = 0; x < both.width(); ++x)
+                for (int c = 0; c < std::min(nc, 4); ++c)
+                    light[size_t(x) * 4 + c] = values[size_t(x) * nc + c];
+            sink.row(m_ext.ybegin + int(r), both.xbegin, both.xend, light.data());
+        }, by_rows(nthreads));
+    }, nthreads);
+}
+
 bool spread_smooth(ImageBuf& dst, const ImageBuf& src, const ImageBuf& radius, int order,
                    ROI roi, int nthreads)
 {
-    if (order < 2 || order > 3) {
-        dst.errorfmt("spread_smooth: order {} (2: tent, 3: smooth)", order);
+    std::string error;
+    const std::unique_ptr<SmoothRows> spread
+        = SmoothRows::make(src, radius, order, roi, error, nthreads);
+    if (!spread) {
+        dst.errorfmt("{}", error);
         return false;
     }
-    const SpreadInputs in = prepare_spread(dst, src, radius, roi, nthreads);
-    if (!in.valid)
-        return false;
-    const int nc = in.nchannels;
-    if (nc > 8) {
-        dst.errorfmt("spread_smooth: {} channels (at most 8)", nc);
-        return false;
-    }
-    roi = in.roi;
-    const int reach = half_support(order, smooth_widths(order, in.max_radius).w[1]);
-    const ROI ext(roi.xbegin - reach, roi.xend + reach, roi.ybegin - reach, roi.yend + reach, 0,
-                  1, 0, nc);
-    // Source rows are read a chunk at a time, their row profiles made side
-    // by side. Small chunks keep the ring in the caches: interleaved runs
-    // against the whole accumulation held at once took 0.91x the time on a
-    // 1024x540 layer at radius 128 and the same on the 4K example with 16
-    // rows; 1.05x and 1.15x on the 4K example with 32 and 128.
-    constexpr int chunk_rows = 16;
-    SmoothAccumulator acc(ext, reach, nc, order, profile_scale(largest_magnitude(in, nthreads)),
-                          chunk_rows, nthreads);
-    reset_for_overwrite(dst, output_spec(src, ext), nthreads);  // every pixel is written below
+    // Every pixel is written below.
+    reset_for_overwrite(dst, output_spec(src, spread->extent()), nthreads);
     float* out = static_cast<float*>(dst.localpixels());
-    std::vector<SourceRow> rows(chunk_rows);
-    for (int y0 = roi.ybegin; y0 < roi.yend; y0 += chunk_rows) {
-        const int y1 = std::min(roi.yend, y0 + chunk_rows);
-        parallel_for_each_item(y0, y1, [&](int64_t y) { acc.read_row(int(y), in, rows[size_t(y - y0)]); },
-                     nthreads);
-        // The rows above the next source row's reach are complete.
-        acc.add(rows, size_t(y1 - y0), in, y1 == roi.yend ? ext.height() : y1 - ext.ybegin - reach,
-                out, nthreads);
-    }
-    if (roi.yend <= roi.ybegin)
-        acc.add(rows, 0, in, ext.height(), out, nthreads);
+    const size_t row_len = size_t(spread->extent().width()) * src.nchannels();
+    spread->make_rows([&](int r) { return out + size_t(r) * row_len; }, [](int, int) {},
+                      nthreads);
     return true;
 }
 
