@@ -28,6 +28,9 @@ public:
     /// RGBA only: the sink takes 4 channels.
     void run(const OIIO::ROI& window, RowSink& sink, int nthreads) const override;
 
+    /// The most rows make_rows() writes before it calls written().
+    static constexpr int batch_rows = 16;
+
     /// Makes every row of the extent, top to bottom, a batch at a time:
     /// row r (from the extent's first, 0) is written where out(r) says,
     /// all channels, and written(first, end) is called once rows

@@ -285,7 +285,8 @@ public:
                       int source_rows, int nthreads)
         : m_ext(ext), m_nc(nc), m_order(order), m_scale(scale)
         , m_row_len(size_t(ext.width()) * nc)
-        , m_ring_rows(ring_rows(ext, reach, order, source_rows))
+        // Every row a chunk of source rows can write.
+        , m_ring_rows(std::min(ext.height(), source_rows + 2 * reach + order + 1))
         , m_profiles(fresh_array<uint64_t>(size_t(m_ring_rows) * m_row_len, nthreads))
         , m_has_corners(size_t(m_ring_rows), 0)
     {
@@ -314,13 +315,6 @@ public:
 
     /// The rows integrated so far: rows [0, done()) of ext.
     int done() const { return m_done; }
-
-    /// The rows the ring holds: every row a chunk of `source_rows` can
-    /// write, and at most as many as one add() integrates.
-    static int ring_rows(const ROI& ext, int reach, int order, int source_rows)
-    {
-        return std::min(ext.height(), source_rows + 2 * reach + order + 1);
-    }
 
 private:
     struct Columns {
@@ -625,7 +619,7 @@ SmoothRows::SmoothRows(SpreadInputs&& in, int order)
 // the whole accumulation held at once took 0.91x the time on a 1024x540
 // layer at radius 128 and the same on the 4K example with 16 rows; 1.05x
 // and 1.15x on the 4K example with 32 and 128.
-constexpr int chunk_rows = 16;
+constexpr int chunk_rows = SmoothRows::batch_rows;
 
 void SmoothRows::make_rows(const std::function<float*(int)>& out,
                            const std::function<void(int, int)>& written, int nthreads) const
@@ -646,10 +640,12 @@ void SmoothRows::make_rows(const std::function<float*(int)>& out,
             acc.read_row(int(y), m_in, rows[size_t(y - y0)]);
         }, nthreads);
         // The rows above the next source row's reach are complete.
-        add(size_t(y1 - y0), y1 == roi.yend ? m_ext.height() : y1 - m_ext.ybegin - m_reach);
+        add(size_t(y1 - y0), y1 - m_ext.ybegin - m_reach);
     }
-    if (roi.yend <= roi.ybegin)
-        add(0, m_ext.height());
+    // Then those below the last source row, a chunk's rows at a time: no
+    // batch is longer than a chunk.
+    while (acc.done() < m_ext.height())
+        add(0, acc.done() + chunk_rows);
 }
 
 void SmoothRows::run(const ROI& window, RowSink& sink, int nthreads) const
@@ -657,13 +653,12 @@ void SmoothRows::run(const ROI& window, RowSink& sink, int nthreads) const
     const ROI both = roi_intersection(window, m_ext);
     if (both.width() <= 0 || both.height() <= 0)
         return;
-    // A ring of rows as they are made, each batch handed on before the
-    // next: the rows of one batch are fewer than the ring's.
+    // Each batch of rows as it is made, handed on before the next: no
+    // batch is longer than a chunk.
     const int nc = m_in.nchannels;
     const size_t row_len = size_t(m_ext.width()) * nc;
-    const int ring = SmoothAccumulator::ring_rows(m_ext, m_reach, m_order, chunk_rows);
-    const std::unique_ptr<float[]> made(new float[size_t(ring) * row_len]);
-    auto row = [&](int r) { return &made[size_t(r % ring) * row_len]; };
+    const std::unique_ptr<float[]> made(new float[size_t(chunk_rows) * row_len]);
+    auto row = [&](int r) { return &made[size_t(r % chunk_rows) * row_len]; };
     make_rows(row, [&](int first, int end) {
         first = std::max(first, both.ybegin - m_ext.ybegin);
         end = std::min(end, both.yend - m_ext.ybegin);
