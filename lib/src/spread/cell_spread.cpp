@@ -40,6 +40,9 @@ DEFOCUS_KERNEL AxisDeltas axis_deltas(double a, double b, double lo, double hi)
                -(b - fb) * scale } };
 }
 
+/// The gradient of a radius that does not change.
+constexpr float no_gradient[2] = { 0.0f, 0.0f };
+
 /// How much a pixel's footprint through the part of the lens about (ux, uy)
 /// scales the area of the surface it is on, whose radius has `gradient`.
 DEFOCUS_KERNEL double area_scale(double ux, double uy, const float* gradient)
@@ -74,8 +77,9 @@ DEFOCUS_KERNEL void spread_pixel(const ApertureCell& s, double cx, double cy, do
 /// cell's rows. Deltas left of the window add up at its first column (the
 /// rectangles cut there), and those right of it are dropped.
 DEFOCUS_KERNEL void spread_run(const ApertureCell& s, int x0, int x1, double cy, double r,
-                               const float* rgba, const float* gradient, int w, int h,
-                               double* deltas, size_t stride, std::vector<double>& line)
+                               const float* rgba, const float* gradient, size_t gradient_step,
+                               int w, int h, double* deltas, size_t stride,
+                               std::vector<double>& line)
 {
     const double ux = 0.5 * (s.u0 + s.u1), uy = 0.5 * (s.v0 + s.v1);
     const double ua = 0.5 + r * s.u0, ub = 0.5 + r * s.u1;
@@ -86,7 +90,7 @@ DEFOCUS_KERNEL void spread_run(const ApertureCell& s, int x0, int x1, double cy,
     const int n = x1 - x0 + span + 1;
     line.assign(size_t(n) * 4, 0.0);
     double* l = line.data();
-    for (int x = x0; x < x1; ++x, rgba += 4, gradient += 2) {
+    for (int x = x0; x < x1; ++x, rgba += 4, gradient += gradient_step) {
         const d4 value = load4(rgba) * splat(area_scale(ux, uy, gradient));
         double* p = l + size_t(x - x0) * 4;
         for (int k = 0; k < 4; ++k) {
@@ -154,20 +158,23 @@ void spread_pixels(const SignedLayer& layer, const ApertureCell& cell, const OII
                 continue;
             const size_t first = row * width + size_t(begin - layer.roi.xbegin);
             const float* rgba = layer.color + first * 4;
-            const float* slope = layer.gradient.data() + first * 2;
+            // A layer of one radius has no gradient: every pixel's reads
+            // the same zeros.
+            const size_t step = layer.gradient.empty() ? 0 : 2;
+            const float* slope = step ? layer.gradient.data() + first * 2 : no_gradient;
             const int wx0 = begin - window.xbegin, wx1 = end - window.xbegin;
             // A run costs its length plus its footprint's width, a pixel
             // alone 4 times its length.
             const double footprint = std::abs(r * (cell.u1 - cell.u0));
             if (wx1 - wx0 >= 4 && 4.0 * (wx1 - wx0) > footprint) {
-                spread_run(cell, wx0, wx1, cy, r, rgba, slope, w, h, deltas, stride, line);
+                spread_run(cell, wx0, wx1, cy, r, rgba, slope, step, w, h, deltas, stride, line);
                 continue;
             }
             for (int px = wx0; px < wx1; ++px) {
                 const size_t i = size_t(px - wx0);
                 spread_pixel(cell, px + 0.5, cy, r,
-                             load4(rgba + i * 4) * splat(area_scale(ux, uy, slope + i * 2)), w,
-                             h, deltas, stride);
+                             load4(rgba + i * 4) * splat(area_scale(ux, uy, slope + i * step)),
+                             w, h, deltas, stride);
             }
         }
     }
@@ -241,6 +248,8 @@ void SignedLayer::set(const OIIO::ROI& pixels, const float* rgba, const float* r
     const size_t blocks = (height + block_rows - 1) / block_rows;
     std::vector<std::vector<PixelRun>> found(blocks);
     std::vector<float> lowest(blocks, INFINITY), highest(blocks, -INFINITY);
+    // The radius's own range over the lit pixels, before quantizing.
+    std::vector<float> least(blocks, INFINITY), most(blocks, -INFINITY);
     row_runs.assign(height + 1, 0);
     parallel_for_each_item(0, int64_t(blocks), [&](int64_t b) {
         for (size_t y = size_t(b) * block_rows; y < std::min(height, (size_t(b) + 1) * block_rows);
@@ -256,6 +265,10 @@ void SignedLayer::set(const OIIO::ROI& pixels, const float* rgba, const float* r
                 size_t end = x + 1;
                 while (end < width && quantized(radius[row + end]) == r && lit(end))
                     ++end;
+                for (size_t i = x; i < end; ++i) {
+                    least[b] = std::min(least[b], radius[row + i]);
+                    most[b] = std::max(most[b], radius[row + i]);
+                }
                 found[b].push_back({ roi.xbegin + int(x), roi.xbegin + int(end), r });
                 lowest[b] = std::min(lowest[b], r);
                 highest[b] = std::max(highest[b], r);
@@ -284,6 +297,11 @@ void SignedLayer::set(const OIIO::ROI& pixels, const float* rgba, const float* r
     radii[1] = blocks > 0 ? *std::max_element(highest.begin(), highest.end()) : 0.0f;
     if (radii[0] > radii[1])
         radii[0] = radii[1] = 0.0f;
+    gradient.clear();
+    if (blocks == 0
+        || *std::min_element(least.begin(), least.end())
+               >= *std::max_element(most.begin(), most.end()))
+        return;
     gradient.assign(size_t(roi.npixels()) * 2, 0.0f);
     parallel_for_each_item(0, int64_t(height), [&](int64_t row) {
         const size_t y = size_t(row);

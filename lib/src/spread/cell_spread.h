@@ -44,7 +44,9 @@ struct SignedLayer {
     const float* color = nullptr;    ///< 4 floats a pixel
     std::vector<PixelRun> runs;      ///< row by row, left to right
     std::vector<size_t> row_runs;    ///< row y's runs start at row_runs[y - roi.ybegin]; one past
-    std::vector<float> gradient;     ///< ∂ρ/∂x, ∂ρ/∂y a pixel, 0 across a step in depth
+    /// ∂ρ/∂x, ∂ρ/∂y a pixel, 0 across a step in depth; empty where every
+    /// lit pixel has the same radius (a layer at one depth: the sky).
+    std::vector<float> gradient;
     float extent = 1.0f;             ///< how far the aperture reaches per unit of radius
     float radii[2] = { 0.0f, 0.0f }; ///< the lowest and highest signed radius lit
     OIIO::ROI lit;                   ///< the bounds of the lit pixels (undefined: none)
