@@ -146,7 +146,7 @@ bool layer_scene(Scene&& scene, const Shot& shot, int frame, const ShotAssets& a
         const RebuiltPixels& rebuilt = slicing.rebuilt;
         if (rebuilt.total() > 0)
             out.rebuilt = format("hidden background rebuilt: {} px ({} patterns copied across "
-                                 "thin holes, {} along lines, {} smooth fill, {} continued "
+                                 "holes, {} along lines, {} smooth fill, {} continued "
                                  "behind edges)",
                                  rebuilt.total(), rebuilt.patterns, rebuilt.lines,
                                  rebuilt.smooth, rebuilt.continued);

@@ -20,6 +20,13 @@ constexpr int side_pixels = 5;
 /// width: a period of the pattern must fit.
 constexpr int search_reach = 64;
 
+/// The widest run whose copy is trusted on the match of its own sides.
+constexpr int widest_lone_run = 32;
+
+/// The lines on either side of a wide run whose copies are compared with
+/// its own.
+constexpr int neighbour_lines = 6;
+
 /// Side pixels covered less than this (beside a nearer edge, or the
 /// layer's own edge) are not compared.
 constexpr float min_side_coverage = 0.25f;
@@ -264,9 +271,48 @@ void ContinuedPatterns::continue_runs(bool along_rows,
             while (run.end < u0 + length && hidden(run.end, v))
                 ++run.end;
             u = run.end;
+            const int width = run.end - run.begin;
+            if (width > m_max_width)
+                continue;
             Copy copy;
-            if (run.end - run.begin <= m_max_width && best_copy(along_rows, run, copy))
+            // A wide run without a copy still counts against those beside it.
+            if (!best_copy(along_rows, run, copy))
+                copy = {};
+            if (copy.trust > 0.0f || width > widest_lone_run)
                 copied[size_t(line)].push_back({ run.begin, run.end, copy });
+        }
+    }, by_rows(nthreads));
+    weigh_by_neighbours(along_rows, copied, nthreads);
+}
+
+void ContinuedPatterns::weigh_by_neighbours(bool along_rows,
+                                            std::vector<std::vector<CopiedRun>>& copied,
+                                            int nthreads)
+{
+    auto shift = [&](const Copy& copy) { return along_rows ? copy.dx : copy.dy; };
+    const int lines = int(copied.size());
+    // Only the trust of wide runs is written, and only the shifts read.
+    parallel_for(0, lines, [&](int64_t line) {
+        for (CopiedRun& run : copied[size_t(line)]) {
+            if (run.end - run.begin <= widest_lone_run || run.copy.trust <= 0.0f)
+                continue;
+            int asked = 0, agreeing = 0;
+            for (int other = std::max(0, int(line) - neighbour_lines);
+                 other <= std::min(lines - 1, int(line) + neighbour_lines); ++other) {
+                if (other == int(line))
+                    continue;
+                bool crossed = false, same = false;
+                for (const CopiedRun& beside : copied[size_t(other)])
+                    if (beside.begin < run.end && beside.end > run.begin) {
+                        crossed = true;
+                        // A run beside without a copy has shift 0, which
+                        // no copy has.
+                        same = same || std::abs(shift(beside.copy) - shift(run.copy)) <= 1;
+                    }
+                asked += crossed;
+                agreeing += same;
+            }
+            run.copy.trust *= asked > 0 ? float(agreeing) / float(asked) : 0.0f;
         }
     }, by_rows(nthreads));
 }

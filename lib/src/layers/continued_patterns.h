@@ -1,5 +1,5 @@
-// Internal: the surface behind a thin hole, copied from where the pixels on
-// its two sides repeat along its row or column (exemplar-based filling,
+// Internal: the surface behind a hole, copied from where the pixels on its
+// two sides repeat along its row or column (exemplar-based filling,
 // Criminisi, Perez & Toyama 2004, restricted to one line of search).
 #pragma once
 
@@ -12,12 +12,17 @@
 
 namespace defocus {
 
-/// For each hidden pixel of a layer in a thin hole, the surface behind it
+/// For each hidden pixel of a layer in a hole, the surface behind it
 /// copied from the same row (for a hole's run along a row) or column,
 /// shifted to where the pixels beside the run, on both sides and on the
 /// rows (columns) next to it, look most alike: a checker, bricks or
-/// stripes behind a thin pole continue with their period, which a line
-/// between the hole's two sides blurs into a blotch. A copy holds no colour
+/// stripes behind a pole or a card continue with their period, which a line
+/// between the hole's two sides blurs into a blotch. Across a wide run,
+/// sides that match on one line may match by chance (arcs of a curved
+/// surface match a different shift on every row, and copies would cut
+/// them into streaks), so a run wider than `widest_lone_run` is trusted
+/// only as far as the runs on the lines beside it copy from the same
+/// shift, as a pattern that repeats along the line does. A copy holds no colour
 /// its sides do not (a light from afar). Copies come only from
 /// seen pixels of the layer (not those continued behind a nearer edge) no
 /// nearer than the run's sides. Each value
@@ -41,7 +46,7 @@ public:
 private:
     struct Copy {
         int dx = 0, dy = 0;
-        float trust = 0.0f;
+        float trust = 0.0f;  ///< 0: none found
     };
     /// A run's copy: pixels [begin, end) along its line.
     struct CopiedRun {
@@ -56,6 +61,10 @@ private:
     static void pixel(bool along_rows, int u, int v, int& x, int& y);
     void continue_runs(bool along_rows, std::vector<std::vector<CopiedRun>>& copied,
                        int nthreads);
+    /// Each wide run's trust times the share of the lines beside it, of
+    /// those with a run across it, that copy from the same shift.
+    static void weigh_by_neighbours(bool along_rows, std::vector<std::vector<CopiedRun>>& copied,
+                                    int nthreads);
     /// The copy of the run along line `v` of `copied` that holds `u`, or
     /// null.
     static const Copy* copy_at(const std::vector<std::vector<CopiedRun>>& copied, int first_line,

@@ -119,9 +119,11 @@ int line_length(double max_distance)
     return int(std::min(4.0 * max_distance, 65535.0));
 }
 
-/// The widest run of a hole that a pattern is copied across: beyond it, a
-/// copy from along the same row joins unrelated surfaces.
-constexpr int widest_pattern_run = 32;
+/// The widest run of a hole that a pattern is copied across (a card before
+/// a checker wall): beyond it, a copy from along the same row joins
+/// unrelated surfaces. Runs wider than ContinuedPatterns' lone runs are
+/// copied only as far as the lines beside them agree.
+constexpr int widest_pattern_run = 128;
 
 /// The first pyramid level over `window`: per cell of 2x2 pixels, the sums
 /// over its observed pixels (those not in `holes`), each weighed so that it counts as no brighter than
