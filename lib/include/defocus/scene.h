@@ -18,7 +18,7 @@ enum class RebuiltBy : uint8_t {
     Smooth,     ///< the push-pull average
     Lines,      ///< structure continued along lines across a thin hole
     Patterns,   ///< a pattern copied from one period along
-    Continued,  ///< a surface continued behind a nearer edge (mixed pixels)
+    Continued,  ///< a surface continued behind a nearer edge (mixed pixels, cut lights)
 };
 
 /// One layer: premultiplied colour and its planar camera-space depth over

@@ -1,5 +1,7 @@
 // Filling the background a flat render cannot see: structure continued
-// along lines across thin holes (continued_lines.h), over push-pull
+// along lines across thin holes (continued_lines.h), patterns copied across
+// holes (continued_patterns.h), cut lights continued as discs
+// (continued_lights.h), over push-pull
 // (Gortler, Grzeszczuk, Szeliski & Cohen, "The Lumigraph", SIGGRAPH 1996).
 #include <defocus/layers/layering.h>
 
@@ -11,6 +13,7 @@
 #include <OpenImageIO/parallel.h>
 
 #include "layers/brightness.h"
+#include "layers/continued_lights.h"
 #include "layers/continued_lines.h"
 #include "layers/continued_patterns.h"
 #include "layers/hole_map.h"
@@ -118,6 +121,10 @@ int line_length(double max_distance)
 {
     return int(std::min(4.0 * max_distance, 65535.0));
 }
+
+/// How many times brighter than the layer's seen mean a small patch is to
+/// be a light, which is continued behind what cuts it.
+constexpr float light_brightness = 4.0f;
 
 /// The widest run of a hole that a pattern is copied across (a card before
 /// a checker wall): beyond it, a copy from along the same row joins
@@ -235,21 +242,21 @@ void fill_holes(Layer& layer, const HoleMap& holes, const ROI& hidden, const ROI
         observed_cells(color, depth, holes, window, seen_brightness, nthreads),
         pyramid_levels(max_distance), nthreads);
 
-    // Lines start at hidden pixels and read as far as their reach.
+    // Lines and copies start at hidden pixels and read as far as their reach.
+    auto reaching = [&](int reach) {
+        return roi_intersection(ROI(hidden.xbegin - reach, hidden.xend + reach,
+                                    hidden.ybegin - reach, hidden.yend + reach),
+                                window);
+    };
     const int length = line_length(max_distance);
-    const int reach = ContinuedLines::reach(length);
-    const ROI line_window = roi_intersection(
-        ROI(hidden.xbegin - reach, hidden.xend + reach, hidden.ybegin - reach, hidden.yend + reach),
-        window);
-    const ContinuedLines lines(color, depth, holes, line_window, length, nthreads);
+    const ContinuedLines lines(color, depth, holes, reaching(ContinuedLines::reach(length)),
+                               length, nthreads);
     const int pattern_width = std::min(length, widest_pattern_run);
-    const int pattern_reach = ContinuedPatterns::reach(pattern_width);
-    const ContinuedPatterns patterns(
-        color, depth, holes,
-        roi_intersection(ROI(hidden.xbegin - pattern_reach, hidden.xend + pattern_reach,
-                             hidden.ybegin - pattern_reach, hidden.yend + pattern_reach),
-                         window),
-        pattern_width, nthreads);
+    const ContinuedPatterns patterns(color, depth, holes,
+                                     reaching(ContinuedPatterns::reach(pattern_width)),
+                                     pattern_width, nthreads);
+    const ContinuedLights lights(color, depth, holes, window, light_brightness * seen_brightness,
+                                 nthreads);
 
     std::vector<RebuiltPixels> rows(size_t(window.height()));
     parallel_for(window.ybegin, window.yend, [&](int y) {
@@ -268,8 +275,9 @@ void fill_holes(Layer& layer, const HoleMap& holes, const ROI& hidden, const ROI
             // `weight` keeps each one's share.
             float mean[5], estimate[5], trust = 0.0f;
             bool found = pull(pyramid[0], i, y - window.ybegin, mean);
-            // In RebuiltBy's order from Smooth: smooth, lines, patterns.
-            float weight[3] = { found ? 1.0f : 0.0f, 0.0f, 0.0f };
+            // In RebuiltBy's order from Smooth: smooth, lines, patterns,
+            // continued (a cut light).
+            float weight[4] = { found ? 1.0f : 0.0f, 0.0f, 0.0f, 0.0f };
             auto blend = [&](int method) {
                 if (!found)
                     trust = 1.0f;
@@ -284,14 +292,16 @@ void fill_holes(Layer& layer, const HoleMap& holes, const ROI& hidden, const ROI
                 blend(1);
             if (patterns.at(x, y, estimate, trust))
                 blend(2);
-            if (!found)
-                continue;
-            if (mean[3] <= 0.0f)
+            if (lights.at(x, y, estimate)) {
+                trust = 1.0f;
+                blend(3);
+            }
+            if (!found || mean[3] <= 0.0f)
                 continue;
             std::copy(mean, mean + 4, color_row + 4 * size_t(i));
             depth_row[i] = mean[4] / mean[3];
             const RebuiltBy by = RebuiltBy(int(RebuiltBy::Smooth)
-                                           + (std::max_element(weight, weight + 3) - weight));
+                                           + (std::max_element(weight, weight + 4) - weight));
             rebuilt_row[i] = uint8_t(by);
             counts.add(by);
         }

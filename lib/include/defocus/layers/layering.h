@@ -71,7 +71,7 @@ struct RebuiltPixels {
     int64_t smooth = 0;     ///< the push-pull average
     int64_t lines = 0;      ///< structure continued along lines across a thin hole
     int64_t patterns = 0;   ///< a pattern copied from one period along
-    int64_t continued = 0;  ///< a surface continued behind a nearer edge (mixed pixels)
+    int64_t continued = 0;  ///< a surface continued behind a nearer edge (mixed pixels, cut lights)
 
     int64_t total() const { return smooth + lines + patterns + continued; }
     /// One more pixel rebuilt by `by` (not RebuiltBy::Seen).
