@@ -573,9 +573,10 @@ TEST_CASE("a checker behind a thin pole continues with its period")
 
 TEST_CASE("a checker behind a wide card continues with its period, and curved stripes do not streak")
 {
-    // A card 60 px wide (CoC -70) over a checker of checks 15 px wide: each
-    // row behind it is copied from a period or more along, as the rows
-    // beside it are (the smooth fill and lines alone leave it 0.6 rms off).
+    // A card 60 px wide over a checker of checks 15 px wide: each row
+    // behind it is copied from a period or more along, as the rows beside
+    // it are (the smooth fill and lines alone leave it 0.6 rms off), also
+    // where the card's blur (CoC -24) lets lines reach only 48 px across.
     // Arcs of stripes behind the same card match a shift on one row by
     // chance and another on the next: copies the rows beside them do not
     // share cut the arcs into horizontal streaks: steps down the columns
@@ -586,13 +587,16 @@ TEST_CASE("a checker behind a wide card continues with its period, and curved st
     auto arcs = [](int x, int y) {
         return int(std::hypot(x - 150.0, y - 130.0) / 8.0) % 2 ? 0.9f : 0.1f;
     };
-    for (const bool curved : { false, true }) {
+    // At focus 0.5, 1 / 4.1 is CoC -70 and 1 / 2.72 CoC -24.
+    for (const auto& [curved, card_depth] : { std::pair { false, 1.0f / 4.1f },
+                                              std::pair { false, 1.0f / 2.72f },
+                                              std::pair { true, 1.0f / 4.1f } }) {
         auto wall = [&](int x, int y) { return curved ? arcs(x, y) : checker(x, y); };
         Scene scene = flat_scene([&](int x, int y, float* rgba, float& z) {
             const bool in_card = card.contains(x, y);
             std::fill(rgba, rgba + 3, in_card ? 0.05f : wall(x, y));
             rgba[3] = 1.0f;
-            z = in_card ? 1.0f / 4.1f : 0.5f;  // CoC -70 and 0 at focus 0.5
+            z = in_card ? card_depth : 0.5f;
         }, 300, 100);
         const LayeredScene layers = cut(std::move(scene), synthetic_camera(0.5)).layers;
         const Layer& back = layers.layers.front();
@@ -606,9 +610,9 @@ TEST_CASE("a checker behind a wide card continues with its period, and curved st
                 wall_steps += std::abs(wall(x, y + 1) - wall(x, y));
             }
         const double rms = std::sqrt(squares / count);
-        INFO((curved ? "arcs" : "checker") << " behind the card: " << rms << " rms off; steps "
-                                           << "down the columns " << steps << " against the "
-                                           << "wall's " << wall_steps);
+        INFO((curved ? "arcs" : "checker") << " behind the card at depth " << card_depth << ": "
+                                           << rms << " rms off; steps down the columns "
+                                           << steps << " against the wall's " << wall_steps);
         if (curved)
             CHECK(steps < 2.0 * wall_steps);
         else

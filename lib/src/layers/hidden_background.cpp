@@ -129,7 +129,10 @@ constexpr float light_brightness = 4.0f;
 /// The widest run of a hole that a pattern is copied across (a card before
 /// a checker wall): beyond it, a copy from along the same row joins
 /// unrelated surfaces. Runs wider than ContinuedPatterns' lone runs are
-/// copied only as far as the lines beside them agree.
+/// copied only as far as the lines beside them agree. Not bound by the
+/// lines' length: a line interpolates between its ends, a copy is checked
+/// against its sides, and a run is copied whole or not at all, so its
+/// pixels near the sides, which the lens sees, need the whole run.
 constexpr int widest_pattern_run = 128;
 
 /// The first pyramid level over `window`: per cell of 2x2 pixels, the sums
@@ -251,10 +254,9 @@ void fill_holes(Layer& layer, const HoleMap& holes, const ROI& hidden, const ROI
     const int length = line_length(max_distance);
     const ContinuedLines lines(color, depth, holes, reaching(ContinuedLines::reach(length)),
                                length, nthreads);
-    const int pattern_width = std::min(length, widest_pattern_run);
     const ContinuedPatterns patterns(color, depth, holes,
-                                     reaching(ContinuedPatterns::reach(pattern_width)),
-                                     pattern_width, nthreads);
+                                     reaching(ContinuedPatterns::reach(widest_pattern_run)),
+                                     widest_pattern_run, nthreads);
     const ContinuedLights lights(color, depth, holes, window, light_brightness * seen_brightness,
                                  nthreads);
 
