@@ -588,9 +588,12 @@ TEST_CASE("a checker behind a wide card continues with its period, and curved st
         return int(std::hypot(x - 150.0, y - 130.0) / 8.0) % 2 ? 0.9f : 0.1f;
     };
     // At focus 0.5, 1 / 4.1 is CoC -70 and 1 / 2.72 CoC -24.
-    for (const auto& [curved, card_depth] : { std::pair { false, 1.0f / 4.1f },
-                                              std::pair { false, 1.0f / 2.72f },
-                                              std::pair { true, 1.0f / 4.1f } }) {
+    // (Not a structured binding: C++17 lambdas cannot capture one.)
+    for (const auto& wall_and_card : { std::pair { false, 1.0f / 4.1f },
+                                       std::pair { false, 1.0f / 2.72f },
+                                       std::pair { true, 1.0f / 4.1f } }) {
+        const bool curved = wall_and_card.first;
+        const float card_depth = wall_and_card.second;
         auto wall = [&](int x, int y) { return curved ? arcs(x, y) : checker(x, y); };
         Scene scene = flat_scene([&](int x, int y, float* rgba, float& z) {
             const bool in_card = card.contains(x, y);
