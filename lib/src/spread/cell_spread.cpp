@@ -262,13 +262,12 @@ void SignedLayer::set(const OIIO::ROI& pixels, const float* rgba, const float* r
                     continue;
                 }
                 const float r = quantized(radius[row + x]);
-                size_t end = x + 1;
-                while (end < width && quantized(radius[row + end]) == r && lit(end))
+                size_t end = x;
+                do {
+                    least[b] = std::min(least[b], radius[row + end]);
+                    most[b] = std::max(most[b], radius[row + end]);
                     ++end;
-                for (size_t i = x; i < end; ++i) {
-                    least[b] = std::min(least[b], radius[row + i]);
-                    most[b] = std::max(most[b], radius[row + i]);
-                }
+                } while (end < width && quantized(radius[row + end]) == r && lit(end));
                 found[b].push_back({ roi.xbegin + int(x), roi.xbegin + int(end), r });
                 lowest[b] = std::min(lowest[b], r);
                 highest[b] = std::max(highest[b], r);
