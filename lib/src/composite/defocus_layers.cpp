@@ -264,14 +264,12 @@ void composite_image(ImageBuf& frame, const ImageBuf& layer, const ChannelPass& 
 {
     const ROI both = roi_intersection(frame.roi(), layer.roi());
     Over over(frame, pass, false, &cells, index);
+    if (both.width() <= 0)
+        return;
     parallel_for(both.ybegin, both.yend, [&](int y) {
-        std::vector<double> row(size_t(std::max(0, both.width())) * 4);
-        for (int x = both.xbegin; x < both.xend; ++x)
-            for (int c = 0; c < 4; ++c)
-                row[size_t(x - both.xbegin) * 4 + c]
-                    = static_cast<const float*>(layer.pixeladdr(x, y))[c];
-        if (both.width() > 0)
-            over.row(y, both.xbegin, both.xend, row.data());
+        over.float_row(y, both.xbegin, both.xend,
+                       static_cast<const float*>(layer.pixeladdr(both.xbegin, y)),
+                       layer.nchannels());
     }, by_rows(nthreads));
 }
 

@@ -31,6 +31,7 @@
 // sink as they are made, so that compositing needs no layer-sized buffer.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -57,6 +58,16 @@ public:
     /// Row y over columns [x_begin, x_end) is black. Skipped by default:
     /// most sinks add.
     virtual void dark(int /*y*/, int /*x_begin*/, int /*x_end*/) {}
+    /// row() of pixels held as floats, `nc` channels a pixel (the first
+    /// four are RGBA; fewer leave the rest 0), widened to doubles.
+    void float_row(int y, int x_begin, int x_end, const float* values, int nc)
+    {
+        std::vector<double> rgba(size_t(std::max(0, x_end - x_begin)) * 4, 0.0);
+        for (size_t x = 0; x < rgba.size() / 4; ++x)
+            for (int c = 0; c < std::min(nc, 4); ++c)
+                rgba[x * 4 + c] = values[x * size_t(nc) + c];
+        row(y, x_begin, x_end, rgba.data());
+    }
 };
 
 /// A layer's spread, handed to a sink a row at a time as it is made, so

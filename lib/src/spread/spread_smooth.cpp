@@ -663,12 +663,8 @@ void SmoothRows::run(const ROI& window, RowSink& sink, int nthreads) const
         first = std::max(first, both.ybegin - m_ext.ybegin);
         end = std::min(end, both.yend - m_ext.ybegin);
         parallel_for(first, end, [&](int64_t r) {
-            std::vector<double> light(size_t(both.width()) * 4, 0.0);
-            const float* values = row(int(r)) + size_t(both.xbegin - m_ext.xbegin) * nc;
-            for (int x = 0; x < both.width(); ++x)
-                for (int c = 0; c < std::min(nc, 4); ++c)
-                    light[size_t(x) * 4 + c] = values[size_t(x) * nc + c];
-            sink.row(m_ext.ybegin + int(r), both.xbegin, both.xend, light.data());
+            sink.float_row(m_ext.ybegin + int(r), both.xbegin, both.xend,
+                           row(int(r)) + size_t(both.xbegin - m_ext.xbegin) * nc, nc);
         }, by_rows(nthreads));
     }, nthreads);
 }
