@@ -666,6 +666,30 @@ TEST_CASE("a light half behind a pole is continued behind it as the disc it is")
     CHECK(slicing.rebuilt.continued > 0);
 }
 
+TEST_CASE("a light in an infinitely far sky, half behind a pole, is continued without NaNs")
+{
+    // A star beside a pole: the light and the sky around it at infinite
+    // depth. Blending the disc over its surroundings took 0 times an
+    // infinite weighted depth, NaN, in 100 pixels.
+    const ROI pole(54, 62, 0, 80);
+    Scene scene = flat_scene([&](int x, int y, float* rgba, float& z) {
+        const bool in_pole = pole.contains(x, y);
+        const bool in_light = std::hypot(x + 0.5 - 62.0, y + 0.5 - 40.0) < 5.0;
+        std::fill(rgba, rgba + 3, in_pole ? 0.05f : in_light ? 6.0f : 0.3f);
+        rgba[3] = 1.0f;
+        z = in_pole ? 1.0f / 2.9f : INFINITY;
+    });
+    const auto [layers, slicing] = cut(std::move(scene), synthetic_camera(0.5));
+    CHECK(slicing.rebuilt.continued > 0);
+    int64_t nans = 0;
+    for (const Layer& layer : layers.layers)
+        for (const ImageBuf* image : { &layer.color, &layer.depth })
+            for (OIIO::ImageBuf::ConstIterator<float> p(*image); !p.done(); ++p)
+                for (int c = 0; c < image->nchannels(); ++c)
+                    nans += std::isnan(p[c]);
+    CHECK(nans == 0);
+}
+
 TEST_CASE("a volume deep sample is spread over the depth it spans")
 {
     // Volume samples (ZBack > Z), as Houdini, Karma or RenderMan write fog,

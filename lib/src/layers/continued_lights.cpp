@@ -6,6 +6,7 @@
 #include <OpenImageIO/parallel.h>
 
 #include "layers/brightness.h"
+#include "layers/observation.h"
 #include "util/parallel_rows.h"
 
 namespace defocus {
@@ -251,10 +252,10 @@ bool ContinuedLights::fit(const Patch& patch, Light& light) const
                 rim.push_back(p);
             continue;
         }
-        const float* c = m_color(p.x, p.y);
-        for (int i = 0; i < 4; ++i)
-            inside[i] += c[i];
-        inside[4] += c[3] * *m_depth(p.x, p.y);
+        float value[5];
+        observe(m_color, m_depth, p.x, p.y, value);
+        for (int i = 0; i < 5; ++i)
+            inside[i] += value[i];
         ++inside_count;
     }
     double cx, cy, radius;
@@ -279,9 +280,10 @@ bool ContinuedLights::fit(const Patch& patch, Light& light) const
             values.push_back(brightness(c));
             if (bright(x, y) || (c[3] > 0.0f && brightness(c) > m_highlight * c[3]))
                 continue;
-            for (int i = 0; i < 4; ++i)
-                surroundings[i] += c[i];
-            surroundings[4] += c[3] * *m_depth(x, y);
+            float value[5];
+            observe(m_color, m_depth, x, y, value);
+            for (int i = 0; i < 5; ++i)
+                surroundings[i] += value[i];
             floor += values.back();
             ++surrounding_count;
         }

@@ -5,6 +5,7 @@
 
 #include <OpenImageIO/parallel.h>
 
+#include "layers/observation.h"
 #include "util/parallel_rows.h"
 
 namespace defocus {
@@ -234,9 +235,7 @@ void ContinuedLines::steps_to_observed(int dx, int dy, std::vector<uint16_t>& st
 
 void ContinuedLines::observation(int x, int y, float value[5]) const
 {
-    const float* c = m_color(x, y);
-    std::copy(c, c + 4, value);
-    value[4] = c[3] > 0.0f ? c[3] * std::min(*m_depth(x, y), 1e30f) : 0.0f;
+    observe(m_color, m_depth, x, y, value);
 }
 
 float ContinuedLines::change_beyond(int x, int y, int dx, int dy, const float end[5]) const

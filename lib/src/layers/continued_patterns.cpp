@@ -5,6 +5,7 @@
 
 #include <OpenImageIO/parallel.h>
 
+#include "layers/observation.h"
 #include "util/parallel_rows.h"
 
 namespace defocus {
@@ -78,9 +79,7 @@ bool ContinuedPatterns::observed(int x, int y) const
 
 void ContinuedPatterns::observation(int x, int y, float value[5]) const
 {
-    const float* c = m_color(x, y);
-    std::copy(c, c + 4, value);
-    value[4] = c[3] > 0.0f ? c[3] * std::min(*m_depth(x, y), 1e30f) : 0.0f;
+    observe(m_color, m_depth, x, y, value);
 }
 
 /// One run of hidden pixels along a line: u along it, v across.
