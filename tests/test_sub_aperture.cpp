@@ -44,13 +44,17 @@ struct Stack {
     LayeredScene scene;
     std::vector<LensLayer> lens;
 
-    /// The display window 600 × 400 from (`display_x`, 0).
-    explicit Stack(int display_x = 0)
+    ROI data;
+
+    /// The display window 600 × 400 from (`display_x`, 0), the data window
+    /// `data_window`.
+    explicit Stack(int display_x = 0, const ROI& data_window = frame)
+        : data(data_window)
     {
         scene.source = "synthetic";
-        scene.spec = OIIO::ImageSpec(frame.width(), frame.height(), 4, OIIO::TypeFloat);
-        scene.spec.x = frame.xbegin;
-        scene.spec.y = frame.ybegin;
+        scene.spec = OIIO::ImageSpec(data.width(), data.height(), 4, OIIO::TypeFloat);
+        scene.spec.x = data.xbegin;
+        scene.spec.y = data.ybegin;
         scene.spec.full_x = display_x;
         scene.spec.full_y = 0;
         scene.spec.full_width = 600;
@@ -61,11 +65,11 @@ struct Stack {
     void add(const char* name, float depth, const Shade& shade)
     {
         const CircleOfConfusion coc(lens_camera(), scene.spec.roi_full());
-        Layer layer { name, zero_image(frame, 4), zero_image(frame, 1) };
-        LensLayer seen { zero_image(frame, 4), zero_image(frame, 1) };
+        Layer layer { name, zero_image(data, 4), zero_image(data, 1) };
+        LensLayer seen { zero_image(data, 4), zero_image(data, 1) };
         layer.color.specmod().alpha_channel = 3;
-        for (int y = frame.ybegin; y < frame.yend; ++y)
-            for (int x = frame.xbegin; x < frame.xend; ++x) {
+        for (int y = data.ybegin; y < data.yend; ++y)
+            for (int x = data.xbegin; x < data.xend; ++x) {
                 float rgba[4] = { 0, 0, 0, 0 };
                 shade(x, y, rgba);
                 const float radius = float(0.5 * coc.diameter(depth, x, y));
@@ -89,16 +93,14 @@ struct Stack {
     }
 };
 
-/// A light 20 times brighter than the wall around it, at 10 m, behind
-/// vertical bars at 1 m, 4 px wide every 16 px; `bars` says which columns
-/// of bars there are (by index from the centre). The light is at the
-/// centre, or `light_x` across; the display window from `display_x`.
-Stack fence(const std::function<bool(int bar)>& bars, int light_x = centre_x,
-            int display_x = 0)
+/// Lights 20 times brighter than the wall around them (where `lit` says),
+/// at 10 m, behind vertical bars at 1 m, 4 px wide every 16 px; `bars`
+/// says which columns of bars there are (by index from the centre).
+Stack fence(const std::function<bool(int bar)>& bars, const std::function<bool(int x, int y)>& lit,
+            Stack stack)
 {
-    Stack stack(display_x);
-    stack.add("light", 10.0f, [=](int x, int y, float* rgba) {
-        const bool light = std::hypot(x + 0.5 - light_x, y + 0.5 - centre_y) < 3.0;
+    stack.add("light", 10.0f, [&](int x, int y, float* rgba) {
+        const bool light = lit(x, y);
         rgba[0] = rgba[1] = rgba[2] = light ? 1.0f : 0.05f;
         rgba[3] = 1.0f;
     });
@@ -111,6 +113,16 @@ Stack fence(const std::function<bool(int bar)>& bars, int light_x = centre_x,
         }
     });
     return stack;
+}
+
+/// The fence before one light at the centre, or `light_x` across; the
+/// display window from `display_x`.
+Stack fence(const std::function<bool(int bar)>& bars, int light_x = centre_x, int display_x = 0)
+{
+    return fence(
+        bars,
+        [=](int x, int y) { return std::hypot(x + 0.5 - light_x, y + 0.5 - centre_y) < 3.0; },
+        Stack(display_x));
 }
 
 /// The light's bokeh: its 20 px CoC around the centre.
@@ -128,6 +140,24 @@ TEST_CASE("a fence before a far light cuts its shadow into the light's bokeh")
          << " dB with cells, " << one << " dB with one cell");
     CHECK(cells >= 35.0);
     CHECK(one < cells - 5.0);
+}
+
+TEST_CASE("a fence before a row of lights wider than a window of cells is cut into none")
+{
+    // A data window 15 tiles wide with lights all along it: the cells are
+    // spread in windows of at most 8 tiles, and the lights' bokeh crosses
+    // from one window into the next.
+    const ROI wide(60, 540, 160, 240, 0, 1, 0, 4);
+    auto every_40_px = [&](int x, int y) {
+        const double along = x + 0.5 - wide.xbegin;
+        return std::hypot(along - 40.0 * std::round(along / 40.0), y + 0.5 - centre_y) < 3.0;
+    };
+    const Stack stack = fence([](int) { return true; }, every_40_px, Stack(0, wide));
+    const ROI lights(wide.xbegin + 16, wide.xend - 16, centre_y - 12, centre_y + 12, 0, 1, 0, 4);
+    const ImageBuf exact = thin_lens(stack.lens, lights);
+    const double cells = psnr_over(stack.engine(0), exact, lights);
+    WARN("fence before a row of lights, against the thin lens: " << cells << " dB with cells");
+    CHECK(cells >= 35.0);
 }
 
 TEST_CASE("the fence's shadow runs on past the data window into a grown one")

@@ -87,17 +87,41 @@ DEFOCUS_KERNEL void spread_run(const ApertureCell& s, int x0, int x1, double cy,
     const int span = taps.at[3] - taps.at[0];
     const double ya = cy + r * s.v0, yb = cy + r * s.v1;
     const AxisDeltas ys = axis_deltas(std::min(ya, yb), std::max(ya, yb), 0.0, h);
-    const int n = x1 - x0 + span + 1;
-    line.assign(size_t(n) * 4, 0.0);
-    double* l = line.data();
-    for (int x = x0; x < x1; ++x, rgba += 4, gradient += gradient_step) {
-        const d4 value = load4(rgba) * splat(area_scale(ux, uy, gradient));
-        double* p = l + size_t(x - x0) * 4;
-        for (int k = 0; k < 4; ++k) {
-            double* q = p + size_t(taps.at[k] - taps.at[0]) * 4;
-            store4(q, load4(q) + splat(taps.weight[k]) * value);
-        }
+    // Entry i of the line gathers tap k from pixel i - offset[k]: built
+    // by adding each pixel's taps, neighbouring pixels would add to the
+    // same entries one after another, each addition waiting for the last.
+    const int length = x1 - x0, n = length + span + 1;
+    line.resize(size_t(length + n) * 4);
+    double* values = line.data();
+    double* l = values + size_t(length) * 4;
+    for (int i = 0; i < length; ++i, rgba += 4, gradient += gradient_step)
+        store4(values + size_t(i) * 4, load4(rgba) * splat(area_scale(ux, uy, gradient)));
+    int offset[4];
+    d4 weight[4];
+    for (int k = 0; k < 4; ++k) {
+        offset[k] = taps.at[k] - taps.at[0];
+        weight[k] = splat(taps.weight[k]);
     }
+    auto gather_edge = [&](int i) {
+        d4 sum = splat(0.0);
+        for (int k = 0; k < 4; ++k)
+            if (const int j = i - offset[k]; j >= 0 && j < length)
+                sum += weight[k] * load4(values + size_t(j) * 4);
+        store4(l + size_t(i) * 4, sum);
+    };
+    const int inner_begin = std::min(span, length), inner_end = std::max(inner_begin, length);
+    for (int i = 0; i < inner_begin; ++i)
+        gather_edge(i);
+    for (int i = inner_begin; i < inner_end; ++i) {
+        const double* v = values + size_t(i) * 4;
+        store4(l + size_t(i) * 4,
+               weight[0] * load4(v - size_t(offset[0]) * 4)
+                   + weight[1] * load4(v - size_t(offset[1]) * 4)
+                   + weight[2] * load4(v - size_t(offset[2]) * 4)
+                   + weight[3] * load4(v - size_t(offset[3]) * 4));
+    }
+    for (int i = inner_end; i < n; ++i)
+        gather_edge(i);
     // Line entry i lands at window column base + i.
     const int base = x0 + taps.at[0];
     const int cut = std::clamp(-base, 0, n), end = std::clamp(w + 2 - base, cut, n);

@@ -109,7 +109,7 @@ private:
     std::vector<double> m_deltas;   ///< rows of the window and two past its end
     std::vector<double> m_running;  ///< the deltas summed down the columns so far
     std::vector<double> m_row;      ///< a row's light
-    std::vector<double> m_line;     ///< a run's light filtered along its row
+    std::vector<double> m_line;     ///< a run's pixels, then their light filtered along its row
 };
 
 }  // namespace defocus
