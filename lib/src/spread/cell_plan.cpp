@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "spread/block_levels.h"
 #include "util/parallel_rows.h"
 
 namespace defocus {
@@ -23,11 +24,6 @@ constexpr int most_cells_across = 12;
 
 /// A blur below this is no blur: every part of the lens sees the same.
 constexpr float sharp_radius = 0.5f;
-
-int floor_div(int a, int b)
-{
-    return a >= 0 ? a / b : -((-a + b - 1) / b);
-}
 
 /// A grid of tiles over pixels, anchored where the frame's tiles are.
 struct TileGrid {
