@@ -48,8 +48,8 @@ double change_bytes(const LayeredScene& layered, const ROI& frame)
 /// before the layers are spread: each layer as the cells read it (a float
 /// RGBA copy unless it is one, its radius's slope, and while it is made its
 /// radius and runs, here 4 bytes a pixel); and on each of `nthreads`
-/// threads, a band of two tile rows across `frame` with each layer's sums
-/// (two float RGBA) and the band's light through a cell (double RGBA) and
+/// threads, a window of tiles of `frame` with each layer's sums (two float
+/// RGBA) and the window's light through a cell (double RGBA) and
 /// transmittances (two doubles).
 double cell_work_bytes(const LayeredScene& layered, const ROI& frame, int nthreads)
 {
@@ -59,12 +59,15 @@ double cell_work_bytes(const LayeredScene& layered, const ROI& frame, int nthrea
         bytes += double(layer.color.roi().npixels())
                  * ((copied ? float_bytes(1.0, 4) : 0.0) + float_bytes(1.0, 3));
     }
-    const double band = double(frame.width() + 2) * (2 * CellTiles::size + 2);
+    const int columns = SubApertureLayers::window_columns * CellTiles::size,
+              rows = SubApertureLayers::window_rows * CellTiles::size;
+    const double window = double(std::min(frame.width(), columns) + 2)
+                          * (std::min(frame.height(), rows) + 2);
     const double per_layer = 2.0 * float_bytes(1.0, 4);
-    const double per_band = 4.0 * sizeof(double) + 2.0 * sizeof(double);
+    const double per_pixel = 4.0 * sizeof(double) + 2.0 * sizeof(double);
     const int threads = nthreads > 0 ? nthreads : OIIO::get_int_attribute("threads", 1);
     return bytes
-           + double(threads) * band * (per_layer * double(layered.layers.size()) + per_band);
+           + double(threads) * window * (per_layer * double(layered.layers.size()) + per_pixel);
 }
 
 }  // namespace

@@ -214,10 +214,9 @@ void SubApertureLayers::compute(const LayeredScene& scene, const CircleOfConfusi
     for (const SignedLayer& layer : layers)
         reach = std::max(reach, layer.reach());
     const int gap = int(std::ceil(2.0 * reach / CellTiles::size)) + 1;
-    const int band_rows = 2, window_columns = 8;
-    parallel_for_each_item(0, (m_tiles.rows + band_rows - 1) / band_rows, [&](int64_t b) {
-        const int first_row = int(b) * band_rows,
-                  end_row = std::min(m_tiles.rows, first_row + band_rows);
+    parallel_for_each_item(0, (m_tiles.rows + window_rows - 1) / window_rows, [&](int64_t b) {
+        const int first_row = int(b) * window_rows,
+                  end_row = std::min(m_tiles.rows, first_row + window_rows);
         CellBand spread;
         BandSums sums;
         for (const auto& entry : cuts) {

@@ -74,6 +74,9 @@ public:
 
     /// What a layer's change holds a pixel.
     static constexpr size_t change_bytes = 4 * sizeof(Imath::half);
+    /// The cells are found a window at a time, at most this many tile rows
+    /// and columns.
+    static constexpr int window_rows = 2, window_columns = 8;
 
 private:
     static constexpr size_t tile_floats = size_t(CellTiles::size) * CellTiles::size * 4;
