@@ -83,12 +83,16 @@ struct Stack {
         order_layers(scene, coc);
     }
 
-    ImageBuf engine(int cells, OutputWindow window = OutputWindow::Input) const
+    ImageBuf engine(int cells, OutputWindow window = OutputWindow::Input,
+                    SubApertureReport* report = nullptr) const
     {
         SpreadOptions spread;
         spread.aperture_cells = cells;
         ImageBuf out;
-        REQUIRE(defocus_layers(out, scene, lens_camera(), spread, {}, window));
+        SpreadStats stats;
+        REQUIRE(defocus_layers(out, scene, lens_camera(), spread, {}, window, nullptr, &stats));
+        if (report)
+            *report = stats.cells;
         return out;
     }
 };
@@ -158,6 +162,51 @@ TEST_CASE("a fence before a row of lights wider than a window of cells is cut in
     const double cells = psnr_over(stack.engine(0), exact, lights);
     WARN("fence before a row of lights, against the thin lens: " << cells << " dB with cells");
     CHECK(cells >= 35.0);
+}
+
+TEST_CASE("where every footprint through a cell is blocks wide, the cells are found over blocks")
+{
+    // Both layers far out of focus, in front of it: bars 8 px wide every 16
+    // at 0.5 m (CoC 142 px) before a light at 0.8 m (78 px). Through each of
+    // the 12 x 12 cells the light blurs by 6.5 px: blocks of 2 x 2 pixels.
+    // A faint layer nearly in focus behind them (2.7 m, 1.6 px) binds the
+    // cells to pixels, and changes the picture by a millionth.
+    auto stack = [](bool faint) {
+        Stack s;
+        if (faint)
+            s.add("faint", 2.7f, [](int, int, float* rgba) { rgba[3] = 1e-6f; });
+        s.add("light", 0.8f, [](int x, int y, float* rgba) {
+            const bool light = std::hypot(x + 0.5 - centre_x, y + 0.5 - centre_y) < 4.0;
+            rgba[0] = rgba[1] = rgba[2] = light ? 1.0f : 0.05f;
+            rgba[3] = 1.0f;
+        });
+        s.add("bars", 0.5f, [](int x, int, float* rgba) {
+            if ((x - centre_x + 256) % 16 < 8) {
+                rgba[0] = rgba[1] = rgba[2] = 0.01f;
+                rgba[3] = 1.0f;
+            }
+        });
+        return s;
+    };
+    const Stack blurred = stack(false), bound = stack(true);
+    const ROI light(centre_x - 40, centre_x + 40, centre_y - 40, centre_y + 40, 0, 1, 0, 4);
+    const ImageBuf exact = thin_lens(blurred.lens, light, 96);
+    SubApertureReport over_blocks, over_pixels;
+    const ImageBuf blocks = blurred.engine(144, OutputWindow::Input, &over_blocks),
+                   pixels = bound.engine(144, OutputWindow::Input, &over_pixels);
+    const double by_blocks = psnr_over(blocks, exact, light),
+                 by_pixels = psnr_over(pixels, exact, light),
+                 one = psnr_over(blurred.engine(1), exact, light);
+    WARN("blurred bars before a blurred light, against the thin lens: "
+         << by_blocks << " dB over blocks, " << by_pixels << " dB over pixels, " << one
+         << " dB with one cell; blocks against pixels " << psnr_over(blocks, pixels, light)
+         << " dB");
+    REQUIRE(over_blocks.tiles_with_cells > 0);
+    CHECK(over_blocks.tiles_over_blocks == over_blocks.tiles_with_cells);
+    CHECK(over_pixels.tiles_over_blocks == 0);
+    CHECK(by_blocks >= by_pixels - 0.5);
+    CHECK(psnr_over(blocks, pixels, light) >= 40.0);
+    CHECK(one < by_blocks - 10.0);
 }
 
 TEST_CASE("the fence's shadow runs on past the data window into a grown one")

@@ -99,9 +99,10 @@ std::string frame_report(const FrameResult& frame, const Shot& shot, const std::
     const SubApertureReport& cells = frame.cells;
     if (cells.tiles > 0)
         r += format("  sub-aperture: {} of {} tiles ({:.1f}%) composited per part of the lens, "
-                    "in up to {} cells\n",
+                    "in up to {} cells; {} of them over blocks of pixels\n",
                     cells.tiles_with_cells, cells.tiles,
-                    100.0 * cells.tiles_with_cells / cells.tiles, cells.most_cells);
+                    100.0 * cells.tiles_with_cells / cells.tiles, cells.most_cells,
+                    cells.tiles_over_blocks);
     r += format("  pixels fixed: {} with NaN/inf colour dropped, {} with colour beyond 1e30 "
                 "clamped, {} with alpha above 1 clamped to 1, {} with bad depth taken as "
                 "infinitely far, {} transparent with colour cleared, {} edge pixels without "

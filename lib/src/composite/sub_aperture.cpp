@@ -6,6 +6,7 @@
 #include <map>
 
 #include "spread/aperture_cells.h"
+#include "spread/coarse_layers.h"
 #include "util/float_pixels.h"
 #include "util/parallel_rows.h"
 #include "util/simd.h"
@@ -75,6 +76,99 @@ void take_row(const double* light, double weight, float* whole, float* reaching,
 
 }  // namespace
 
+/// Tiles of a band that one cut of the aperture composites together: rows
+/// [first_row, end_row), columns [first_column, last_column], spread over
+/// blocks of `scale` pixels.
+struct CellWindow {
+    int across;
+    int first_row, end_row, first_column, last_column;
+    int scale;
+
+    /// How many of its tiles take its cut.
+    int64_t tiles(const CellTiles& all) const
+    {
+        int64_t n = 0;
+        for (int row = first_row; row < end_row; ++row)
+            for (int column = first_column; column <= last_column; ++column)
+                n += all.at(column, row) == across;
+        return n;
+    }
+    /// Its pixels.
+    ROI pixels(const CellTiles& tiles) const
+    {
+        return roi_union(tiles.tile(first_column, first_row), tiles.tile(last_column, end_row - 1));
+    }
+    /// What it is spread over: its pixels, or its blocks and one more all
+    /// round, between whose centres its pixels are read.
+    ROI spread(const CellTiles& tiles) const
+    {
+        if (scale == 1)
+            return pixels(tiles);
+        const ROI blocks = blocks_of(pixels(tiles), scale, tiles.window.xbegin,
+                                     tiles.window.ybegin);
+        return ROI(blocks.xbegin - 1, blocks.xend + 1, blocks.ybegin - 1, blocks.yend + 1);
+    }
+};
+
+/// The windows that the cuts of the aperture (`cuts`, by cells across)
+/// composite `tiles` in, band of tile rows by band, each spread over the
+/// coarsest blocks its `layers` allow (`extent`: how far the aperture
+/// reaches at unit radius).
+std::vector<std::vector<CellWindow>> plan_windows(
+    const CellTiles& tiles, const std::map<int, std::vector<ApertureCell>>& cuts,
+    const std::vector<SignedLayer>& layers, double extent)
+{
+    // Bands of two tile rows: a pixel's light reaches the bands of the
+    // rows its blur spans, so taller bands would spread each pixel fewer
+    // times, but their buffers fall out of the caches (4 rows took 6%
+    // longer on the 4K example, 8 rows 40%). A band is cut into windows
+    // where its tiles with cells are far enough apart that no pixel's light
+    // reaches both sides, and every 8 tiles: each cell reads its layers'
+    // pixels around the window again, and 256 columns of them stay in the
+    // core's cache (the 4K example's spread stage took 12% longer in
+    // windows as wide as the frame).
+    float reach = 0.0f;
+    for (const SignedLayer& layer : layers)
+        reach = std::max(reach, layer.reach());
+    const int gap = int(std::ceil(2.0 * reach / CellTiles::size)) + 1;
+    std::vector<RadiusTiles> radii;
+    for (const SignedLayer& layer : layers)
+        radii.emplace_back(layer, CellTiles::size, tiles.window.xbegin, tiles.window.ybegin);
+    const int window_rows = SubApertureLayers::window_rows,
+              window_columns = SubApertureLayers::window_columns;
+    std::vector<std::vector<CellWindow>> bands(size_t(tiles.rows + window_rows - 1) / window_rows);
+    for (size_t b = 0; b < bands.size(); ++b) {
+        const int first_row = int(b) * window_rows,
+                  end_row = std::min(tiles.rows, first_row + window_rows);
+        for (const auto& [across, cut] : cuts) {
+            auto used_in = [&, across = across](int column) {
+                for (int row = first_row; row < end_row; ++row)
+                    if (tiles.at(column, row) == across)
+                        return true;
+                return false;
+            };
+            for (int first = 0; first < tiles.columns;) {
+                if (!used_in(first)) {
+                    ++first;
+                    continue;
+                }
+                int last = first;
+                for (int column = first + 1; column < tiles.columns && column <= last + gap
+                                             && column < first + window_columns;
+                     ++column)
+                    if (used_in(column))
+                        last = column;
+                CellWindow window { across, first_row, end_row, first, last, 1 };
+                window.scale = coarsest_scale(layers, radii, window.pixels(tiles),
+                                              2.0 * extent / across);
+                bands[b].push_back(window);
+                first = last + 1;
+            }
+        }
+    }
+    return bands;
+}
+
 /// Where the cells change a band, layer by layer: for each layer that
 /// reaches it (back to front), its light through the whole aperture and
 /// what of it reaches the camera; and what passes through every layer.
@@ -96,6 +190,8 @@ struct BandSums {
 
     /// Layer i's (of `layers`) change at pixel (x, y) of the band.
     void change(size_t i, int x, int y, float* out) const;
+    /// Every layer's change over the band: RGBA a pixel, layer after layer.
+    void all_changes(std::vector<float>& out) const;
 
 private:
     /// T_{i+1} at (x, y), pixel p: what passes through the layers in
@@ -170,6 +266,15 @@ void BandSums::change(size_t i, int x, int y, float* out) const
     out[3] = float((1.0 - back / front) - std::clamp(a, 0.0, 1.0));
 }
 
+void BandSums::all_changes(std::vector<float>& out) const
+{
+    out.resize(layers.size() * passing.size() * 4);
+    float* at = out.data();
+    for (size_t i = 0; i < layers.size(); ++i)
+        for (int y = band.ybegin; y < band.yend; ++y)
+            for (int x = band.xbegin; x < band.xend; ++x, at += 4)
+                change(i, x, y, at);
+}
 
 bool takes_aperture_cells(const SpreadOptions& spread)
 {
@@ -201,52 +306,46 @@ void SubApertureLayers::compute(const LayeredScene& scene, const CircleOfConfusi
     for (const auto& [across, cut] : cuts)
         m_most_cells = std::max(m_most_cells, int(cut.size()));
 
-    // Bands of two tile rows: a pixel's light reaches the bands of the
-    // rows its blur spans, so taller bands would spread each pixel fewer
-    // times, but their buffers fall out of the caches (4 rows took 6%
-    // longer on the 4K example, 8 rows 40%). A band is cut into windows
-    // where its tiles with cells are far enough apart that no pixel's light
-    // reaches both sides, and every 8 tiles: each cell reads its layers'
-    // pixels around the window again, and 256 columns of them stay in the
-    // core's cache (the 4K example's spread stage took 12% longer in
-    // windows as wide as the frame).
-    float reach = 0.0f;
-    for (const SignedLayer& layer : layers)
-        reach = std::max(reach, layer.reach());
-    const int gap = int(std::ceil(2.0 * reach / CellTiles::size)) + 1;
-    parallel_for_each_item(0, (m_tiles.rows + window_rows - 1) / window_rows, [&](int64_t b) {
-        const int first_row = int(b) * window_rows,
-                  end_row = std::min(m_tiles.rows, first_row + window_rows);
+    const std::vector<std::vector<CellWindow>> bands
+        = plan_windows(m_tiles, cuts, layers, profile.extent());
+    // The pixels of the windows spread over blocks, by blocks' size.
+    ROI over_blocks[5];
+    m_tiles_over_blocks = 0;
+    for (const std::vector<CellWindow>& band : bands)
+        for (const CellWindow& window : band)
+            if (window.scale > 1) {
+                ROI& all = over_blocks[window.scale];
+                const ROI pixels = window.pixels(m_tiles);
+                all = all.defined() ? roi_union(all, pixels) : pixels;
+                m_tiles_over_blocks += window.tiles(m_tiles);
+            }
+    // The layers by blocks of 1, 2 and 4 pixels, as windows take them:
+    // over blocks, only the pixels whose light reaches such a window.
+    std::vector<SignedLayer> scaled[5];
+    std::vector<std::vector<float>> block_colors;
+    for (int scale : { 2, 4 })
+        if (const ROI& all = over_blocks[scale]; all.defined())
+            for (const SignedLayer& layer : layers) {
+                const int reach = int(std::ceil(layer.reach())) + 2;
+                const ROI source(all.xbegin - reach, all.xend + reach, all.ybegin - reach,
+                                 all.yend + reach);
+                scaled[scale].push_back(coarse_layer(layer, source, scale, m_tiles.window.xbegin,
+                                                     m_tiles.window.ybegin,
+                                                     block_colors.emplace_back(), nthreads));
+            }
+    scaled[1] = std::move(layers);
+    parallel_for_each_item(0, int64_t(bands.size()), [&](int64_t b) {
         CellBand spread;
         BandSums sums;
-        for (const auto& entry : cuts) {
-            const int across = entry.first;
-            auto used_in = [&](int column) {
-                for (int row = first_row; row < end_row; ++row)
-                    if (m_tiles.at(column, row) == across)
-                        return true;
-                return false;
-            };
-            for (int first = 0; first < m_tiles.columns;) {
-                if (!used_in(first)) {
-                    ++first;
-                    continue;
-                }
-                int last = first;
-                for (int column = first + 1; column < m_tiles.columns && column <= last + gap
-                                             && column < first + window_columns;
-                     ++column)
-                    if (used_in(column))
-                        last = column;
-                const ROI band = roi_union(m_tiles.tile(first, first_row),
-                                           m_tiles.tile(last, end_row - 1));
-                sums.sum(layers, entry.second, band, spread);
-                for (int row = first_row; row < end_row; ++row)
-                    for (int column = first; column <= last; ++column)
-                        if (m_tiles.at(column, row) == across)
-                            keep(sums, column, row);
-                first = last + 1;
-            }
+        std::vector<float> changes;
+        for (const CellWindow& window : bands[size_t(b)]) {
+            sums.sum(scaled[window.scale], cuts.at(window.across), window.spread(m_tiles), spread);
+            if (window.scale > 1)
+                sums.all_changes(changes);
+            for (int row = window.first_row; row < window.end_row; ++row)
+                for (int column = window.first_column; column <= window.last_column; ++column)
+                    if (m_tiles.at(column, row) == window.across)
+                        keep(sums, window.scale, column, row, changes);
         }
     }, nthreads);
 }
@@ -268,10 +367,15 @@ void SubApertureLayers::allocate(const std::vector<SignedLayer>& layers)
     m_pixels.reset(new Imath::half[size_t(used) * tile_floats]);
 }
 
-void SubApertureLayers::keep(const BandSums& sums, int column, int row)
+void SubApertureLayers::keep(const BandSums& sums, int scale, int column, int row,
+                             const std::vector<float>& changes)
 {
     const size_t t = size_t(row) * m_tiles.columns + column;
     const ROI tile = m_tiles.tile(column, row);
+    if (scale > 1) {
+        keep_between_blocks(sums, scale, t, tile, changes);
+        return;
+    }
     for (size_t i = 0; i < sums.layers.size(); ++i) {
         const int64_t at = offset(sums.layers[i], t);
         if (at < 0)
@@ -285,6 +389,53 @@ void SubApertureLayers::keep(const BandSums& sums, int column, int row)
                                                 + (x - tile.xbegin)) * 4];
                 std::copy(change, change + 4, out);
             }
+    }
+}
+
+void SubApertureLayers::keep_between_blocks(const BandSums& sums, int scale, size_t t,
+                                            const ROI& tile, const std::vector<float>& changes)
+{
+    const ROI& blocks = sums.band;
+    const size_t per_layer = size_t(blocks.npixels()) * 4;
+    // Pixel x's centre in blocks, whose centres are at block + 1/2.
+    auto position = [&](int x, int origin, int begin, int end, int& block, float& along) {
+        const float b = (x + 0.5f - origin) / float(scale) - 0.5f;
+        block = std::clamp(int(std::floor(b)), begin, end - 2);
+        along = std::clamp(b - float(block), 0.0f, 1.0f);
+    };
+    for (size_t l = 0; l < m_offset.size(); ++l) {
+        const int64_t at = offset(l, t);
+        if (at < 0)
+            continue;
+        const auto found = std::find(sums.layers.begin(), sums.layers.end(), l);
+        const float* layer = found == sums.layers.end()
+                                 ? nullptr
+                                 : &changes[size_t(found - sums.layers.begin()) * per_layer];
+        for (int y = tile.ybegin; y < tile.yend; ++y) {
+            int by;
+            float fy;
+            position(y, m_tiles.window.ybegin, blocks.ybegin, blocks.yend, by, fy);
+            Imath::half* out = &m_pixels[size_t(at) + (y - tile.ybegin) * CellTiles::size * 4];
+            for (int x = tile.xbegin; x < tile.xend; ++x, out += 4) {
+                float change[4] = { 0.0f, 0.0f, 0.0f, 0.0f };
+                if (layer) {
+                    int bx;
+                    float fx;
+                    position(x, m_tiles.window.xbegin, blocks.xbegin, blocks.xend, bx, fx);
+                    for (int j = 0; j < 2; ++j)
+                        for (int i = 0; i < 2; ++i) {
+                            const float w = (i ? fx : 1.0f - fx) * (j ? fy : 1.0f - fy);
+                            const size_t block
+                                = size_t(by + j - blocks.ybegin) * blocks.width()
+                                  + size_t(bx + i - blocks.xbegin);
+                            const float* c = layer + block * 4;
+                            for (int k = 0; k < 4; ++k)
+                                change[k] += w * c[k];
+                        }
+                }
+                std::copy(change, change + 4, out);
+            }
+        }
     }
 }
 
@@ -314,7 +465,7 @@ bool SubApertureLayers::change(size_t l, int x, int y, int& end, float* out) con
 
 SubApertureReport SubApertureLayers::report() const
 {
-    return { m_tiles.count(), m_tiles.with_cells(), m_most_cells };
+    return { m_tiles.count(), m_tiles.with_cells(), m_most_cells, m_tiles_over_blocks };
 }
 
 }  // namespace defocus

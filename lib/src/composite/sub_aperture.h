@@ -84,8 +84,15 @@ private:
     /// Room for each layer's change in each tile with cells that its light
     /// reaches.
     void allocate(const std::vector<SignedLayer>& layers);
-    /// Keeps the changes `sums` found over its band in tile (column, row).
-    void keep(const BandSums& sums, int column, int row);
+    /// Keeps the changes `sums` found over its band in tile (column, row);
+    /// over blocks of `scale` pixels, read between them from `changes`
+    /// (BandSums::all_changes).
+    void keep(const BandSums& sums, int scale, int column, int row,
+              const std::vector<float>& changes);
+    /// keep() of tile `t` (pixels `tile`) from changes over blocks: each
+    /// pixel's read between the four blocks' centres around it.
+    void keep_between_blocks(const BandSums& sums, int scale, size_t t, const OIIO::ROI& tile,
+                             const std::vector<float>& changes);
     /// Where tile t's pixels for layer l start in m_pixels, or -1.
     int64_t offset(size_t l, size_t t) const { return m_offset[l][t]; }
 
@@ -96,6 +103,7 @@ private:
     /// itself, for half the memory (140 MB on the 4K example).
     std::unique_ptr<Imath::half[]> m_pixels;
     int m_most_cells = 0;
+    int64_t m_tiles_over_blocks = 0;
 };
 
 }  // namespace defocus

@@ -29,12 +29,15 @@ OIIO::ImageSpec result_spec(const OIIO::ImageSpec& scene, const OIIO::ROI& windo
                             OIIO::TypeDesc format);
 
 /// How much of a frame was composited per part of the aperture (see
-/// SpreadOptions::aperture_cells): its tiles, those that took cells, and
-/// the most cells one took.
+/// SpreadOptions::aperture_cells): its tiles, those that took cells, the
+/// most cells one took, and of those with cells, how many were found over
+/// blocks of 2 x 2 or 4 x 4 pixels (where every footprint through a cell
+/// is several blocks wide).
 struct SubApertureReport {
     int64_t tiles = 0;
     int64_t tiles_with_cells = 0;
     int most_cells = 0;
+    int64_t tiles_over_blocks = 0;
 };
 
 /// What defocus_layers() reports beside the image.
