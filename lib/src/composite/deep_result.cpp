@@ -23,29 +23,36 @@ namespace {
 DeepLayer lit_pixels(const ImageBuf& spread, const ROI& window, int nthreads)
 {
     const ROI roi = spread.roi();
-    std::vector<DeepLayer> rows(size_t(roi.height()));
+    auto lit = [](const float* p) {
+        return p[0] != 0.0f || p[1] != 0.0f || p[2] != 0.0f || p[3] != 0.0f;
+    };
+    // Each row's lit pixels are counted, then written where the rows
+    // before them end: no array grows or is copied again.
+    std::vector<size_t> first(size_t(roi.height()) + 1, 0);
     parallel_for(roi.ybegin, roi.yend, [&](int y) {
-        DeepLayer& row = rows[size_t(y - roi.ybegin)];
         const float* p = static_cast<const float*>(spread.pixeladdr(roi.xbegin, y));
-        const uint32_t first = uint32_t(size_t(y - window.ybegin) * size_t(window.width())
-                                        + size_t(roi.xbegin - window.xbegin));
+        size_t n = 0;
         for (int x = 0; x < roi.width(); ++x, p += 4)
-            if (p[0] != 0.0f || p[1] != 0.0f || p[2] != 0.0f || p[3] != 0.0f) {
-                row.pixels.push_back(first + uint32_t(x));
-                row.rgba.insert(row.rgba.end(), p, p + 4);
+            n += lit(p);
+        first[size_t(y - roi.ybegin) + 1] = n;
+    }, by_rows(nthreads));
+    for (size_t r = 1; r < first.size(); ++r)
+        first[r] += first[r - 1];
+    DeepLayer all;
+    all.pixels.resize(first.back());
+    all.rgba.resize(4 * first.back());
+    parallel_for(roi.ybegin, roi.yend, [&](int y) {
+        const float* p = static_cast<const float*>(spread.pixeladdr(roi.xbegin, y));
+        const uint32_t row = uint32_t(size_t(y - window.ybegin) * size_t(window.width())
+                                      + size_t(roi.xbegin - window.xbegin));
+        size_t at = first[size_t(y - roi.ybegin)];
+        for (int x = 0; x < roi.width(); ++x, p += 4)
+            if (lit(p)) {
+                all.pixels[at] = row + uint32_t(x);
+                std::copy(p, p + 4, &all.rgba[4 * at]);
+                ++at;
             }
     }, by_rows(nthreads));
-    DeepLayer all;
-    size_t count = 0;
-    for (const DeepLayer& row : rows)
-        count += row.pixels.size();
-    all.pixels.reserve(count);
-    all.rgba.reserve(4 * count);
-    for (DeepLayer& row : rows) {
-        all.pixels.insert(all.pixels.end(), row.pixels.begin(), row.pixels.end());
-        all.rgba.insert(all.rgba.end(), row.rgba.begin(), row.rgba.end());
-        row = DeepLayer();
-    }
     return all;
 }
 
