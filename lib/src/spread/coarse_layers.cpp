@@ -107,9 +107,11 @@ RadiusTiles::RadiusTiles(const SignedLayer& layer, int size, int x0, int y0)
 
 bool RadiusTiles::range(const ROI& roi, float& least, float& most) const
 {
-    const ROI tiles = OIIO::roi_intersection(blocks_of(roi, m_size, m_x0, m_y0), m_tiles);
     least = INFINITY;
     most = -INFINITY;
+    if (m_least.empty())  // nothing lit; m_tiles is undefined, which OIIO takes as all
+        return false;
+    const ROI tiles = OIIO::roi_intersection(blocks_of(roi, m_size, m_x0, m_y0), m_tiles);
     for (int y = tiles.ybegin; y < tiles.yend; ++y)
         for (int x = tiles.xbegin; x < tiles.xend; ++x) {
             const size_t i = size_t(y - m_tiles.ybegin) * m_tiles.width()
