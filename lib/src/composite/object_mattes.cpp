@@ -99,9 +99,8 @@ struct BandObjects {
                 auto [it, added] = index.emplace(run.objects[k].id, found.size());
                 if (added)
                     found.push_back({ run.objects[k].id, {} });
-                Presence& p = found[it->second].second;
-                p.roi = roi_union(p.roi, pixels);
-                p.whole_pixels += run.objects[k].fraction == 1.0f ? end - begin : 0;
+                found[it->second].second.add(pixels,
+                                             run.objects[k].fraction == 1.0f ? end - begin : 0);
             }
         };
         for (int y = y0; y < y1; ++y) {
@@ -222,9 +221,7 @@ std::vector<ObjectExtent> find_objects(const ObjectSet& set, const LayeredScene&
                 if (added)
                     objects.push_back({ id, {}, {} });
                 ObjectExtent& o = objects[it->second];
-                Presence& p = o.layers[i];
-                p.roi = roi_union(p.roi, presence.roi);
-                p.whole_pixels += presence.whole_pixels;
+                o.layers[i].add(presence.roi, presence.whole_pixels);
                 o.all = roi_union(o.all, presence.roi);
             }
         }

@@ -40,6 +40,13 @@ struct Presence {
     OIIO::ROI roi;
     int64_t whole_pixels = 0;  ///< pixels wholly the object's
     bool all_of_layer = false;
+
+    /// Takes in `pixels`, `whole` of them wholly the object's.
+    void add(const OIIO::ROI& pixels, int64_t whole)
+    {
+        roi = OIIO::roi_union(roi, pixels);
+        whole_pixels += whole;
+    }
 };
 
 /// An object and, per layer, where it lies.
