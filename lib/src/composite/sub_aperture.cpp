@@ -325,14 +325,10 @@ void SubApertureLayers::compute(const LayeredScene& scene, const CircleOfConfusi
     std::vector<std::vector<float>> block_colors;
     for (int scale : { 2, 4 })
         if (const ROI& all = over_blocks[scale]; all.defined())
-            for (const SignedLayer& layer : layers) {
-                const int reach = int(std::ceil(layer.reach())) + 2;
-                const ROI source(all.xbegin - reach, all.xend + reach, all.ybegin - reach,
-                                 all.yend + reach);
-                scaled[scale].push_back(coarse_layer(layer, source, scale, m_tiles.window.xbegin,
-                                                     m_tiles.window.ybegin,
+            for (const SignedLayer& layer : layers)
+                scaled[scale].push_back(coarse_layer(layer, layer.sources_of(all), scale,
+                                                     m_tiles.window.xbegin, m_tiles.window.ybegin,
                                                      block_colors.emplace_back(), nthreads));
-            }
     scaled[1] = std::move(layers);
     parallel_for_each_item(0, int64_t(bands.size()), [&](int64_t b) {
         CellBand spread;

@@ -22,8 +22,6 @@ constexpr float light_tolerance = 1e-3f;
 /// fewest where cells are taken at all.
 constexpr int most_cells_across = 12;
 
-/// A blur below this is no blur: every part of the lens sees the same.
-constexpr float sharp_radius = 0.5f;
 
 /// A grid of tiles over pixels, anchored where the frame's tiles are.
 struct TileGrid {

@@ -339,13 +339,26 @@ void SignedLayer::set(const OIIO::ROI& pixels, const float* rgba, const float* r
     }, nthreads);
 }
 
+namespace {
+
+/// `roi` and as far again as a layer's footprints reach, and their corner
+/// deltas a pixel past their edge.
+OIIO::ROI grown_by_footprints(const OIIO::ROI& roi, float reach)
+{
+    const int r = int(std::ceil(reach)) + 2;
+    return OIIO::ROI(roi.xbegin - r, roi.xend + r, roi.ybegin - r, roi.yend + r);
+}
+
+}  // namespace
+
 OIIO::ROI SignedLayer::light() const
 {
-    if (!lit.defined())
-        return lit;
-    // A footprint's corner deltas land up to a pixel past its edge.
-    const int r = int(std::ceil(reach())) + 2;
-    return OIIO::ROI(lit.xbegin - r, lit.xend + r, lit.ybegin - r, lit.yend + r);
+    return lit.defined() ? grown_by_footprints(lit, reach()) : lit;
+}
+
+OIIO::ROI SignedLayer::sources_of(const OIIO::ROI& window) const
+{
+    return grown_by_footprints(window, reach());
 }
 
 OIIO::ROI SignedLayer::light_in(const OIIO::ROI& window) const

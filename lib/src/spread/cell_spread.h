@@ -21,6 +21,10 @@ inline bool has_pixels(const OIIO::ROI& roi)
     return roi.width() > 0 && roi.height() > 0;
 }
 
+/// A CoC radius below this is no blur: every part of the lens sees the
+/// same, and every cell of it lets the same through.
+constexpr float sharp_radius = 0.5f;
+
 /// Lit pixels of one row and one signed radius, columns [x_begin, x_end).
 struct PixelRun {
     int x_begin, x_end;
@@ -58,6 +62,8 @@ struct SignedLayer {
     /// The pixels of `window` that this layer's light can land on; none
     /// (see has_pixels) where it lands on none of them.
     OIIO::ROI light_in(const OIIO::ROI& window) const;
+    /// The pixels whose light can land in `window`, were they lit.
+    OIIO::ROI sources_of(const OIIO::ROI& window) const;
 
     /// `roi`'s pixels of colour `color` and signed radius `radius` (a float
     /// a pixel), as runs.

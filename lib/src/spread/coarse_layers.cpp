@@ -12,10 +12,6 @@ using OIIO::ROI;
 
 namespace {
 
-/// A blur below this is no blur: every cell lets the same through (as
-/// cell_plan.cpp's sharp radius).
-constexpr float in_focus = 0.5f;
-
 /// The blocks of `scale` pixels from `origin` that [begin, end) meets.
 void blocks(int begin, int end, int scale, int origin, int& first, int& last_end)
 {
@@ -130,12 +126,8 @@ int coarsest_scale(const std::vector<SignedLayer>& layers, const std::vector<Rad
         const SignedLayer& layer = layers[l];
         if (!has_pixels(layer.light_in(window)))
             continue;
-        // The pixels whose light reaches the window.
-        const int reach = int(std::ceil(layer.reach())) + 2;
-        const ROI source(window.xbegin - reach, window.xend + reach, window.ybegin - reach,
-                         window.yend + reach);
         float least, most;
-        if (!radii[l].range(source, least, most) || most < in_focus)
+        if (!radii[l].range(layer.sources_of(window), least, most) || most < sharp_radius)
             continue;
         const double blur = least * cell_width;
         while (scale > 1 && blur < 3.0 * scale)
