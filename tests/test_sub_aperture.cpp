@@ -209,6 +209,38 @@ TEST_CASE("where every footprint through a cell is blocks wide, the cells are fo
     CHECK(one < by_blocks - 10.0);
 }
 
+TEST_CASE("a wide occluder takes the cells its whole width asks for, not its corner's in a tile")
+{
+    // A square 200 px wide at 0.5 m (CoC 142 px) before a checker at 10 m:
+    // 5 cells across keep its footprint through each within a 32 px tile.
+    // Its corners cover 8 x 8 pixels of their tiles, and those 8 pixel runs
+    // asked for 9 across while widths were measured within a tile. A bar
+    // the data window cuts to its last 3 rows asked for 12 across; it asks
+    // for nothing more: the window ends there, not the bar.
+    const ROI data(150, 450, 60, 340, 0, 1, 0, 4);
+    Stack stack(0, data);
+    stack.add("checker", 10.0f, [](int x, int y, float* rgba) {
+        rgba[0] = rgba[1] = rgba[2] = ((x / 8 + y / 8) % 2) ? 0.8f : 0.1f;
+        rgba[3] = 1.0f;
+    });
+    const ROI square(data.xbegin + 56, data.xbegin + 256, data.ybegin + 56, data.ybegin + 256);
+    stack.add("square and bar", 0.5f, [&](int x, int y, float* rgba) {
+        if (square.contains(x, y) || (y < data.ybegin + 3 && x >= 200 && x < 400)) {
+            rgba[0] = rgba[1] = rgba[2] = 0.02f;
+            rgba[3] = 1.0f;
+        }
+    });
+    const ROI edge(square.xend - 32, square.xend + 32, centre_y - 32, centre_y + 32, 0, 1, 0, 4);
+    const ImageBuf exact = thin_lens(stack.lens, edge);
+    SubApertureReport report;
+    const double cells = psnr_over(stack.engine(0, OutputWindow::Input, &report), exact, edge);
+    const double one = psnr_over(stack.engine(1), exact, edge);
+    WARN("wide square's edge over a checker, against the thin lens: " << cells << " dB with "
+         << report.most_cells << " cells, " << one << " dB with one cell");
+    CHECK(report.most_cells == 25);
+    CHECK(cells >= one + 5.0);
+}
+
 TEST_CASE("the fence's shadow runs on past the data window into a grown one")
 {
     // The light at the right edge of the data and display windows: half its

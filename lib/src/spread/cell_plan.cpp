@@ -38,8 +38,7 @@ struct TileGrid {
 
 /// What a layer holds in each tile of the grid: the range of each channel
 /// (0 where it has no pixels), its largest blur where lit, and the width
-/// of its shapes: the mean run of opaque (alpha ≥ 1/2) or of clear pixels,
-/// whichever is shorter, along rows or columns, whichever is shorter.
+/// of its shapes there (see ShapeRuns).
 struct TileStats {
     std::vector<float> low, high;  ///< 4 a tile: R, G, B, A
     std::vector<float> radius;
@@ -47,64 +46,127 @@ struct TileStats {
     std::vector<float> width;
 };
 
-/// Counts of a tile's opaque and clear pixels and of the changes between
-/// them along rows and along columns.
-struct Runs {
-    int opaque = 0, clear = 0, along_rows = 0, along_columns = 0;
+/// A tile's opaque (alpha ≥ 1/2) and clear pixels and, along rows and along
+/// columns, how many runs of each they make: a run that passes through
+/// several tiles counts in each by its share of pixels there. So a shape's
+/// width is its runs' whole length, not the part of it a tile holds.
+struct ShapeRuns {
+    int opaque = 0, clear = 0;
+    float opaque_runs[2] = { 0.0f, 0.0f }, clear_runs[2] = { 0.0f, 0.0f };  ///< rows, columns
 
+    /// The mean run of opaque or of clear pixels, whichever is shorter,
+    /// along rows or columns, whichever is shorter; infinite where the
+    /// tile is all one or the other, or its runs all reach the frame's end.
     float width() const
     {
-        const int shorter = std::min(opaque, clear);
-        float w = float(CellTiles::size);
-        if (along_rows > 0)
-            w = std::min(w, 2.0f * shorter / along_rows);
-        if (along_columns > 0)
-            w = std::min(w, 2.0f * shorter / along_columns);
+        float w = INFINITY;
+        if (opaque == 0 || clear == 0)
+            return w;
+        for (int d = 0; d < 2; ++d) {
+            if (opaque_runs[d] > 0.0f)
+                w = std::min(w, opaque / opaque_runs[d]);
+            if (clear_runs[d] > 0.0f)
+                w = std::min(w, clear / clear_runs[d]);
+        }
         return std::max(w, 1.0f);
+    }
+
+    /// Adds `pixels` of a run `length` pixels long along direction `d`.
+    void add(bool opaque_run, int pixels, int length, int d)
+    {
+        (opaque_run ? opaque_runs[d] : clear_runs[d]) += float(pixels) / float(length);
     }
 };
 
-TileStats layer_stats(const SignedLayer& layer, const TileGrid& grid, int nthreads)
+/// Calls `run(begin, end, opaque)` for each run of opaque or of clear
+/// pixels among `count` alphas `stride` floats apart that ends within them
+/// on both sides. Runs the data window cuts are left out: the frame ends
+/// there, not the shape, and its width is unknown.
+template<class Run>
+void for_each_run(const float* alpha, int count, size_t stride, Run&& run)
 {
-    const size_t n = size_t(grid.columns) * grid.rows;
-    TileStats stats { std::vector<float>(n * 4, 0.0f), std::vector<float>(n * 4, 0.0f),
-                      std::vector<float>(n, 0.0f), std::vector<uint8_t>(n, 0),
-                      std::vector<float>(n, float(CellTiles::size)) };
+    int begin = 0;
+    for (int i = 1; i < count; ++i)
+        if ((alpha[i * stride] >= 0.5f) != (alpha[(i - 1) * stride] >= 0.5f)) {
+            if (begin > 0)
+                run(begin, i, alpha[begin * stride] >= 0.5f);
+            begin = i;
+        }
+}
+
+/// Adds a run of pixels [begin, end) along direction `d` to the runs of
+/// the tiles it passes, `tile_of(i)` giving the tile of its i-th pixel.
+template<class TileOf>
+void add_run(std::vector<ShapeRuns>& runs, int begin, int end, bool opaque, int d,
+             int tile_start, TileOf&& tile_of)
+{
+    const int size = CellTiles::size;
+    for (int i = begin; i < end;) {
+        const int next = std::min(end, tile_start + (floor_div(i - tile_start, size) + 1) * size);
+        runs[tile_of(i)].add(opaque, next - i, end - begin, d);
+        i = next;
+    }
+}
+
+/// Adds each tile's channel ranges, lit pixels and blur, its opaque and
+/// clear pixels and their runs along rows.
+void add_rows(const SignedLayer& layer, const TileGrid& grid, TileStats& stats,
+              std::vector<ShapeRuns>& runs, int nthreads)
+{
     // Tiles the layer covers whole start from their first pixel; those it
     // covers in part keep the 0 of the pixels it lacks.
-    std::vector<uint8_t> seen(n, 0);
-    std::vector<Runs> runs(n);
+    std::vector<uint8_t> seen(runs.size(), 0);
     const int size = CellTiles::size;
     const OIIO::ROI& roi = layer.roi;
+    const size_t stride = size_t(roi.width()) * 4;
+    auto tile_at = [&](int x, int y) {
+        return grid.index(floor_div(x - grid.anchor_x, size), floor_div(y - grid.anchor_y, size));
+    };
     // Each row of tiles is its own task: its pixels write only its tiles.
     parallel_for_each_item(grid.y0, grid.y0 + grid.rows, [&](int64_t tile_row) {
         const int ty = int(tile_row);
         const int tile_top = grid.anchor_y + ty * size;
         for (int y = std::max(roi.ybegin, tile_top); y < std::min(roi.yend, tile_top + size); ++y) {
-            const float* rgba = layer.color + size_t(y - roi.ybegin) * roi.width() * 4;
-            const float* above = y > roi.ybegin ? rgba - size_t(roi.width()) * 4 : nullptr;
-            for (int x = roi.xbegin; x < roi.xend; ++x, rgba += 4) {
+            const float* rgba = layer.color + size_t(y - roi.ybegin) * stride;
+            for_each_run(rgba + 3, roi.width(), 4, [&](int begin, int end, bool opaque) {
+                add_run(runs, roi.xbegin + begin, roi.xbegin + end, opaque, 0, grid.anchor_x,
+                        [&](int x) { return tile_at(x, y); });
+            });
+            // A tile's part of the row at a time, its ranges kept in
+            // registers (stored through a pointer, they would be stored
+            // at every pixel: the pixels are floats too).
+            for (int x = roi.xbegin; x < roi.xend;) {
                 const int tx = floor_div(x - grid.anchor_x, size);
+                const int tile_x = grid.anchor_x + tx * size;
+                const int end = std::min(roi.xend, tile_x + size);
                 const size_t t = grid.index(tx, ty);
-                const bool opaque = rgba[3] >= 0.5f;
-                Runs& r = runs[t];
-                (opaque ? r.opaque : r.clear) += 1;
-                r.along_rows += x > roi.xbegin && (rgba[-1] >= 0.5f) != opaque;
-                r.along_columns += above && (above[(x - roi.xbegin) * 4 + 3] >= 0.5f) != opaque;
-                float* low = &stats.low[t * 4];
-                float* high = &stats.high[t * 4];
                 if (!seen[t]) {
                     seen[t] = 1;
-                    const int tile_x = grid.anchor_x + tx * size;
                     if (tile_x >= roi.xbegin && tile_x + size <= roi.xend
                         && tile_top >= roi.ybegin && tile_top + size <= roi.yend)
                         for (int c = 0; c < 4; ++c)
-                            low[c] = high[c] = rgba[c];
+                            stats.low[t * 4 + c] = stats.high[t * 4 + c] = rgba[c];
+                }
+                float low[4], high[4];
+                for (int c = 0; c < 4; ++c) {
+                    low[c] = stats.low[t * 4 + c];
+                    high[c] = stats.high[t * 4 + c];
+                }
+                const int begin = x;
+                int opaque = 0;
+                for (; x < end; ++x, rgba += 4) {
+                    opaque += rgba[3] >= 0.5f;
+                    for (int c = 0; c < 4; ++c) {
+                        low[c] = std::min(low[c], rgba[c]);
+                        high[c] = std::max(high[c], rgba[c]);
+                    }
                 }
                 for (int c = 0; c < 4; ++c) {
-                    low[c] = std::min(low[c], rgba[c]);
-                    high[c] = std::max(high[c], rgba[c]);
+                    stats.low[t * 4 + c] = low[c];
+                    stats.high[t * 4 + c] = high[c];
                 }
+                runs[t].opaque += opaque;
+                runs[t].clear += end - begin - opaque;
             }
             const size_t row = size_t(y - roi.ybegin);
             for (size_t k = layer.row_runs[row]; k < layer.row_runs[row + 1]; ++k) {
@@ -119,6 +181,65 @@ TileStats layer_stats(const SignedLayer& layer, const TileGrid& grid, int nthrea
             }
         }
     }, nthreads);
+}
+
+/// Adds each tile's runs of opaque and of clear pixels down columns.
+void add_column_runs(const SignedLayer& layer, const TileGrid& grid, std::vector<ShapeRuns>& runs,
+                     int nthreads)
+{
+    const int size = CellTiles::size;
+    const OIIO::ROI& roi = layer.roi;
+    const size_t stride = size_t(roi.width()) * 4;
+    // Bands of columns of tiles are tasks for the runs down columns. Each
+    // reads its pixels row by row, each column's run open until its alpha
+    // crosses 1/2 (a column at a time would read a cache line a pixel),
+    // and adds them up in tiles of its own: tasks side by side would share
+    // cache lines of `runs`.
+    constexpr int band_tiles = 16;
+    parallel_for_each_item(0, (grid.columns + band_tiles - 1) / band_tiles, [&](int64_t band) {
+        const int first = grid.x0 + int(band) * band_tiles;
+        const int tiles = std::min(band_tiles, grid.x0 + grid.columns - first);
+        const int left = std::max(roi.xbegin, grid.anchor_x + first * size);
+        const int right = std::min(roi.xend, grid.anchor_x + (first + tiles) * size);
+        if (left >= right)
+            return;
+        std::vector<ShapeRuns> column(size_t(grid.rows) * tiles);
+        std::vector<int> run_begin(size_t(right - left), 0);
+        const float* alpha = layer.color + size_t(left - roi.xbegin) * 4 + 3;
+        for (int y = 1; y < roi.height(); ++y, alpha += stride)
+            for (int i = 0; i < right - left; ++i) {
+                const bool opaque = alpha[i * 4] >= 0.5f;
+                if ((alpha[stride + i * 4] >= 0.5f) == opaque)
+                    continue;
+                // As for_each_run: a run from the window's first row is cut.
+                const int tile = floor_div(left + i - grid.anchor_x, size) - first;
+                if (run_begin[i] > 0)
+                    add_run(column, roi.ybegin + run_begin[i], roi.ybegin + y, opaque, 1,
+                            grid.anchor_y, [&](int row) {
+                                const int ty = floor_div(row - grid.anchor_y, size) - grid.y0;
+                                return size_t(ty) * tiles + tile;
+                            });
+                run_begin[i] = y;
+            }
+        for (int ty = 0; ty < grid.rows; ++ty)
+            for (int tile = 0; tile < tiles; ++tile) {
+                const ShapeRuns& down = column[size_t(ty) * tiles + tile];
+                ShapeRuns& r = runs[grid.index(first + tile, grid.y0 + ty)];
+                r.opaque_runs[1] += down.opaque_runs[1];
+                r.clear_runs[1] += down.clear_runs[1];
+            }
+    }, nthreads);
+}
+
+TileStats layer_stats(const SignedLayer& layer, const TileGrid& grid, int nthreads)
+{
+    const size_t n = size_t(grid.columns) * grid.rows;
+    TileStats stats { std::vector<float>(n * 4, 0.0f), std::vector<float>(n * 4, 0.0f),
+                      std::vector<float>(n, 0.0f), std::vector<uint8_t>(n, 0),
+                      std::vector<float>(n, INFINITY) };
+    std::vector<ShapeRuns> runs(n);
+    add_rows(layer, grid, stats, runs, nthreads);
+    add_column_runs(layer, grid, runs, nthreads);
     for (size_t t = 0; t < n; ++t)
         stats.width[t] = runs[t].width();
     return stats;
@@ -219,7 +340,7 @@ CellTiles plan_cell_tiles(const std::vector<SignedLayer>& layers, const OIIO::RO
             for (int tx = grid.x0; tx < grid.x0 + grid.columns; ++tx) {
                 float low[4] = { INFINITY, INFINITY, INFINITY, INFINITY },
                       high[4] = { -INFINITY, -INFINITY, -INFINITY, -INFINITY }, blur = 0.0f,
-                      width = float(CellTiles::size);
+                      width = INFINITY;
                 // The tile and those after it: a change at a border between
                 // tiles is found once, by the tile before it.
                 for (int y = ty; y <= ty + 1; ++y)
@@ -239,7 +360,7 @@ CellTiles plan_cell_tiles(const std::vector<SignedLayer>& layers, const OIIO::RO
                 const double reach = blur * layers[l].extent + 1.0;
                 if (high[3] - low[3] > alpha_tolerance)
                     mark_reach(grid, tx, ty, reach, occluded,
-                               float(fixed ? fixed : automatic_cells_across(blur, width)));
+                               float(fixed ? fixed : automatic_cells_across(blur, std::min(width, float(CellTiles::size)))));
                 bool varies = false;
                 for (int c = 0; c < 4; ++c)
                     varies |= high[c] - low[c] > light_tolerance;

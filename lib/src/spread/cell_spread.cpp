@@ -4,6 +4,8 @@
 #include <cmath>
 #include <utility>
 
+#include <immintrin.h>
+
 #include "util/parallel_rows.h"
 #include "util/simd.h"
 
@@ -226,9 +228,12 @@ void integrate_deltas(double* deltas, double* running, double* light, int width,
 /// pixel (16 corner taps each, against a run's 8); its footprints' edges
 /// through a cell move by at most 1/16 pixel, and the whole aperture's
 /// light that the change is taken against is made from the same runs.
+///
+/// One conversion instruction rounds it (to nearest, ties to even):
+/// std::round is a library call, and this runs at every lit pixel.
 float quantized(float radius)
 {
-    return std::round(radius * 8.0f) / 8.0f;
+    return float(_mm_cvtss_si64(_mm_set_ss(radius * 8.0f))) / 8.0f;
 }
 
 bool is_lit(const float* rgba)
@@ -257,6 +262,61 @@ float slope(const float* rgba, const float* radius, size_t i, size_t before, siz
     return 0.0f;
 }
 
+/// The runs of a block of rows, and the ranges of their radii quantized
+/// and as they were.
+struct BlockRuns {
+    std::vector<PixelRun> runs;
+    float lowest = INFINITY, highest = -INFINITY;  ///< quantized
+    float least = INFINITY, most = -INFINITY;
+
+    void add_ranges(const BlockRuns& other)
+    {
+        lowest = std::min(lowest, other.lowest);
+        highest = std::max(highest, other.highest);
+        least = std::min(least, other.least);
+        most = std::max(most, other.most);
+    }
+};
+
+/// The runs of lit pixels of one quantized radius in rows [first, end) of
+/// `roi` (from its top), and each row's count of them in counts[row].
+BlockRuns find_runs(const OIIO::ROI& roi, const float* rgba, const float* radius, size_t first,
+                    size_t end, size_t* counts)
+{
+    const size_t width = size_t(roi.width());
+    BlockRuns block;
+    // The ranges are kept in locals: a pixel's store to them would wait
+    // for the last.
+    float lowest = INFINITY, highest = -INFINITY, least = INFINITY, most = -INFINITY;
+    for (size_t y = first; y < end; ++y) {
+        const size_t row = y * width, before = block.runs.size();
+        auto lit = [&](size_t i) { return is_lit(rgba + (row + i) * 4); };
+        for (size_t x = 0; x < width;) {
+            if (!lit(x)) {
+                ++x;
+                continue;
+            }
+            const float r = quantized(radius[row + x]);
+            size_t run_end = x;
+            do {
+                least = std::min(least, radius[row + run_end]);
+                most = std::max(most, radius[row + run_end]);
+                ++run_end;
+            } while (run_end < width && quantized(radius[row + run_end]) == r && lit(run_end));
+            block.runs.push_back({ roi.xbegin + int(x), roi.xbegin + int(run_end), r });
+            lowest = std::min(lowest, r);
+            highest = std::max(highest, r);
+            x = run_end;
+        }
+        counts[y] = block.runs.size() - before;
+    }
+    block.lowest = lowest;
+    block.highest = highest;
+    block.least = least;
+    block.most = most;
+    return block;
+}
+
 }  // namespace
 
 void SignedLayer::set(const OIIO::ROI& pixels, const float* rgba, const float* radius,
@@ -270,35 +330,12 @@ void SignedLayer::set(const OIIO::ROI& pixels, const float* rgba, const float* r
     // each row's, and the blocks are then joined in order.
     constexpr size_t block_rows = 32;
     const size_t blocks = (height + block_rows - 1) / block_rows;
-    std::vector<std::vector<PixelRun>> found(blocks);
-    std::vector<float> lowest(blocks, INFINITY), highest(blocks, -INFINITY);
-    // The radius's own range over the lit pixels, before quantizing.
-    std::vector<float> least(blocks, INFINITY), most(blocks, -INFINITY);
+    std::vector<BlockRuns> found(blocks);
     row_runs.assign(height + 1, 0);
     parallel_for_each_item(0, int64_t(blocks), [&](int64_t b) {
-        for (size_t y = size_t(b) * block_rows; y < std::min(height, (size_t(b) + 1) * block_rows);
-             ++y) {
-            const size_t row = y * width, before = found[b].size();
-            auto lit = [&](size_t i) { return is_lit(rgba + (row + i) * 4); };
-            for (size_t x = 0; x < width;) {
-                if (!lit(x)) {
-                    ++x;
-                    continue;
-                }
-                const float r = quantized(radius[row + x]);
-                size_t end = x;
-                do {
-                    least[b] = std::min(least[b], radius[row + end]);
-                    most[b] = std::max(most[b], radius[row + end]);
-                    ++end;
-                } while (end < width && quantized(radius[row + end]) == r && lit(end));
-                found[b].push_back({ roi.xbegin + int(x), roi.xbegin + int(end), r });
-                lowest[b] = std::min(lowest[b], r);
-                highest[b] = std::max(highest[b], r);
-                x = end;
-            }
-            row_runs[y] = found[b].size() - before;
-        }
+        const size_t first = size_t(b) * block_rows;
+        found[b] = find_runs(roi, rgba, radius, first, std::min(height, first + block_rows),
+                             row_runs.data());
     }, nthreads);
     runs.clear();
     size_t total = 0;
@@ -306,8 +343,8 @@ void SignedLayer::set(const OIIO::ROI& pixels, const float* rgba, const float* r
         total += std::exchange(row_runs[y], total);
     row_runs.back() = total;
     runs.reserve(total);
-    for (const std::vector<PixelRun>& block : found)
-        runs.insert(runs.end(), block.begin(), block.end());
+    for (const BlockRuns& block : found)
+        runs.insert(runs.end(), block.runs.begin(), block.runs.end());
     lit = OIIO::ROI();
     for (size_t y = 0; y < height; ++y)
         if (row_runs[y + 1] > row_runs[y]) {
@@ -316,14 +353,13 @@ void SignedLayer::set(const OIIO::ROI& pixels, const float* rgba, const float* r
                                  row + 1);
             lit = lit.defined() ? OIIO::roi_union(lit, line) : line;
         }
-    radii[0] = blocks > 0 ? *std::min_element(lowest.begin(), lowest.end()) : 0.0f;
-    radii[1] = blocks > 0 ? *std::max_element(highest.begin(), highest.end()) : 0.0f;
-    if (radii[0] > radii[1])
-        radii[0] = radii[1] = 0.0f;
+    BlockRuns all;
+    for (const BlockRuns& block : found)
+        all.add_ranges(block);
+    radii[0] = all.lowest <= all.highest ? all.lowest : 0.0f;
+    radii[1] = all.lowest <= all.highest ? all.highest : 0.0f;
     gradient.clear();
-    if (blocks == 0
-        || *std::min_element(least.begin(), least.end())
-               >= *std::max_element(most.begin(), most.end()))
+    if (all.least >= all.most)
         return;
     gradient.assign(size_t(roi.npixels()) * 2, 0.0f);
     parallel_for_each_item(0, int64_t(height), [&](int64_t row) {
