@@ -241,6 +241,31 @@ TEST_CASE("a wide occluder takes the cells its whole width asks for, not its cor
     CHECK(cells >= one + 5.0);
 }
 
+TEST_CASE("a smooth gradient behind a fence takes no cells: every part of the lens sees it alike")
+{
+    // A wall at 10 m brightening by 1% across the frame behind the fence:
+    // whatever part of the lens a pixel sees it through, it sees the same
+    // light to within a thousandth.
+    Stack stack;
+    stack.add("gradient", 10.0f, [](int, int y, float* rgba) {
+        rgba[0] = rgba[1] = rgba[2] = 0.5f + 0.005f * (y - frame.ybegin) / frame.height();
+        rgba[3] = 1.0f;
+    });
+    stack.add("bars", 1.0f, [](int x, int, float* rgba) {
+        if ((x - centre_x + 256) % 16 < 4) {
+            rgba[0] = rgba[1] = rgba[2] = 0.01f;
+            rgba[3] = 1.0f;
+        }
+    });
+    SubApertureReport report;
+    const ImageBuf cells = stack.engine(0, OutputWindow::Input, &report);
+    const ImageBuf exact = thin_lens(stack.lens, bokeh);
+    WARN("a gradient behind a fence, against the thin lens: " << psnr_over(cells, exact, bokeh)
+         << " dB with " << report.tiles_with_cells << " tiles of cells");
+    CHECK(report.tiles_with_cells == 0);
+    CHECK(psnr_over(cells, exact, bokeh) >= 50.0);
+}
+
 TEST_CASE("the fence's shadow runs on past the data window into a grown one")
 {
     // The light at the right edge of the data and display windows: half its

@@ -14,9 +14,14 @@ namespace {
 /// differently.
 constexpr float alpha_tolerance = 1e-3f;
 
-/// Light that varies less than this (premultiplied, scene-linear) over a
-/// blur's reach is the same through every part of the lens.
+/// Light that varies less than this (premultiplied, scene-linear) plus
+/// the relative tolerance times its brightest there, over a blur's reach,
+/// is the same through every part of the lens. What cells change is a
+/// fraction of that range, and 2% of a level is about one code value of
+/// an 8-bit sRGB output at mid-grey (more below it): a dusk sky's
+/// gradient behind a branch takes no cells.
 constexpr float light_tolerance = 1e-3f;
+constexpr float relative_light_tolerance = 0.02f;
 
 /// The most cells across the aperture automatic cells take, and the
 /// fewest where cells are taken at all.
@@ -363,7 +368,7 @@ CellTiles plan_cell_tiles(const std::vector<SignedLayer>& layers, const OIIO::RO
                                float(fixed ? fixed : automatic_cells_across(blur, std::min(width, float(CellTiles::size)))));
                 bool varies = false;
                 for (int c = 0; c < 4; ++c)
-                    varies |= high[c] - low[c] > light_tolerance;
+                    varies |= high[c] - low[c] > light_tolerance + relative_light_tolerance * high[c];
                 if (varies)
                     mark_reach(grid, tx, ty, reach, varied, 1.0f);
             }
