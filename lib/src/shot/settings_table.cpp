@@ -405,7 +405,7 @@ std::vector<SettingRule> spread_rules()
                  "bokeh), composite the layers per part of the aperture, cut into about N "
                  "cells: 1 = the whole aperture at once (the layered model of compositing "
                  "tools); 0 = as many as each place needs: truer where near objects are "
-                 "blurred over detail, 2-6 times slower (default: 1)" },
+                 "blurred over detail, about 2 times slower (default: 1)" },
                [](auto& s) -> auto& { return s.spread.aperture_cells; }, 0, 256),
     };
 }
