@@ -129,6 +129,17 @@ Stack fence(const std::function<bool(int bar)>& bars, int light_x = centre_x, in
         Stack(display_x));
 }
 
+/// Adds dark opaque vertical bars `width` px wide every 16 px at `depth`.
+void add_bars(Stack& stack, float depth, int width)
+{
+    stack.add("bars", depth, [=](int x, int, float* rgba) {
+        if ((x - centre_x + 256) % 16 < width) {
+            rgba[0] = rgba[1] = rgba[2] = 0.01f;
+            rgba[3] = 1.0f;
+        }
+    });
+}
+
 /// The light's bokeh: its 20 px CoC around the centre.
 const ROI bokeh(centre_x - 12, centre_x + 12, centre_y - 12, centre_y + 12, 0, 1, 0, 4);
 
@@ -180,12 +191,7 @@ TEST_CASE("where every footprint through a cell is blocks wide, the cells are fo
             rgba[0] = rgba[1] = rgba[2] = light ? 1.0f : 0.05f;
             rgba[3] = 1.0f;
         });
-        s.add("bars", 0.5f, [](int x, int, float* rgba) {
-            if ((x - centre_x + 256) % 16 < 8) {
-                rgba[0] = rgba[1] = rgba[2] = 0.01f;
-                rgba[3] = 1.0f;
-            }
-        });
+        add_bars(s, 0.5f, 8);
         return s;
     };
     const Stack blurred = stack(false), bound = stack(true);
@@ -251,12 +257,7 @@ TEST_CASE("a smooth gradient behind a fence takes no cells: every part of the le
         rgba[0] = rgba[1] = rgba[2] = 0.5f + 0.005f * (y - frame.ybegin) / frame.height();
         rgba[3] = 1.0f;
     });
-    stack.add("bars", 1.0f, [](int x, int, float* rgba) {
-        if ((x - centre_x + 256) % 16 < 4) {
-            rgba[0] = rgba[1] = rgba[2] = 0.01f;
-            rgba[3] = 1.0f;
-        }
-    });
+    add_bars(stack, 1.0f, 4);
     SubApertureReport report;
     const ImageBuf cells = stack.engine(0, OutputWindow::Input, &report);
     const ImageBuf exact = thin_lens(stack.lens, bokeh);
