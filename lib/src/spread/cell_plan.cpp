@@ -99,8 +99,9 @@ void for_each_run(const float* alpha, int count, size_t stride, Run&& run)
         }
 }
 
-/// Adds a run of pixels [begin, end) along direction `d` to the runs of
-/// the tiles it passes, `tile_of(i)` giving the tile of its i-th pixel.
+/// Adds a run of pixels [begin, end) along direction `d` (coordinates
+/// along it, tiles starting at `tile_start`) to the runs of the tiles it
+/// passes, `tile_of(i)` giving the index of the tile of its pixel at i.
 template<class TileOf>
 void add_run(std::vector<ShapeRuns>& runs, int begin, int end, bool opaque, int d,
              int tile_start, TileOf&& tile_of)
