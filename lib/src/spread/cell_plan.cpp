@@ -27,7 +27,6 @@ constexpr float relative_light_tolerance = 0.02f;
 /// fewest where cells are taken at all.
 constexpr int most_cells_across = 12;
 
-
 /// A grid of tiles over pixels, anchored where the frame's tiles are.
 struct TileGrid {
     int x0, y0;           ///< the grid's first tile, in tiles from the anchor
@@ -305,7 +304,8 @@ int64_t CellTiles::with_cells() const
 
 int automatic_cells_across(double radius, double width)
 {
-    return int(std::clamp(std::ceil(2.0 * radius / width), 4.0, double(most_cells_across)));
+    const double shapes = std::min(width, double(CellTiles::size));
+    return int(std::clamp(std::ceil(2.0 * radius / shapes), 4.0, double(most_cells_across)));
 }
 
 CellTiles plan_cell_tiles(const std::vector<SignedLayer>& layers, const OIIO::ROI& window,
@@ -366,10 +366,11 @@ CellTiles plan_cell_tiles(const std::vector<SignedLayer>& layers, const OIIO::RO
                 const double reach = blur * layers[l].extent + 1.0;
                 if (high[3] - low[3] > alpha_tolerance)
                     mark_reach(grid, tx, ty, reach, occluded,
-                               float(fixed ? fixed : automatic_cells_across(blur, std::min(width, float(CellTiles::size)))));
+                               float(fixed ? fixed : automatic_cells_across(blur, width)));
                 bool varies = false;
                 for (int c = 0; c < 4; ++c)
-                    varies |= high[c] - low[c] > light_tolerance + relative_light_tolerance * high[c];
+                    varies |= high[c] - low[c]
+                              > light_tolerance + relative_light_tolerance * high[c];
                 if (varies)
                     mark_reach(grid, tx, ty, reach, varied, 1.0f);
             }

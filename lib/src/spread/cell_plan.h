@@ -29,10 +29,11 @@ struct CellTiles {
 };
 
 /// The cells across the aperture in automatic mode for an occluder of CoC
-/// radius `radius` whose shapes are `width` pixels wide: enough that its
-/// footprint through one cell is no wider than its shapes. Fewer cells than
-/// that alias: they print a coarse false shadow, further from the lens's
-/// than the whole aperture's even dimming.
+/// radius `radius` whose shapes are `width` pixels wide (infinite: no
+/// edge): enough that its footprint through one cell is no wider than its
+/// shapes, nor than a tile. Fewer cells than that alias: they print a
+/// coarse false shadow, further from the lens's than the whole aperture's
+/// even dimming.
 int automatic_cells_across(double radius, double width);
 
 /// The tiles of `window` that `layers` (back to front) need cells in: where
