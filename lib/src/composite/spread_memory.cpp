@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include <OpenImageIO/parallel.h>
 
@@ -50,26 +51,35 @@ double change_bytes(const LayeredScene& layered, const ROI& frame)
 /// radius and runs, here 4 bytes a pixel), and again over blocks of 2 x 2
 /// and 4 x 4 pixels (their colour, radius and slope); and on each of
 /// `nthreads` threads, a window of tiles of `frame` with each layer's sums
-/// (two float RGBA) and the window's light through a cell (double RGBA)
-/// and transmittances (two doubles).
+/// (two float RGBA) and where it is solid (a byte), the window's light
+/// through a cell (double RGBA) and transmittances (two doubles), and the
+/// counts that find where a layer is solid (an int over the window grown
+/// by the farthest blur).
 double cell_work_bytes(const LayeredScene& layered, const ROI& frame, int nthreads)
 {
     double bytes = 0.0;
-    for (const Layer& layer : layered.layers) {
+    int reach = 0;
+    for (size_t i = 0; i < layered.layers.size(); ++i) {
+        const Layer& layer = layered.layers[i];
+        const ROI roi = layer.color.roi();
+        reach = std::max(reach, roi.xbegin - grown_by_blur(roi, layered.reports[i]).xbegin);
         const bool copied = layer.color.spec().format != TypeFloat || layer.color.nchannels() != 4;
         const double over_blocks = (1.0 / 4.0 + 1.0 / 16.0) * float_bytes(1.0, 4 + 1 + 2);
-        bytes += double(layer.color.roi().npixels())
+        bytes += double(roi.npixels())
                  * ((copied ? float_bytes(1.0, 4) : 0.0) + float_bytes(1.0, 3) + over_blocks);
     }
     const int columns = SubApertureLayers::window_columns * CellTiles::size,
               rows = SubApertureLayers::window_rows * CellTiles::size;
-    const double window = double(std::min(frame.width(), columns) + 2)
-                          * (std::min(frame.height(), rows) + 2);
-    const double per_layer = 2.0 * float_bytes(1.0, 4);
+    const double width = std::min(frame.width(), columns) + 2,
+                 height = std::min(frame.height(), rows) + 2;
+    const double per_layer = 2.0 * float_bytes(1.0, 4) + 1.0;
     const double per_pixel = 4.0 * sizeof(double) + 2.0 * sizeof(double);
+    const double counts = (width + 2.0 * reach) * (height + 2.0 * reach) * sizeof(int32_t);
     const int threads = nthreads > 0 ? nthreads : OIIO::get_int_attribute("threads", 1);
     return bytes
-           + double(threads) * window * (per_layer * double(layered.layers.size()) + per_pixel);
+           + double(threads)
+                 * (width * height * (per_layer * double(layered.layers.size()) + per_pixel)
+                    + counts);
 }
 
 }  // namespace

@@ -59,14 +59,20 @@ DEFOCUS_KERNEL d4 covering(d4 light)
 /// what of it reaches the camera (`reaching`: RGB, and in the 4th lane the
 /// share of the lens that the layers in front let through), and lets
 /// `passing` (what the layers in front let through) through this one.
+/// Where the layer is `solid` (SignedLayer::solid_in), it covers the pixel
+/// through every part of the lens, and its light is taken as covering it
+/// whole: its runs are cut where the quantized radius steps, and through a
+/// cell the footprints on either side of a step move apart or together by
+/// the step times the cell's offset, leaving the pixel a little under or
+/// over covered; a light behind would show through the gap.
 DEFOCUS_CLONES
-void take_row(const double* light, double weight, float* whole, float* reaching,
-              double* passing, int pixels)
+void take_row(const double* light, const uint8_t* solid, double weight, float* whole,
+              float* reaching, double* passing, int pixels)
 {
     for (int x = 0; x < pixels; ++x) {
         const d4 raw = load4(light + x * 4);
         store4(whole + x * 4, load4(whole + x * 4) + splat(weight) * raw);
-        d4 seen = covering(raw);
+        d4 seen = solid[x] && raw[3] > 0.0 ? raw * splat(1.0 / raw[3]) : covering(raw);
         const double alpha = seen[3];
         seen.v[3] = 1.0;
         store4(reaching + x * 4, load4(reaching + x * 4) + splat(weight * passing[x]) * seen);
@@ -184,6 +190,7 @@ struct BandSums {
     std::vector<float> reaching;  ///< E_l (RGB) and T_{l+1} a pixel, per layer, in its box
     std::vector<double> passing;  ///< through the layers so far, this cell
     std::vector<double> through;  ///< T_0: through every layer, all cells
+    std::vector<std::vector<uint8_t>> solid;  ///< per layer, SignedLayer::solid_in the band
 
     void sum(const std::vector<SignedLayer>& all, const std::vector<ApertureCell>& cells,
              const ROI& pixels, CellBand& spread);
@@ -210,6 +217,20 @@ void BandSums::sum(const std::vector<SignedLayer>& all, const std::vector<Apertu
             layers.push_back(l);
             boxes.push_back(box);
         }
+    // A layer solid over the whole band hides those behind it through
+    // every part of the lens: they are not spread, and their sums stay
+    // nothing, as is their change.
+    size_t first_seen = 0;
+    solid.resize(layers.size());
+    for (size_t i = layers.size(); i-- > 0;) {
+        all[layers[i]].solid_in(band, solid[i]);
+        if (std::all_of(solid[i].begin(), solid[i].end(), [](uint8_t s) { return s != 0; })) {
+            first_seen = i;
+            break;
+        }
+    }
+    for (size_t i = 0; i < first_seen; ++i)
+        solid[i].assign(size_t(band.npixels()), 0);
     const size_t n = size_t(band.npixels()), row = size_t(band.width());
     whole.assign(layers.size() * n * 4, 0.0f);
     reaching.assign(layers.size() * n * 4, 0.0f);
@@ -217,12 +238,12 @@ void BandSums::sum(const std::vector<SignedLayer>& all, const std::vector<Apertu
     through.assign(n, 0.0);
     spread.reset(band);
     for (const ApertureCell& cell : cells) {
-        for (size_t i = layers.size(); i-- > 0;) {
+        for (size_t i = layers.size(); i-- > first_seen;) {
             spread.spread(all[layers[i]], cell);
             spread.integrate([&](int y, int x_begin, int x_end, const double* light) {
                 const size_t first = size_t(x_begin - band.xbegin);
                 const size_t at = size_t(y - band.ybegin) * row + first;
-                take_row(light + first * 4, cell.weight, &whole[(i * n + at) * 4],
+                take_row(light + first * 4, &solid[i][at], cell.weight, &whole[(i * n + at) * 4],
                          &reaching[(i * n + at) * 4], &passing[at], x_end - x_begin);
             });
         }
@@ -259,11 +280,15 @@ void BandSums::change(size_t i, int x, int y, float* out) const
         std::fill(out, out + 4, 0.0f);
         return;
     }
+    // Where the layer is solid, its light through the whole lens covers the
+    // pixel whole as it does through each cell: the engine's spread of the
+    // surface does, and only the cells' difference from it is a change.
     const double a = w[3];
-    const double scale = a > 1.0 ? 1.0 / a : 1.0;
+    const bool whole_cover = solid[i][p] && a > 0.0;
+    const double scale = a > 1.0 || whole_cover ? 1.0 / a : 1.0;
     for (int c = 0; c < 3; ++c)
         out[c] = float(e[c] / front - w[c] * scale);
-    out[3] = float((1.0 - back / front) - std::clamp(a, 0.0, 1.0));
+    out[3] = float((1.0 - back / front) - (whole_cover ? 1.0 : std::clamp(a, 0.0, 1.0)));
 }
 
 void BandSums::all_changes(std::vector<float>& out) const

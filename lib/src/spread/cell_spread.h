@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include <OpenImageIO/imagebuf.h>
@@ -64,6 +65,11 @@ struct SignedLayer {
     OIIO::ROI light_in(const OIIO::ROI& window) const;
     /// The pixels whose light can land in `window`, were they lit.
     OIIO::ROI sources_of(const OIIO::ROI& window) const;
+    /// For each pixel of `window` (row by row), 1 where every pixel whose
+    /// light can land on it is lit, opaque and on one surface with its
+    /// neighbours (no step in depth): through every part of the lens the
+    /// layer covers it, and whatever lies behind is hidden.
+    void solid_in(const OIIO::ROI& window, std::vector<uint8_t>& solid) const;
 
     /// `roi`'s pixels of colour `color` and signed radius `radius` (a float
     /// a pixel), as runs.
