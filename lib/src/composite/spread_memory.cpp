@@ -47,9 +47,9 @@ double change_bytes(const LayeredScene& layered, const ROI& frame)
 
 /// What SubApertureLayers holds while it finds the changes, and frees
 /// before the layers are spread: each layer as the cells read it (a float
-/// RGBA copy unless it is one, its radius's slope, and while it is made its
-/// radius and runs, here 4 bytes a pixel), and again over blocks of 2 x 2
-/// and 4 x 4 pixels (their colour, radius and slope); and on each of
+/// RGBA copy unless it is one, and while it is made its radius, and its
+/// runs, here 8 bytes a pixel), and again over blocks of 2 x 2 and 4 x 4
+/// pixels (their colour, radius and runs); and on each of
 /// `nthreads` threads, a window of tiles of `frame` with each layer's sums
 /// (two float RGBA) and where it is solid (a byte), the window's light
 /// through a cell (double RGBA) and transmittances (two doubles), and the
@@ -66,7 +66,7 @@ double cell_work_bytes(const LayeredScene& layered, const ROI& frame, int nthrea
         const bool copied = layer.color.spec().format != TypeFloat || layer.color.nchannels() != 4;
         const double over_blocks = (1.0 / 4.0 + 1.0 / 16.0) * float_bytes(1.0, 4 + 1 + 2);
         bytes += double(roi.npixels())
-                 * ((copied ? float_bytes(1.0, 4) : 0.0) + float_bytes(1.0, 3) + over_blocks);
+                 * ((copied ? float_bytes(1.0, 4) : 0.0) + float_bytes(1.0, 2) + over_blocks);
     }
     const int columns = SubApertureLayers::window_columns * CellTiles::size,
               rows = SubApertureLayers::window_rows * CellTiles::size;

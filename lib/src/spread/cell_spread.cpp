@@ -42,14 +42,11 @@ DEFOCUS_KERNEL AxisDeltas axis_deltas(double a, double b, double lo, double hi)
                -(b - fb) * scale } };
 }
 
-/// The gradient of a radius that does not change.
-constexpr float no_gradient[2] = { 0.0f, 0.0f };
-
-/// How much a pixel's footprint through the part of the lens about (ux, uy)
-/// scales the area of the surface it is on, whose radius has `gradient`.
-DEFOCUS_KERNEL double area_scale(double ux, double uy, const float* gradient)
+/// How much a run's footprints through the part of the lens about (ux, uy)
+/// scale the area of the surface it is on.
+DEFOCUS_KERNEL double area_scale(double ux, double uy, const PixelRun& run)
 {
-    return std::max(0.0, 1.0 + ux * gradient[0] + uy * gradient[1]);
+    return std::max(0.0, 1.0 + ux * run.slope[0] + uy * run.slope[1]);
 }
 
 /// Adds one pixel's light `value` through cell `s` at (cx, cy), window
@@ -74,16 +71,15 @@ DEFOCUS_KERNEL void spread_pixel(const ApertureCell& s, double cx, double cy, do
 }
 
 /// Adds a run of pixels of one radius r, window columns [x0, x1), through
-/// cell `s`: their x deltas are the same taps at every pixel, so the run is
-/// filtered along the row once into `line`, and the line added to the
-/// cell's rows. Deltas left of the window add up at its first column (the
-/// rectangles cut there), and those right of it are dropped.
+/// cell `s`, their light scaled by `scale`: their x deltas are the same
+/// taps at every pixel, so the run is filtered along the row once into
+/// `line`, and the line added to the cell's rows. Deltas left of the window
+/// add up at its first column (the rectangles cut there), and those right
+/// of it are dropped.
 DEFOCUS_KERNEL void spread_run(const ApertureCell& s, int x0, int x1, double cy, double r,
-                               const float* rgba, const float* gradient, size_t gradient_step,
-                               int w, int h, double* deltas, size_t stride,
-                               std::vector<double>& line)
+                               const float* rgba, double scale, int w, int h, double* deltas,
+                               size_t stride, std::vector<double>& line)
 {
-    const double ux = 0.5 * (s.u0 + s.u1), uy = 0.5 * (s.v0 + s.v1);
     const double ua = 0.5 + r * s.u0, ub = 0.5 + r * s.u1;
     const AxisDeltas taps = axis_deltas(std::min(ua, ub), std::max(ua, ub), -INFINITY, INFINITY);
     const int span = taps.at[3] - taps.at[0];
@@ -96,8 +92,8 @@ DEFOCUS_KERNEL void spread_run(const ApertureCell& s, int x0, int x1, double cy,
     line.resize(size_t(length + n) * 4);
     double* values = line.data();
     double* l = values + size_t(length) * 4;
-    for (int i = 0; i < length; ++i, rgba += 4, gradient += gradient_step)
-        store4(values + size_t(i) * 4, load4(rgba) * splat(area_scale(ux, uy, gradient)));
+    for (int i = 0; i < length; ++i, rgba += 4)
+        store4(values + size_t(i) * 4, load4(rgba) * splat(scale));
     int offset[4];
     d4 weight[4];
     for (int k = 0; k < 4; ++k) {
@@ -184,24 +180,18 @@ void spread_pixels(const SignedLayer& layer, const ApertureCell& cell, const OII
                 continue;
             const size_t first = row * width + size_t(begin - layer.roi.xbegin);
             const float* rgba = layer.color + first * 4;
-            // A layer of one radius has no gradient: every pixel's reads
-            // the same zeros.
-            const size_t step = layer.gradient.empty() ? 0 : 2;
-            const float* slope = step ? layer.gradient.data() + first * 2 : no_gradient;
+            const double scale = area_scale(ux, uy, run);
             const int wx0 = begin - window.xbegin, wx1 = end - window.xbegin;
             // A run costs its length plus its footprint's width, a pixel
             // alone 4 times its length.
             const double footprint = std::abs(r * (cell.u1 - cell.u0));
             if (wx1 - wx0 >= 4 && 4.0 * (wx1 - wx0) > footprint) {
-                spread_run(cell, wx0, wx1, cy, r, rgba, slope, step, w, h, deltas, stride, line);
+                spread_run(cell, wx0, wx1, cy, r, rgba, scale, w, h, deltas, stride, line);
                 continue;
             }
-            for (int px = wx0; px < wx1; ++px) {
-                const size_t i = size_t(px - wx0);
-                spread_pixel(cell, px + 0.5, cy, r,
-                             load4(rgba + i * 4) * splat(area_scale(ux, uy, slope + i * step)),
+            for (int px = wx0; px < wx1; ++px)
+                spread_pixel(cell, px + 0.5, cy, r, load4(rgba + size_t(px - wx0) * 4) * splat(scale),
                              w, h, deltas, stride);
-            }
         }
     }
 }
@@ -358,19 +348,22 @@ void SignedLayer::set(const OIIO::ROI& pixels, const float* rgba, const float* r
         all.add_ranges(block);
     radii[0] = all.lowest <= all.highest ? all.lowest : 0.0f;
     radii[1] = all.lowest <= all.highest ? all.highest : 0.0f;
-    gradient.clear();
     if (all.least >= all.most)
         return;
-    gradient.assign(size_t(roi.npixels()) * 2, 0.0f);
     parallel_for_each_item(0, int64_t(height), [&](int64_t row) {
         const size_t y = size_t(row);
-        for (size_t x = 0; x < width; ++x) {
-            const size_t i = y * width + x;
-            if (!is_lit(rgba + i * 4))
-                continue;
-            gradient[i * 2] = slope(rgba, radius, i, x > 0 ? i - 1 : i, x + 1 < width ? i + 1 : i);
-            gradient[i * 2 + 1] = slope(rgba, radius, i, y > 0 ? i - width : i,
-                                        y + 1 < height ? i + width : i);
+        for (size_t k = row_runs[y]; k < row_runs[y + 1]; ++k) {
+            PixelRun& run = runs[k];
+            double along = 0.0, down = 0.0;
+            for (int column = run.x_begin; column < run.x_end; ++column) {
+                const size_t x = size_t(column - roi.xbegin), i = y * width + x;
+                along += slope(rgba, radius, i, x > 0 ? i - 1 : i, x + 1 < width ? i + 1 : i);
+                down += slope(rgba, radius, i, y > 0 ? i - width : i,
+                              y + 1 < height ? i + width : i);
+            }
+            const int length = run.x_end - run.x_begin;
+            run.slope[0] = float(along / length);
+            run.slope[1] = float(down / length);
         }
     }, nthreads);
 }

@@ -26,10 +26,12 @@ inline bool has_pixels(const OIIO::ROI& roi)
 /// same, and every cell of it lets the same through.
 constexpr float sharp_radius = 0.5f;
 
-/// Lit pixels of one row and one signed radius, columns [x_begin, x_end).
+/// Lit pixels of one row and one signed radius, columns [x_begin, x_end),
+/// and the radius's mean slope over them (see SignedLayer).
 struct PixelRun {
     int x_begin, x_end;
     float radius;
+    float slope[2] = { 0.0f, 0.0f };  ///< ∂ρ/∂x, ∂ρ/∂y a pixel
 };
 
 /// A layer as sub-aperture spreading reads it: premultiplied RGBA of each
@@ -42,16 +44,14 @@ struct PixelRun {
 /// keeps each pixel's light, so a tilted opaque surface would come out
 /// denser than opaque through one side of the lens and see-through on the
 /// other, and "over" per cell would cut seams into it; each pixel's light
-/// through a cell is weighted by that scale instead (`gradient`, ∇ρ), which
+/// through a cell is weighted by that scale instead, with its run's mean
+/// ∇ρ (a run's pixels lie within 1/8 pixel of radius on one surface), which
 /// leaves the whole aperture's light as it was.
 struct SignedLayer {
     OIIO::ROI roi;
     const float* color = nullptr;    ///< 4 floats a pixel
     std::vector<PixelRun> runs;      ///< row by row, left to right
     std::vector<size_t> row_runs;    ///< row y's runs start at row_runs[y - roi.ybegin]; one past
-    /// ∂ρ/∂x, ∂ρ/∂y a pixel, 0 across a step in depth; empty where every
-    /// lit pixel has the same radius (a layer at one depth: the sky).
-    std::vector<float> gradient;
     float extent = 1.0f;             ///< how far the aperture reaches per unit of radius
     float radii[2] = { 0.0f, 0.0f }; ///< the lowest and highest signed radius lit
     OIIO::ROI lit;                   ///< the bounds of the lit pixels (undefined: none)
