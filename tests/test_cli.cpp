@@ -1081,8 +1081,9 @@ TEST_CASE("a full disk: a one-line error, no partial file, the old output and ot
     REQUIRE(Filesystem::copy(small, dir + "/f.0001.exr"));
     REQUIRE(Filesystem::copy(dir + "/big.exr", dir + "/f.0002.exr"));
     Filesystem::write_text_file(dir + "/full.sh", script);
-    REQUIRE(run((namespaces ? "unshare -rm bash " : "bash ") + dir + "/full.sh", log) == 0);
+    const int status = run((namespaces ? "unshare -rm bash " : "bash ") + dir + "/full.sh", log);
     INFO(log);
+    REQUIRE(status == 0);
     CHECK_FALSE(Strutil::contains(log, "setup failed"));
     // Each format says why.
     const std::string why = namespaces ? ": cannot write: No space left on device"

@@ -314,8 +314,9 @@ TEST_CASE("Python's ImageBuf opens a .dof with the same pixels, and takes hints"
     const std::string path = scratch_dir("plugin_python") + "/check.py";
     Filesystem::write_text_file(path, script);
     std::string log;
-    REQUIRE(run(with_plugin + PYTHON_BIN + " " + path, log) == 0);
+    const int status = run(with_plugin + PYTHON_BIN + " " + path, log);
     INFO(log);
+    REQUIRE(status == 0);
     CHECK(Strutil::contains(log, "plain True"));
     CHECK(Strutil::contains(log, "hinted True"));
 }
