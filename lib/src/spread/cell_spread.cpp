@@ -352,16 +352,25 @@ void SignedLayer::set(const OIIO::ROI& pixels, const float* rgba, const float* r
         return;
     parallel_for_each_item(0, int64_t(height), [&](int64_t row) {
         const size_t y = size_t(row);
+        auto along_at = [&](size_t x) {
+            const size_t i = y * width + x;
+            return slope(rgba, radius, i, x > 0 ? i - 1 : i, x + 1 < width ? i + 1 : i);
+        };
         for (size_t k = row_runs[y]; k < row_runs[y + 1]; ++k) {
             PixelRun& run = runs[k];
-            double along = 0.0, down = 0.0;
-            for (int column = run.x_begin; column < run.x_end; ++column) {
-                const size_t x = size_t(column - roi.xbegin), i = y * width + x;
-                along += slope(rgba, radius, i, x > 0 ? i - 1 : i, x + 1 < width ? i + 1 : i);
+            const int length = run.x_end - run.x_begin;
+            const size_t first = size_t(run.x_begin - roi.xbegin), last = first + length - 1;
+            // A run's inner pixels have their neighbours on their surface,
+            // so their central differences add up to the ends'.
+            const float* r = radius + y * width;
+            double along = along_at(first), down = 0.0;
+            if (last > first)
+                along += along_at(last) + 0.5 * (r[last] + r[last - 1] - r[first] - r[first + 1]);
+            for (size_t x = first; x <= last; ++x) {
+                const size_t i = y * width + x;
                 down += slope(rgba, radius, i, y > 0 ? i - width : i,
                               y + 1 < height ? i + width : i);
             }
-            const int length = run.x_end - run.x_begin;
             run.slope[0] = float(along / length);
             run.slope[1] = float(down / length);
         }
