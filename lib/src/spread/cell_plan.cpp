@@ -113,9 +113,9 @@ void add_run(std::vector<ShapeRuns>& runs, int begin, int end, bool opaque, int 
     }
 }
 
-/// Adds each tile's channel ranges, lit pixels and blur, its opaque and
-/// clear pixels and their runs along rows.
-void add_rows(const SignedLayer& layer, const TileGrid& grid, TileStats& stats,
+/// Adds each tile's channel ranges, lit pixels and blur and, with
+/// `shapes`, its opaque and clear pixels and their runs along rows.
+void add_rows(const SignedLayer& layer, const TileGrid& grid, bool shapes, TileStats& stats,
               std::vector<ShapeRuns>& runs, int nthreads)
 {
     // Tiles the layer covers whole start from their first pixel; those it
@@ -133,10 +133,11 @@ void add_rows(const SignedLayer& layer, const TileGrid& grid, TileStats& stats,
         const int tile_top = grid.anchor_y + ty * size;
         for (int y = std::max(roi.ybegin, tile_top); y < std::min(roi.yend, tile_top + size); ++y) {
             const float* rgba = layer.color + size_t(y - roi.ybegin) * stride;
-            for_each_run(rgba + 3, roi.width(), 4, [&](int begin, int end, bool opaque) {
-                add_run(runs, roi.xbegin + begin, roi.xbegin + end, opaque, 0, grid.anchor_x,
-                        [&](int x) { return tile_at(x, y); });
-            });
+            if (shapes)
+                for_each_run(rgba + 3, roi.width(), 4, [&](int begin, int end, bool opaque) {
+                    add_run(runs, roi.xbegin + begin, roi.xbegin + end, opaque, 0, grid.anchor_x,
+                            [&](int x) { return tile_at(x, y); });
+                });
             // A tile's part of the row at a time, its ranges kept in
             // registers (stored through a pointer, they would be stored
             // at every pixel: the pixels are floats too).
@@ -236,14 +237,18 @@ void add_column_runs(const SignedLayer& layer, const TileGrid& grid, std::vector
     }, nthreads);
 }
 
-TileStats layer_stats(const SignedLayer& layer, const TileGrid& grid, int nthreads)
+/// A layer's stats in each tile of `grid`; the widths of its shapes only
+/// with `shapes` (else infinite).
+TileStats layer_stats(const SignedLayer& layer, const TileGrid& grid, bool shapes, int nthreads)
 {
     const size_t n = size_t(grid.columns) * grid.rows;
     TileStats stats { std::vector<float>(n * 4, 0.0f), std::vector<float>(n * 4, 0.0f),
                       std::vector<float>(n, 0.0f), std::vector<uint8_t>(n, 0),
                       std::vector<float>(n, INFINITY) };
     std::vector<ShapeRuns> runs(n);
-    add_rows(layer, grid, stats, runs, nthreads);
+    add_rows(layer, grid, shapes, stats, runs, nthreads);
+    if (!shapes)
+        return stats;
     add_column_runs(layer, grid, runs, nthreads);
     for (size_t t = 0; t < n; ++t)
         stats.width[t] = runs[t].width();
@@ -340,7 +345,8 @@ CellTiles plan_cell_tiles(const std::vector<SignedLayer>& layers, const OIIO::RO
     // tile and its neighbours.
     std::vector<float> behind(n, 0.0f), needed(n, 0.0f);
     for (size_t l = 0; l < layers.size(); ++l) {
-        const TileStats stats = layer_stats(layers[l], grid, nthreads);
+        // The farthest layer occludes nothing: its shapes do not count.
+        const TileStats stats = layer_stats(layers[l], grid, l > 0, nthreads);
         std::vector<float> occluded(n, 0.0f), varied(n, 0.0f);
         for (int ty = grid.y0; ty < grid.y0 + grid.rows; ++ty)
             for (int tx = grid.x0; tx < grid.x0 + grid.columns; ++tx) {
