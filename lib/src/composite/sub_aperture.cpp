@@ -28,30 +28,22 @@ void make_source(const Layer& layer, const CircleOfConfusion& coc, double extent
     ROI depth_roi = roi;
     depth_roi.chend = layer.depth.nchannels();
     const FloatPixels depth(layer.depth, depth_roi);
-    std::vector<float> radius(size_t(roi.npixels()));
+    // Left unset: every pixel is written below (a zeroed vector would fault
+    // in its pages on one thread).
+    std::unique_ptr<float[]> radius(new float[size_t(roi.npixels())]);
     parallel_for(roi.ybegin, roi.yend, [&](int64_t y) {
         for (int x = roi.xbegin; x < roi.xend; ++x)
             radius[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)]
                 = float(0.5 * coc.diameter(*depth(x, int(y)), x, int(y)));
     }, by_rows(nthreads));
     signed_layer.set(roi, roi.npixels() > 0 ? color(roi.xbegin, roi.ybegin) : nullptr,
-                     radius.data(), float(extent), nthreads);
+                     radius.get(), float(extent), nthreads);
 }
 
 /// Whether `layer`'s light can reach `window`.
 bool reaches(const SignedLayer& layer, const ROI& window)
 {
     return has_pixels(layer.light_in(window));
-}
-
-/// A spread pixel as "over" takes it, as the engine composites: where a
-/// layer's own pixels overlap past full coverage, scaled back to it.
-DEFOCUS_KERNEL d4 covering(d4 light)
-{
-    const double a = light[3];
-    light *= splat(a > 1.0 ? 1.0 / a : 1.0);
-    light.v[3] = std::clamp(a, 0.0, 1.0);
-    return light;
 }
 
 /// One layer's row of light through a cell of share `weight`, taken front
@@ -64,7 +56,9 @@ DEFOCUS_KERNEL d4 covering(d4 light)
 /// whole: its runs are cut where the quantized radius steps, and through a
 /// cell the footprints on either side of a step move apart or together by
 /// the step times the cell's offset, leaving the pixel a little under or
-/// over covered; a light behind would show through the gap.
+/// over covered; a light behind would show through the gap. Elsewhere "over"
+/// takes it as the engine composites: where a layer's own pixels overlap
+/// past full coverage, scaled back to it.
 DEFOCUS_CLONES
 void take_row(const double* light, const uint8_t* solid, double weight, float* whole,
               float* reaching, double* passing, int pixels)
@@ -72,8 +66,10 @@ void take_row(const double* light, const uint8_t* solid, double weight, float* w
     for (int x = 0; x < pixels; ++x) {
         const d4 raw = load4(light + x * 4);
         store4(whole + x * 4, load4(whole + x * 4) + splat(weight) * raw);
-        d4 seen = solid[x] && raw[3] > 0.0 ? raw * splat(1.0 / raw[3]) : covering(raw);
-        const double alpha = seen[3];
+        const double a = raw[3];
+        const bool whole_cover = solid[x] && a > 0.0;
+        d4 seen = whole_cover || a > 1.0 ? raw * splat(1.0 / a) : raw;
+        const double alpha = whole_cover ? 1.0 : std::clamp(a, 0.0, 1.0);
         seen.v[3] = 1.0;
         store4(reaching + x * 4, load4(reaching + x * 4) + splat(weight * passing[x]) * seen);
         passing[x] *= 1.0 - alpha;
@@ -223,8 +219,7 @@ void BandSums::sum(const std::vector<SignedLayer>& all, const std::vector<Apertu
     size_t first_seen = 0;
     solid.resize(layers.size());
     for (size_t i = layers.size(); i-- > 0;) {
-        all[layers[i]].solid_in(band, solid[i]);
-        if (std::all_of(solid[i].begin(), solid[i].end(), [](uint8_t s) { return s != 0; })) {
+        if (all[layers[i]].solid_in(band, solid[i])) {
             first_seen = i;
             break;
         }
@@ -418,44 +413,48 @@ void SubApertureLayers::keep_between_blocks(const BandSums& sums, int scale, siz
 {
     const ROI& blocks = sums.band;
     const size_t per_layer = size_t(blocks.npixels()) * 4;
-    // Pixel x's centre in blocks, whose centres are at block + 1/2.
-    auto position = [&](int x, int origin, int begin, int end, int& block, float& along) {
-        const float b = (x + 0.5f - origin) / float(scale) - 0.5f;
-        block = std::clamp(int(std::floor(b)), begin, end - 2);
-        along = std::clamp(b - float(block), 0.0f, 1.0f);
+    // Each pixel's centre among the blocks' centres (at block + 1/2): the
+    // block before it, and how far along to the next.
+    struct Between {
+        int block;
+        float along;
     };
+    auto between = [&](int x, int origin, int begin, int end) {
+        const float b = (x + 0.5f - origin) / float(scale) - 0.5f;
+        const int block = std::clamp(int(std::floor(b)), begin, end - 2);
+        return Between { block, std::clamp(b - float(block), 0.0f, 1.0f) };
+    };
+    Between columns[CellTiles::size];
+    for (int x = tile.xbegin; x < tile.xend; ++x)
+        columns[x - tile.xbegin] = between(x, m_tiles.window.xbegin, blocks.xbegin, blocks.xend);
+    const size_t row_floats = size_t(blocks.width()) * 4;
+    float row[CellTiles::size * 4];
     for (size_t l = 0; l < m_offset.size(); ++l) {
         const int64_t at = offset(l, t);
         if (at < 0)
             continue;
         const auto found = std::find(sums.layers.begin(), sums.layers.end(), l);
-        const float* layer = found == sums.layers.end()
-                                 ? nullptr
-                                 : &changes[size_t(found - sums.layers.begin()) * per_layer];
-        for (int y = tile.ybegin; y < tile.yend; ++y) {
-            int by;
-            float fy;
-            position(y, m_tiles.window.ybegin, blocks.ybegin, blocks.yend, by, fy);
-            Imath::half* out = &m_pixels[size_t(at) + (y - tile.ybegin) * CellTiles::size * 4];
-            for (int x = tile.xbegin; x < tile.xend; ++x, out += 4) {
-                float change[4] = { 0.0f, 0.0f, 0.0f, 0.0f };
-                if (layer) {
-                    int bx;
-                    float fx;
-                    position(x, m_tiles.window.xbegin, blocks.xbegin, blocks.xend, bx, fx);
-                    for (int j = 0; j < 2; ++j)
-                        for (int i = 0; i < 2; ++i) {
-                            const float w = (i ? fx : 1.0f - fx) * (j ? fy : 1.0f - fy);
-                            const size_t block
-                                = size_t(by + j - blocks.ybegin) * blocks.width()
-                                  + size_t(bx + i - blocks.xbegin);
-                            const float* c = layer + block * 4;
-                            for (int k = 0; k < 4; ++k)
-                                change[k] += w * c[k];
-                        }
-                }
-                std::copy(change, change + 4, out);
+        Imath::half* out = &m_pixels[size_t(at)];
+        if (found == sums.layers.end()) {
+            std::fill(out, out + tile_floats, Imath::half(0.0f));
+            continue;
+        }
+        const float* layer = &changes[size_t(found - sums.layers.begin()) * per_layer];
+        for (int y = tile.ybegin; y < tile.yend; ++y, out += CellTiles::size * 4) {
+            const Between down = between(y, m_tiles.window.ybegin, blocks.ybegin, blocks.yend);
+            const float* top = layer + size_t(down.block - blocks.ybegin) * row_floats;
+            const float* bottom = top + row_floats;
+            for (int i = 0; i < tile.width(); ++i) {
+                const Between& across = columns[i];
+                const size_t b = size_t(across.block - blocks.xbegin) * 4;
+                const float fx = across.along, fy = down.along;
+                const float w00 = (1.0f - fx) * (1.0f - fy), w10 = fx * (1.0f - fy),
+                            w01 = (1.0f - fx) * fy, w11 = fx * fy;
+                for (int k = 0; k < 4; ++k)
+                    row[i * 4 + k] = w00 * top[b + k] + w10 * top[b + 4 + k]
+                                     + w01 * bottom[b + k] + w11 * bottom[b + 4 + k];
             }
+            std::copy(row, row + tile.width() * 4, out);
         }
     }
 }

@@ -399,27 +399,34 @@ OIIO::ROI SignedLayer::sources_of(const OIIO::ROI& window) const
     return grown_by_footprints(window, reach());
 }
 
-void SignedLayer::solid_in(const OIIO::ROI& window, std::vector<uint8_t>& solid) const
+bool SignedLayer::solid_in(const OIIO::ROI& window, std::vector<uint8_t>& solid) const
 {
+    solid.assign(size_t(window.npixels()), 0);
+    // Only pixels whose every source lies within the lit box can be solid.
+    const int r = int(std::ceil(reach())) + 2;
+    if (!lit.defined())
+        return false;
+    const OIIO::ROI inner = OIIO::roi_intersection(
+        window, OIIO::ROI(lit.xbegin + r, lit.xend - r, lit.ybegin + r, lit.yend - r));
+    if (!has_pixels(inner))
+        return false;
     // A pixel is whole if it is lit, opaque, and its radius steps to no
     // neighbour's on its left or above: a step in depth opens a real gap
     // through some part of the lens. `counts` holds how many pixels are
-    // not whole in the rectangle from the grown window's corner to each
-    // pixel, so that any square's count is four reads.
-    const OIIO::ROI grown = sources_of(window);
-    const int r = window.xbegin - grown.xbegin, width = grown.width() + 1;
+    // not whole in the rectangle from the grown corner to each pixel, so
+    // that any square's count is four reads.
+    const OIIO::ROI grown = sources_of(inner);
+    const int width = grown.width() + 1;
     std::vector<int32_t> counts(size_t(width) * (grown.height() + 1), 0);
     std::vector<float> above(size_t(grown.width()), NAN), here(above.size());
     for (int y = grown.ybegin; y < grown.yend; ++y) {
         std::fill(here.begin(), here.end(), NAN);
-        if (y >= roi.ybegin && y < roi.yend) {
-            const size_t row = size_t(y - roi.ybegin);
-            for (size_t k = row_runs[row]; k < row_runs[row + 1]; ++k)
-                for (int x = std::max(runs[k].x_begin, grown.xbegin);
-                     x < std::min(runs[k].x_end, grown.xend); ++x)
-                    if (color[(row * roi.width() + (x - roi.xbegin)) * 4 + 3] >= 1.0f - 1e-3f)
-                        here[size_t(x - grown.xbegin)] = runs[k].radius;
-        }
+        const size_t row = size_t(y - roi.ybegin);
+        for (size_t k = row_runs[row]; k < row_runs[row + 1]; ++k)
+            for (int x = std::max(runs[k].x_begin, grown.xbegin);
+                 x < std::min(runs[k].x_end, grown.xend); ++x)
+                if (color[(row * roi.width() + (x - roi.xbegin)) * 4 + 3] >= 1.0f - 1e-3f)
+                    here[size_t(x - grown.xbegin)] = runs[k].radius;
         const int32_t* sums_above = &counts[size_t(y - grown.ybegin) * width];
         int32_t* sums = &counts[size_t(y - grown.ybegin + 1) * width];
         int32_t along = 0;
@@ -432,14 +439,19 @@ void SignedLayer::solid_in(const OIIO::ROI& window, std::vector<uint8_t>& solid)
         }
         std::swap(above, here);
     }
-    solid.resize(size_t(window.npixels()));
-    uint8_t* out = solid.data();
-    for (int y = 0; y < window.height(); ++y)
-        for (int x = 0; x < window.width(); ++x) {
-            const int32_t* top = &counts[size_t(y) * width];
-            const int32_t* bottom = &counts[size_t(y + 2 * r + 1) * width];
-            *out++ = bottom[x + 2 * r + 1] - bottom[x] - top[x + 2 * r + 1] + top[x] == 0;
+    bool all = inner.width() == window.width() && inner.height() == window.height();
+    const int side = 2 * r + 1;
+    for (int y = 0; y < inner.height(); ++y) {
+        const int32_t* top = &counts[size_t(y) * width];
+        const int32_t* bottom = &counts[size_t(y + side) * width];
+        uint8_t* out = &solid[size_t(y + inner.ybegin - window.ybegin) * window.width()
+                              + size_t(inner.xbegin - window.xbegin)];
+        for (int x = 0; x < inner.width(); ++x) {
+            out[x] = bottom[x + side] - bottom[x] - top[x + side] + top[x] == 0;
+            all &= out[x] != 0;
         }
+    }
+    return all;
 }
 
 OIIO::ROI SignedLayer::light_in(const OIIO::ROI& window) const
