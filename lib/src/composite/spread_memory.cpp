@@ -51,8 +51,9 @@ double change_bytes(const LayeredScene& layered, const ROI& frame)
 /// runs, here 8 bytes a pixel), and again over blocks of 2 x 2 and 4 x 4
 /// pixels (their colour, radius and runs); and on each of
 /// `nthreads` threads, a window of tiles of `frame` with each layer's sums
-/// (two float RGBA) and where it is solid (a byte), the window's light
-/// through a cell (double RGBA) and transmittances (two doubles), and the
+/// (two float RGBA) and how it covers each pixel (a byte), the window's
+/// light through a cell (double RGBA), transmittances (two doubles) and
+/// where a layer is solid and the layers so far hide it (two bytes), and the
 /// counts that find where a layer is solid (an int over the window grown
 /// by the farthest blur).
 double cell_work_bytes(const LayeredScene& layered, const ROI& frame, int nthreads)
@@ -73,7 +74,7 @@ double cell_work_bytes(const LayeredScene& layered, const ROI& frame, int nthrea
     const double width = std::min(frame.width(), columns) + 2,
                  height = std::min(frame.height(), rows) + 2;
     const double per_layer = 2.0 * float_bytes(1.0, 4) + 1.0;
-    const double per_pixel = 4.0 * sizeof(double) + 2.0 * sizeof(double);
+    const double per_pixel = 4.0 * sizeof(double) + 2.0 * sizeof(double) + 2.0;
     const double counts = (width + 2.0 * reach) * (height + 2.0 * reach) * sizeof(int32_t);
     const int threads = nthreads > 0 ? nthreads : OIIO::get_int_attribute("threads", 1);
     return bytes

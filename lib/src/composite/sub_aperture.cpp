@@ -15,6 +15,11 @@ namespace defocus {
 
 using namespace OIIO;
 
+/// How a layer stands at a pixel of a band: see-through from some part of
+/// the lens; solid (SignedLayer::solid_in); or hidden behind a nearer
+/// layer solid there.
+enum class Cover : uint8_t { Open, Solid, Hidden };
+
 namespace {
 
 /// A layer's pixels as the cells spread them, with their signed radii.
@@ -51,23 +56,27 @@ bool reaches(const SignedLayer& layer, const ROI& window)
 /// what of it reaches the camera (`reaching`: RGB, and in the 4th lane the
 /// share of the lens that the layers in front let through), and lets
 /// `passing` (what the layers in front let through) through this one.
-/// Where the layer is `solid` (SignedLayer::solid_in), it covers the pixel
+/// Where the layer is solid (SignedLayer::solid_in), it covers the pixel
 /// through every part of the lens, and its light is taken as covering it
 /// whole: its runs are cut where the quantized radius steps, and through a
 /// cell the footprints on either side of a step move apart or together by
 /// the step times the cell's offset, leaving the pixel a little under or
 /// over covered; a light behind would show through the gap. Elsewhere "over"
 /// takes it as the engine composites: where a layer's own pixels overlap
-/// past full coverage, scaled back to it.
+/// past full coverage, scaled back to it. Where a nearer layer is solid,
+/// the layer is hidden through every part of the lens, and nothing of it
+/// is taken: its change there is nothing, whatever its sums.
 DEFOCUS_CLONES
-void take_row(const double* light, const uint8_t* solid, double weight, float* whole,
+void take_row(const double* light, const Cover* cover, double weight, float* whole,
               float* reaching, double* passing, int pixels)
 {
     for (int x = 0; x < pixels; ++x) {
+        if (cover[x] == Cover::Hidden)
+            continue;
         const d4 raw = load4(light + x * 4);
         store4(whole + x * 4, load4(whole + x * 4) + splat(weight) * raw);
         const double a = raw[3];
-        const bool whole_cover = solid[x] && a > 0.0;
+        const bool whole_cover = cover[x] == Cover::Solid && a > 0.0;
         d4 seen = whole_cover || a > 1.0 ? raw * splat(1.0 / a) : raw;
         const double alpha = whole_cover ? 1.0 : std::clamp(a, 0.0, 1.0);
         seen.v[3] = 1.0;
@@ -186,7 +195,7 @@ struct BandSums {
     std::vector<float> reaching;  ///< E_l (RGB) and T_{l+1} a pixel, per layer, in its box
     std::vector<double> passing;  ///< through the layers so far, this cell
     std::vector<double> through;  ///< T_0: through every layer, all cells
-    std::vector<std::vector<uint8_t>> solid;  ///< per layer, SignedLayer::solid_in the band
+    std::vector<std::vector<Cover>> cover;  ///< per layer, over the band
 
     void sum(const std::vector<SignedLayer>& all, const std::vector<ApertureCell>& cells,
              const ROI& pixels, CellBand& spread);
@@ -213,20 +222,28 @@ void BandSums::sum(const std::vector<SignedLayer>& all, const std::vector<Apertu
             layers.push_back(l);
             boxes.push_back(box);
         }
-    // A layer solid over the whole band hides those behind it through
-    // every part of the lens: they are not spread, and their sums stay
-    // nothing, as is their change.
+    // Where a layer is solid, it hides those behind it through every part
+    // of the lens. Where the layers in front hide the whole band, those
+    // behind are not spread, and their sums stay nothing, as does their
+    // change.
+    const size_t n = size_t(band.npixels()), row = size_t(band.width());
     size_t first_seen = 0;
-    solid.resize(layers.size());
+    cover.resize(layers.size());
+    std::vector<uint8_t> hidden(n, 0), solid;
     for (size_t i = layers.size(); i-- > 0;) {
-        if (all[layers[i]].solid_in(band, solid[i])) {
-            first_seen = i;
+        if (std::all_of(hidden.begin(), hidden.end(), [](uint8_t h) { return h != 0; })) {
+            first_seen = i + 1;
             break;
+        }
+        all[layers[i]].solid_in(band, solid);
+        cover[i].resize(n);
+        for (size_t p = 0; p < n; ++p) {
+            cover[i][p] = hidden[p] ? Cover::Hidden : solid[p] ? Cover::Solid : Cover::Open;
+            hidden[p] |= solid[p];
         }
     }
     for (size_t i = 0; i < first_seen; ++i)
-        solid[i].assign(size_t(band.npixels()), 0);
-    const size_t n = size_t(band.npixels()), row = size_t(band.width());
+        cover[i].assign(n, Cover::Hidden);
     whole.assign(layers.size() * n * 4, 0.0f);
     reaching.assign(layers.size() * n * 4, 0.0f);
     passing.assign(n, 1.0);
@@ -238,7 +255,7 @@ void BandSums::sum(const std::vector<SignedLayer>& all, const std::vector<Apertu
             spread.integrate([&](int y, int x_begin, int x_end, const double* light) {
                 const size_t first = size_t(x_begin - band.xbegin);
                 const size_t at = size_t(y - band.ybegin) * row + first;
-                take_row(light + first * 4, &solid[i][at], cell.weight, &whole[(i * n + at) * 4],
+                take_row(light + first * 4, &cover[i][at], cell.weight, &whole[(i * n + at) * 4],
                          &reaching[(i * n + at) * 4], &passing[at], x_end - x_begin);
             });
         }
@@ -279,7 +296,7 @@ void BandSums::change(size_t i, int x, int y, float* out) const
     // pixel whole as it does through each cell: the engine's spread of the
     // surface does, and only the cells' difference from it is a change.
     const double a = w[3];
-    const bool whole_cover = solid[i][p] && a > 0.0;
+    const bool whole_cover = cover[i][p] == Cover::Solid && a > 0.0;
     const double scale = a > 1.0 || whole_cover ? 1.0 / a : 1.0;
     for (int c = 0; c < 3; ++c)
         out[c] = float(e[c] / front - w[c] * scale);

@@ -399,17 +399,17 @@ OIIO::ROI SignedLayer::sources_of(const OIIO::ROI& window) const
     return grown_by_footprints(window, reach());
 }
 
-bool SignedLayer::solid_in(const OIIO::ROI& window, std::vector<uint8_t>& solid) const
+void SignedLayer::solid_in(const OIIO::ROI& window, std::vector<uint8_t>& solid) const
 {
     solid.assign(size_t(window.npixels()), 0);
     // Only pixels whose every source lies within the lit box can be solid.
     const int r = int(std::ceil(reach())) + 2;
     if (!lit.defined())
-        return false;
+        return;
     const OIIO::ROI inner = OIIO::roi_intersection(
         window, OIIO::ROI(lit.xbegin + r, lit.xend - r, lit.ybegin + r, lit.yend - r));
     if (!has_pixels(inner))
-        return false;
+        return;
     // A pixel is whole if it is lit, opaque, and its radius steps to no
     // neighbour's on its left or above: a step in depth opens a real gap
     // through some part of the lens. `counts` holds how many pixels are
@@ -439,19 +439,15 @@ bool SignedLayer::solid_in(const OIIO::ROI& window, std::vector<uint8_t>& solid)
         }
         std::swap(above, here);
     }
-    bool all = inner.width() == window.width() && inner.height() == window.height();
     const int side = 2 * r + 1;
     for (int y = 0; y < inner.height(); ++y) {
         const int32_t* top = &counts[size_t(y) * width];
         const int32_t* bottom = &counts[size_t(y + side) * width];
         uint8_t* out = &solid[size_t(y + inner.ybegin - window.ybegin) * window.width()
                               + size_t(inner.xbegin - window.xbegin)];
-        for (int x = 0; x < inner.width(); ++x) {
+        for (int x = 0; x < inner.width(); ++x)
             out[x] = bottom[x + side] - bottom[x] - top[x + side] + top[x] == 0;
-            all &= out[x] != 0;
-        }
     }
-    return all;
 }
 
 OIIO::ROI SignedLayer::light_in(const OIIO::ROI& window) const

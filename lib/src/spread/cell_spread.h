@@ -68,9 +68,8 @@ struct SignedLayer {
     /// For each pixel of `window` (row by row), 1 where every pixel whose
     /// light can land on it is lit, opaque and on one surface with its
     /// neighbours (no step in depth): through every part of the lens the
-    /// layer covers it, and whatever lies behind is hidden. Whether every
-    /// pixel is.
-    bool solid_in(const OIIO::ROI& window, std::vector<uint8_t>& solid) const;
+    /// layer covers it, and whatever lies behind is hidden.
+    void solid_in(const OIIO::ROI& window, std::vector<uint8_t>& solid) const;
 
     /// `roi`'s pixels of colour `color` and signed radius `radius` (a float
     /// a pixel), as runs.
