@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 #include <utility>
 
 #include <immintrin.h>
@@ -88,12 +89,12 @@ DEFOCUS_KERNEL void spread_run(const ApertureCell& s, int x0, int x1, double cy,
     // Entry i of the line gathers tap k from pixel i - offset[k]: built
     // by adding each pixel's taps, neighbouring pixels would add to the
     // same entries one after another, each addition waiting for the last.
+    // The pixels are read as they are (float) and scaled as they are read.
     const int length = x1 - x0, n = length + span + 1;
-    line.resize(size_t(length + n) * 4);
-    double* values = line.data();
-    double* l = values + size_t(length) * 4;
-    for (int i = 0; i < length; ++i, rgba += 4)
-        store4(values + size_t(i) * 4, load4(rgba) * splat(scale));
+    line.resize(size_t(n) * 4);
+    double* l = line.data();
+    const d4 scaled = splat(scale);
+    auto value = [&](int j) { return load4(rgba + size_t(j) * 4) * scaled; };
     int offset[4];
     d4 weight[4];
     for (int k = 0; k < 4; ++k) {
@@ -104,41 +105,52 @@ DEFOCUS_KERNEL void spread_run(const ApertureCell& s, int x0, int x1, double cy,
         d4 sum = splat(0.0);
         for (int k = 0; k < 4; ++k)
             if (const int j = i - offset[k]; j >= 0 && j < length)
-                sum += weight[k] * load4(values + size_t(j) * 4);
+                sum += weight[k] * value(j);
         store4(l + size_t(i) * 4, sum);
     };
     const int inner_begin = std::min(span, length), inner_end = std::max(inner_begin, length);
     for (int i = 0; i < inner_begin; ++i)
         gather_edge(i);
-    for (int i = inner_begin; i < inner_end; ++i) {
-        const double* v = values + size_t(i) * 4;
-        store4(l + size_t(i) * 4,
-               weight[0] * load4(v - size_t(offset[0]) * 4)
-                   + weight[1] * load4(v - size_t(offset[1]) * 4)
-                   + weight[2] * load4(v - size_t(offset[2]) * 4)
-                   + weight[3] * load4(v - size_t(offset[3]) * 4));
-    }
+    for (int i = inner_begin; i < inner_end; ++i)
+        store4(l + size_t(i) * 4, weight[0] * value(i - offset[0]) + weight[1] * value(i - offset[1])
+                                      + weight[2] * value(i - offset[2])
+                                      + weight[3] * value(i - offset[3]));
     for (int i = inner_end; i < n; ++i)
         gather_edge(i);
-    // Line entry i lands at window column base + i.
+    // Line entry i lands at window column base + i, in the rows of the
+    // y taps; those of no weight are left out. Each entry is read once
+    // for all the rows.
     const int base = x0 + taps.at[0];
     const int cut = std::clamp(-base, 0, n), end = std::clamp(w + 2 - base, cut, n);
     d4 left = splat(0.0);
     for (int i = 0; i < cut; ++i)
         left += load4(l + size_t(i) * 4);
-    for (int j = 0; j < 4; ++j) {
-        const double wy = ys.weight[j];
-        if (wy == 0.0)
-            continue;
-        double* out = deltas + size_t(ys.at[j]) * stride;
-        const d4 weight = splat(wy);
-        if (cut > 0)
-            store4(out, load4(out) + weight * left);
-        for (int i = cut; i < end; ++i) {
-            double* o = out + size_t(base + i) * 4;
-            store4(o, load4(o) + weight * load4(l + size_t(i) * 4));
+    double* rows[4];
+    d4 row_weight[4];
+    int count = 0;
+    for (int j = 0; j < 4; ++j)
+        if (ys.weight[j] != 0.0) {
+            rows[count] = deltas + size_t(ys.at[j]) * stride;
+            row_weight[count++] = splat(ys.weight[j]);
         }
-    }
+    if (cut > 0)
+        for (int j = 0; j < count; ++j) {
+            store4(rows[j], load4(rows[j]) + row_weight[j] * left);
+        }
+    // With the count known, the rows stay in registers (most runs take 4).
+    auto add_to_rows = [&](auto rows_count) {
+        for (int i = cut; i < end; ++i) {
+            const d4 entry = load4(l + size_t(i) * 4);
+            for (int j = 0; j < int(rows_count); ++j) {
+                double* o = rows[j] + size_t(base + i) * 4;
+                store4(o, load4(o) + row_weight[j] * entry);
+            }
+        }
+    };
+    if (count == 4)
+        add_to_rows(std::integral_constant<int, 4>());
+    else
+        add_to_rows(count);
 }
 
 /// How far light lands from its pixel along one axis, through the part of
