@@ -8,6 +8,7 @@
 #include "spread/aperture_cells.h"
 #include "spread/coarse_layers.h"
 #include "util/float_pixels.h"
+#include "util/fresh_array.h"
 #include "util/parallel_rows.h"
 #include "util/simd.h"
 
@@ -33,9 +34,7 @@ void make_source(const Layer& layer, const CircleOfConfusion& coc, double extent
     ROI depth_roi = roi;
     depth_roi.chend = layer.depth.nchannels();
     const FloatPixels depth(layer.depth, depth_roi);
-    // Left unset: every pixel is written below (a zeroed vector would fault
-    // in its pages on one thread).
-    std::unique_ptr<float[]> radius(new float[size_t(roi.npixels())]);
+    const std::unique_ptr<float[]> radius = fresh_array<float>(size_t(roi.npixels()), nthreads);
     parallel_for(roi.ybegin, roi.yend, [&](int64_t y) {
         for (int x = roi.xbegin; x < roi.xend; ++x)
             radius[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)]
@@ -334,7 +333,7 @@ void SubApertureLayers::compute(const LayeredScene& scene, const CircleOfConfusi
             if (const ROI light = layer.light(); light.defined())
                 where = roi_union(where, light);
     m_tiles = plan_cell_tiles(layers, where, cells, nthreads);
-    allocate(layers);
+    allocate(layers, nthreads);
     std::map<int, std::vector<ApertureCell>> cuts;
     for (uint8_t across : m_tiles.across)
         if (across > 1 && !cuts.count(across))
@@ -383,7 +382,7 @@ void SubApertureLayers::compute(const LayeredScene& scene, const CircleOfConfusi
     }, nthreads);
 }
 
-void SubApertureLayers::allocate(const std::vector<SignedLayer>& layers)
+void SubApertureLayers::allocate(const std::vector<SignedLayer>& layers, int nthreads)
 {
     const size_t tiles = size_t(m_tiles.count());
     m_offset.assign(layers.size(), std::vector<int64_t>(tiles, -1));
@@ -397,7 +396,7 @@ void SubApertureLayers::allocate(const std::vector<SignedLayer>& layers)
                 m_offset[l][t] = (used++) * int64_t(tile_floats);
     }
     // Left unset: keep() writes every pixel that change() reads.
-    m_pixels.reset(new Imath::half[size_t(used) * tile_floats]);
+    m_pixels = fresh_array<Imath::half>(size_t(used) * tile_floats, nthreads);
 }
 
 void SubApertureLayers::keep(const BandSums& sums, int scale, int column, int row,

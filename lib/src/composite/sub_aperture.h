@@ -83,7 +83,7 @@ private:
 
     /// Room for each layer's change in each tile with cells that its light
     /// reaches.
-    void allocate(const std::vector<SignedLayer>& layers);
+    void allocate(const std::vector<SignedLayer>& layers, int nthreads);
     /// Keeps the changes `sums` found over its band in tile (column, row);
     /// over blocks of `scale` pixels, read between them from `changes`
     /// (BandSums::all_changes).
