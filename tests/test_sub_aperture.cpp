@@ -165,6 +165,40 @@ TEST_CASE("a fence before a far light cuts its shadow into the light's bokeh")
     CHECK(one < cells - 5.0);
 }
 
+TEST_CASE("a light far beyond half's range keeps its fence's shadow, finite, in proportion")
+{
+    // The layers' changes are kept in half (largest 65504): a light a
+    // billion times brighter came out infinite, and NaN where "over" met
+    // it. Light adds up: the fence's every colour times a billion is the
+    // same picture times a billion.
+    auto fence_times = [](float k) {
+        Stack stack;
+        stack.add("light", 10.0f, [=](int x, int y, float* rgba) {
+            const bool light = std::hypot(x + 0.5 - centre_x, y + 0.5 - centre_y) < 3.0;
+            rgba[0] = rgba[1] = rgba[2] = k * (light ? 1.0f : 0.05f);
+            rgba[3] = 1.0f;
+        });
+        stack.add("bars", 1.0f, [=](int x, int, float* rgba) {
+            if ((x - centre_x + 256) % 16 < 4) {
+                rgba[0] = rgba[1] = rgba[2] = k * 0.01f;
+                rgba[3] = 1.0f;
+            }
+        });
+        return stack.engine(0);
+    };
+    const ImageBuf once = fence_times(1.0f), bright = fence_times(1e9f);
+    double worst = 0.0;
+    for (int y = bokeh.ybegin; y < bokeh.yend; ++y)
+        for (int x = bokeh.xbegin; x < bokeh.xend; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const double a = once.getchannel(x, y, 0, c), b = bright.getchannel(x, y, 0, c);
+                REQUIRE(std::isfinite(b));
+                worst = std::max(worst, std::abs(b / 1e9 - a) / std::max(a, 1e-3));
+            }
+    INFO("most relative difference from the picture times a billion " << worst);
+    CHECK(worst < 2e-3);
+}
+
 TEST_CASE("a fence before a row of lights wider than a window of cells is cut into none")
 {
     // A data window 15 tiles wide with lights all along it: the cells are

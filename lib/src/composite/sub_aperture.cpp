@@ -397,6 +397,24 @@ void SubApertureLayers::allocate(const std::vector<SignedLayer>& layers, int nth
     }
     // Left unset: keep() writes every pixel that change() reads.
     m_pixels = fresh_array<Imath::half>(size_t(used) * tile_floats, nthreads);
+    m_unscale.assign(size_t(used), 1.0f);
+}
+
+void SubApertureLayers::store(int64_t at, const float* changes)
+{
+    // Half's largest is 65504: a change beyond it (a highlight in the
+    // thousands, brightened by a footprint narrower than a pixel) would be
+    // infinite, and "over" would turn it into NaN. Such a tile is kept
+    // scaled down by a power of two, exact to half's precision.
+    float largest = 0.0f;
+    for (size_t i = 0; i < tile_floats; ++i)
+        largest = std::max(largest, std::abs(changes[i]));
+    constexpr float room = 32768.0f;
+    const float scale = largest > room ? std::exp2(-std::ceil(std::log2(largest / room))) : 1.0f;
+    m_unscale[size_t(at) / tile_floats] = 1.0f / scale;
+    Imath::half* out = &m_pixels[size_t(at)];
+    for (size_t i = 0; i < tile_floats; ++i)
+        out[i] = changes[i] * scale;
 }
 
 void SubApertureLayers::keep(const BandSums& sums, int scale, int column, int row,
@@ -408,19 +426,18 @@ void SubApertureLayers::keep(const BandSums& sums, int scale, int column, int ro
         keep_between_blocks(sums, scale, t, tile, changes);
         return;
     }
+    std::vector<float> changes_in_tile(tile_floats);
     for (size_t i = 0; i < sums.layers.size(); ++i) {
         const int64_t at = offset(sums.layers[i], t);
         if (at < 0)
             continue;
+        std::fill(changes_in_tile.begin(), changes_in_tile.end(), 0.0f);
         for (int y = tile.ybegin; y < tile.yend; ++y)
-            for (int x = tile.xbegin; x < tile.xend; ++x) {
-                float change[4];
-                sums.change(i, x, y, change);
-                Imath::half* out = &m_pixels[size_t(at)
-                                             + ((y - tile.ybegin) * CellTiles::size
-                                                + (x - tile.xbegin)) * 4];
-                std::copy(change, change + 4, out);
-            }
+            for (int x = tile.xbegin; x < tile.xend; ++x)
+                sums.change(i, x, y,
+                            &changes_in_tile[((y - tile.ybegin) * CellTiles::size
+                                              + (x - tile.xbegin)) * 4]);
+        store(at, changes_in_tile.data());
     }
 }
 
@@ -444,19 +461,20 @@ void SubApertureLayers::keep_between_blocks(const BandSums& sums, int scale, siz
     for (int x = tile.xbegin; x < tile.xend; ++x)
         columns[x - tile.xbegin] = between(x, m_tiles.window.xbegin, blocks.xbegin, blocks.xend);
     const size_t row_floats = size_t(blocks.width()) * 4;
-    float row[CellTiles::size * 4];
+    std::vector<float> changes_in_tile(tile_floats);
     for (size_t l = 0; l < m_offset.size(); ++l) {
         const int64_t at = offset(l, t);
         if (at < 0)
             continue;
+        std::fill(changes_in_tile.begin(), changes_in_tile.end(), 0.0f);
         const auto found = std::find(sums.layers.begin(), sums.layers.end(), l);
-        Imath::half* out = &m_pixels[size_t(at)];
         if (found == sums.layers.end()) {
-            std::fill(out, out + tile_floats, Imath::half(0.0f));
+            store(at, changes_in_tile.data());
             continue;
         }
         const float* layer = &changes[size_t(found - sums.layers.begin()) * per_layer];
-        for (int y = tile.ybegin; y < tile.yend; ++y, out += CellTiles::size * 4) {
+        float* row = changes_in_tile.data();
+        for (int y = tile.ybegin; y < tile.yend; ++y, row += CellTiles::size * 4) {
             const Between down = between(y, m_tiles.window.ybegin, blocks.ybegin, blocks.yend);
             const float* top = layer + size_t(down.block - blocks.ybegin) * row_floats;
             const float* bottom = top + row_floats;
@@ -470,8 +488,8 @@ void SubApertureLayers::keep_between_blocks(const BandSums& sums, int scale, siz
                     row[i * 4 + k] = w00 * top[b + k] + w10 * top[b + 4 + k]
                                      + w01 * bottom[b + k] + w11 * bottom[b + 4 + k];
             }
-            std::copy(row, row + tile.width() * 4, out);
         }
+        store(at, changes_in_tile.data());
     }
 }
 
@@ -496,6 +514,9 @@ bool SubApertureLayers::change(size_t l, int x, int y, int& end, float* out) con
     const Imath::half* in
         = &m_pixels[size_t(at) + ((y - tile.ybegin) * CellTiles::size + (x - tile.xbegin)) * 4];
     std::copy(in, in + size_t(end - x) * 4, out);
+    if (const float unscale = m_unscale[size_t(at) / tile_floats]; unscale != 1.0f)
+        for (size_t i = 0; i < size_t(end - x) * 4; ++i)
+            out[i] *= unscale;
     return true;
 }
 

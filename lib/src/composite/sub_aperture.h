@@ -93,6 +93,9 @@ private:
     /// pixel's read between the four blocks' centres around it.
     void keep_between_blocks(const BandSums& sums, int scale, size_t t, const OIIO::ROI& tile,
                              const std::vector<float>& changes);
+    /// Keeps a tile's changes (tile_floats, row by row) at `at` in
+    /// m_pixels.
+    void store(int64_t at, const float* changes);
     /// Where tile t's pixels for layer l start in m_pixels, or -1.
     int64_t offset(size_t l, size_t t) const { return m_offset[l][t]; }
 
@@ -102,6 +105,9 @@ private:
     /// correction to the layer's spread, and half holds it to 1e-3 of
     /// itself, for half the memory (140 MB on the 4K example).
     std::unique_ptr<Imath::half[]> m_pixels;
+    /// Per tile and layer, what its halves are multiplied by when read (see
+    /// store()): 1 unless its changes are beyond half's range.
+    std::vector<float> m_unscale;
     int m_most_cells = 0;
     int64_t m_tiles_over_blocks = 0;
 };
