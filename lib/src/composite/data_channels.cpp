@@ -14,6 +14,7 @@
 #include "composite/data_lookup.h"
 #include "composite/data_spreads.h"
 #include "composite/object_mattes.h"
+#include "composite/sub_aperture.h"
 #include "util/float_pixels.h"
 #include "util/parallel_rows.h"
 
@@ -80,19 +81,51 @@ void composite_quantities(ImageBuf& dst, Coverage& cov, const ImageBuf& spread, 
     }, by_rows(nthreads));
 }
 
-/// Spreads the depth and the Average and Dominant channels, three at a
-/// time, through every layer; the first spread also fills `cov` (each
-/// layer's alpha only when `keep_alphas`: mattes need it).
+/// The quantities of one spread, and whether each layer's own light
+/// carries them (see Spreader::spread).
+struct QuantityPass {
+    std::vector<QuantityTarget> targets;
+    bool own_light = false;
+};
+
+/// The spreads that carry `all`, per_spread at a time; the first also finds
+/// what the layers cover. Through aperture cells (`cells`), the averages
+/// and the coverage are composited per part of the lens as the colour is,
+/// but a Dominant value, its layer's spread quantity over its spread alpha,
+/// comes from the layer's own light: the cells' changes, kept in half,
+/// round a quantity and its alpha apart, and the value would drift off
+/// every layer's.
+std::vector<QuantityPass> quantity_passes(const std::vector<QuantityTarget>& all, bool cells)
+{
+    std::vector<QuantityPass> passes;
+    auto add = [&](const std::vector<QuantityTarget>& targets, bool own_light) {
+        for (size_t first = 0; first < targets.size(); first += per_spread)
+            passes.push_back({ { targets.begin() + first,
+                                 targets.begin() + std::min(targets.size(), first + per_spread) },
+                               own_light });
+    };
+    std::vector<QuantityTarget> averages, dominants;
+    for (const QuantityTarget& t : all)
+        (cells && t.kind == DataKind::Dominant ? dominants : averages).push_back(t);
+    add(averages, false);
+    add(dominants, true);
+    if (passes.empty() || passes.front().own_light)
+        passes.insert(passes.begin(), QuantityPass {});  // the coverage alone
+    return passes;
+}
+
+/// Spreads the depth and the Average and Dominant channels in `passes`
+/// through every layer; the first spread also fills `cov` (each layer's
+/// alpha only when `keep_alphas`: mattes need it).
 bool spread_quantities(ImageBuf& dst, Coverage& cov, Spreader& spreader,
                        const std::vector<DataLookup>& lookups,
-                       const std::vector<QuantityTarget>& all, bool keep_alphas,
+                       const std::vector<QuantityPass>& passes, bool keep_alphas,
                        std::string& error)
 {
     const LayeredScene& scene = spreader.scene;
     const std::vector<size_t> from = lit_layers(scene);
-    for (size_t first = 0; first < all.size() || first == 0; first += per_spread) {
-        const std::vector<QuantityTarget> targets(
-            all.begin() + first, all.begin() + std::min(all.size(), first + per_spread));
+    for (const QuantityPass& pass : passes) {
+        const std::vector<QuantityTarget>& targets = pass.targets;
         std::vector<Layer> layers;
         layers.reserve(from.size());  // see Spreader::spread
         for (size_t i : from) {
@@ -110,13 +143,13 @@ bool spread_quantities(ImageBuf& dst, Coverage& cov, Spreader& spreader,
                                                     : 0.0f;
             }, spreader.nthreads));
         }
-        const bool first_pass = first == 0;
+        const bool first_pass = &pass == &passes.front();
         if (!spreader.spread(std::move(layers), from, [&](size_t i, const ImageBuf& s) {
                 composite_quantities(dst, cov, s, i, targets, first_pass, spreader.nthreads);
                 const int alpha[] = { 3 };
                 if (first_pass && keep_alphas)
                     ImageBufAlgo::channels(cov.layer_alpha[i], s, 1, alpha);
-            }, error))
+            }, error, pass.own_light))
             return false;
     }
     return true;
@@ -218,8 +251,8 @@ bool data_channels(ImageBuf& dst, const ImageBuf& result, const LayeredScene& sc
                    std::vector<int>(ranked, -1), std::vector<ImageBuf>(scene.layers.size()) };
     std::string error;
     std::vector<std::vector<ObjectExtent>> objects;
-    auto spreads = [](size_t items) { return int((items + per_spread - 1) / per_spread); };
-    spreader.total = std::max(1, spreads(targets.size()));
+    const std::vector<QuantityPass> passes = quantity_passes(targets, takes_aperture_cells(spread));
+    spreader.total = int(passes.size());
     for (const ObjectSet& set : sets) {
         objects.push_back(find_objects(set, scene, lookups, nthreads));
         if (!plausible_ids(set, objects.back(), roi, error)) {
@@ -228,7 +261,7 @@ bool data_channels(ImageBuf& dst, const ImageBuf& result, const LayeredScene& sc
         }
         spreader.total += object_spreads(objects.back());
     }
-    if (!spread_quantities(dst, cov, spreader, lookups, targets, !sets.empty(), error)) {
+    if (!spread_quantities(dst, cov, spreader, lookups, passes, !sets.empty(), error)) {
         dst.errorfmt("{}", error);
         return false;
     }

@@ -44,7 +44,7 @@ Layer quantity_layer(const Layer& layer, const ROI& roi, const QuantityFill& fil
 }
 
 bool Spreader::spread(std::vector<Layer>&& layers, const std::vector<size_t>& from,
-                      const QuantitySink& sink, std::string& error)
+                      const QuantitySink& sink, std::string& error, bool own_light)
 {
     if (keep_going && !keep_going(done++, total)) {
         error = "cancelled";
@@ -64,7 +64,10 @@ bool Spreader::spread(std::vector<Layer>&& layers, const std::vector<size_t>& fr
                                       : describe_layer(layers[k], coc, nthreads));
         alone.layers.push_back(std::move(layers[k]));
     }
-    return spread_layers_apart(alone, reach.camera, reach.spread, reach.images, window,
+    SpreadOptions options = reach.spread;
+    if (own_light)
+        options.aperture_cells = 1;
+    return spread_layers_apart(alone, reach.camera, options, reach.images, window,
                                [&](size_t i, const ImageBuf& s, const ROI&) {
                                    sink(from[i], s);
                                    return true;

@@ -41,9 +41,12 @@ struct Spreader {
     /// Spreads `layers` (quantity layers, back to front, made from the
     /// scene's layers `from`) apart, each handed to `sink` by its scene index.
     /// Thousands of IDs are hundreds of spreads: each first asks whether
-    /// to go on ("cancelled" when not), saying how far the stage is.
+    /// to go on ("cancelled" when not), saying how far the stage is. With
+    /// `own_light`, each layer is spread with one aperture cell: its
+    /// quantities and alpha are its own light alone, whatever passes in
+    /// front of it through each part of the lens.
     bool spread(std::vector<Layer>&& layers, const std::vector<size_t>& from,
-                const QuantitySink& sink, std::string& error);
+                const QuantitySink& sink, std::string& error, bool own_light = false);
 };
 
 /// Per output pixel, over the result's window: what the first spread of
