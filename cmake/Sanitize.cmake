@@ -2,8 +2,11 @@
 # errors, leaks) and UndefinedBehaviorSanitizer, and any finding stops the
 # program (-fno-sanitize-recover) so a test cannot pass over it.
 #
-# DEFOCUS_FUZZ builds the same way plus libFuzzer's coverage instrumentation,
-# so the harnesses find memory errors as well as crashes.
+# DEFOCUS_FUZZ builds the same way plus the libFuzzer harnesses, and the
+# library with libFuzzer's coverage instrumentation, so the harnesses find
+# memory errors as well as crashes. With DEFOCUS_SANITIZE too, one build
+# serves both the sanitized suite and the fuzzers (scripts/sanitize.sh,
+# scripts/fuzz.sh).
 #
 # Programs built elsewhere (Debian's oiiotool and python3) that load our
 # plugin need the sanitizer runtime loaded first: DEFOCUS_SANITIZER_PRELOAD
@@ -11,6 +14,8 @@
 # (empty when not sanitizing).
 
 set(DEFOCUS_SANITIZER_PRELOAD "")
+set(DEFOCUS_SHARED_SANITIZER_RUNTIME "")
+set(DEFOCUS_FUZZ_COVERAGE_FLAGS "")
 set(DEFOCUS_PYTHON_SANITIZER_ENV "")
 set(DEFOCUS_SANITIZER_FLAGS "")
 if(DEFOCUS_SANITIZE OR DEFOCUS_FUZZ)
@@ -28,11 +33,12 @@ if(DEFOCUS_SANITIZE OR DEFOCUS_FUZZ)
     endif()
     execute_process(COMMAND ${CMAKE_CXX_COMPILER} -print-file-name=${_runtime}
                     OUTPUT_VARIABLE DEFOCUS_SANITIZER_PRELOAD OUTPUT_STRIP_TRAILING_WHITESPACE)
-    if(CMAKE_CXX_COMPILER_ID STREQUAL "Clang" AND NOT DEFOCUS_FUZZ)
+    if(CMAKE_CXX_COMPILER_ID STREQUAL "Clang" AND DEFOCUS_SANITIZE)
         # The shared runtime is not where the loader looks: the programs
         # are told where it is.
         get_filename_component(_runtime_dir ${DEFOCUS_SANITIZER_PRELOAD} DIRECTORY)
         add_link_options(-shared-libasan -Wl,-rpath,${_runtime_dir})
+        set(DEFOCUS_SHARED_SANITIZER_RUNTIME ${DEFOCUS_SANITIZER_PRELOAD})
     endif()
     # With the runtime loaded before libstdc++ (python3 does not link it),
     # ASan cannot find the __cxa_throw it intercepts and aborts at the first
@@ -57,6 +63,7 @@ if(DEFOCUS_FUZZ)
         message(FATAL_ERROR "DEFOCUS_FUZZ needs clang (libFuzzer): "
                             "configure with -DCMAKE_CXX_COMPILER=clang++")
     endif()
-    # Coverage feedback from the library too, not only the harnesses.
-    add_compile_options(-fsanitize=fuzzer-no-link)
+    # Coverage feedback from the library too (lib/CMakeLists.txt), not only
+    # the harnesses. The tests, which link the same library, carry it.
+    set(DEFOCUS_FUZZ_COVERAGE_FLAGS -fsanitize=fuzzer-no-link)
 endif()

@@ -1,30 +1,32 @@
 #!/usr/bin/env bash
-# Builds the libFuzzer harnesses (clang, with ASan + UBSan) in build-fuzz/
+# Builds the libFuzzer harnesses (clang, with ASan + UBSan) in the build
+# sanitize.sh uses, build-sanitize/ (after it, nothing is left to build),
 # and runs each on its seed corpus in tests/fuzz/corpus for SECONDS
 # (default 60), as many at once as there are cores (each harness runs on
-# one). Inputs that grow coverage collect in build-fuzz/corpus; a crash,
-# hang, leak or over-budget allocation stops the run, is saved in
-# build-fuzz/findings/ and fails the script.
+# one). Inputs that grow coverage collect in build-sanitize/fuzz/corpus; a
+# crash, hang, leak or over-budget allocation stops the run, is saved in
+# build-sanitize/fuzz/findings/ and fails the script.
 #   scripts/fuzz.sh [SECONDS] [HARNESS...]   harnesses: shot_file settings scene read
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/step_times.sh
+source scripts/sanitized_build.sh
 seconds="${1:-60}"
 shift || true
 harnesses=("$@")
 [ ${#harnesses[@]} -gt 0 ] || harnesses=(shot_file settings scene read)
 timed packages bash scripts/install-deps.sh clang
-cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-    -DDEFOCUS_FUZZ=ON -DBUILD_TESTING=OFF -DDEFOCUS_BUILD_BENCHMARKS=OFF
-timed build cmake --build build-fuzz -j"$(nproc)" --target "${harnesses[@]/#/fuzz_}"
+configure_sanitized_build
+timed build cmake --build "$sanitized_build" -j"$(nproc)" --target "${harnesses[@]/#/fuzz_}"
+out="$sanitized_build/fuzz"
 data="${DEFOCUS_SHARED_DATA:-$(cd .. && pwd)/shared/data}"
 export ASAN_OPTIONS="detect_leaks=1"
 export LSAN_OPTIONS="suppressions=$PWD/tests/sanitizer/lsan.supp:print_suppressions=0"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
-mkdir -p build-fuzz/findings
+mkdir -p "$out/findings"
 
-# Runs one harness: its log in build-fuzz/fuzz_HARNESS.log, its exit status
-# in build-fuzz/fuzz_HARNESS.status.
+# Runs one harness: its log in $out/fuzz_HARNESS.log, its exit status in
+# $out/fuzz_HARNESS.status.
 fuzz() {
     local harness=$1
     local seeds=(tests/fuzz/corpus/"$harness")
@@ -35,15 +37,15 @@ fuzz() {
     if [ "$harness" = scene ] || [ "$harness" = read ] && [ -d "$data/openexr-images/Damaged" ]; then
         seeds+=("$data/openexr-images/Damaged")
     fi
-    mkdir -p build-fuzz/corpus/"$harness"
+    mkdir -p "$out/corpus/$harness"
     # -timeout: one input taking 10 s is a hang. -rss_limit_mb: the memory
     # the harness may use, above the 1 GB --memory-limit the scene harness
     # sets.
     local status=0
-    build-fuzz/bin/fuzz_"$harness" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2560 \
-        -max_len=65536 -print_final_stats=1 -artifact_prefix=build-fuzz/findings/"$harness"- \
-        build-fuzz/corpus/"$harness" "${seeds[@]}" 2>build-fuzz/fuzz_"$harness".log || status=$?
-    echo $status >build-fuzz/fuzz_"$harness".status
+    "$sanitized_build/bin/fuzz_$harness" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2560 \
+        -max_len=65536 -print_final_stats=1 -artifact_prefix="$out/findings/$harness-" \
+        "$out/corpus/$harness" "${seeds[@]}" 2>"$out/fuzz_$harness.log" || status=$?
+    echo $status >"$out/fuzz_$harness.status"
 }
 
 # Every harness, as many at once as there are cores.
@@ -65,11 +67,11 @@ timed fuzzing fuzz_all
 status=0
 for harness in "${harnesses[@]}"; do
     echo "== fuzz_$harness"
-    if [ "$(cat build-fuzz/fuzz_"$harness".status)" = 0 ]; then
-        grep -E "^stat::(number_of_executed_units|peak_rss_mb)|^Done" build-fuzz/fuzz_"$harness".log || true
+    if [ "$(cat "$out/fuzz_$harness.status")" = 0 ]; then
+        grep -E "^stat::(number_of_executed_units|peak_rss_mb)|^Done" "$out/fuzz_$harness.log" || true
     else
         status=1
-        tail -n 60 build-fuzz/fuzz_"$harness".log
+        tail -n 60 "$out/fuzz_$harness.log"
     fi
 done
 exit $status
