@@ -64,6 +64,8 @@ if(DEFOCUS_FUZZ)
                             "configure with -DCMAKE_CXX_COMPILER=clang++")
     endif()
     # Coverage feedback from the library too (lib/CMakeLists.txt), not only
-    # the harnesses. The tests, which link the same library, carry it.
-    set(DEFOCUS_FUZZ_COVERAGE_FLAGS -fsanitize=fuzzer-no-link)
+    # the harnesses. The tests, which link the same library, carry it: the
+    # edge counters alone cost them little, where fuzzer-no-link's
+    # comparison tracing made them 2.5-3 times slower.
+    set(DEFOCUS_FUZZ_COVERAGE_FLAGS -fsanitize-coverage=inline-8bit-counters,pc-table)
 endif()
