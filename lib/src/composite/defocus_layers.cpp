@@ -427,7 +427,7 @@ void compute_cells(SubApertureLayers& cells, const LayeredScene& scene, const Ca
     const RowProfile* shape = plan.profile ? plan.profile.get()
                               : spread.aperture.shape == ApertureShape::Box ? &box
                                                                              : nullptr;
-    if (!shape || !takes_aperture_cells(spread))
+    if (!shape || !takes_aperture_cells(spread, scene))
         return;
     cells.compute(scene, CircleOfConfusion(camera, scene.spec.roi_full()), *shape,
                   spread.aperture_cells,

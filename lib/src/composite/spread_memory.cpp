@@ -114,10 +114,8 @@ double spread_bytes(const LayeredScene& layered, const SpreadOptions& spread, in
     }
     spreading += result_bytes(double(all.npixels()));
     // The cells' changes are found before the layers are spread, and kept
-    // while they are; a layer alone takes none (nothing in front of it).
-    const auto lit = std::count_if(layered.reports.begin(), layered.reports.end(),
-                                   [](const LayerReport& r) { return r.pixels > 0; });
-    if (!takes_aperture_cells(spread) || lit < 2)
+    // while they are.
+    if (!takes_aperture_cells(spread, layered))
         return holdout_bytes + layers + spreading;
     return holdout_bytes + layers + change_bytes(layered, all)
            + std::max(spreading, cell_work_bytes(layered, all, nthreads));

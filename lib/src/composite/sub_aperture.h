@@ -48,9 +48,10 @@ namespace defocus {
 
 struct BandSums;
 
-/// Whether spreading as `spread` says composites per cell of the aperture:
-/// not with one cell, nor with the soft PSFs of tent and smooth.
-bool takes_aperture_cells(const SpreadOptions& spread);
+/// Whether spreading `scene` as `spread` says composites per cell of the
+/// aperture: not with one cell, nor with the soft PSFs of tent and smooth,
+/// nor for a layer alone (nothing in front of it hides anything).
+bool takes_aperture_cells(const SpreadOptions& spread, const LayeredScene& scene);
 
 /// What compositing per cell of the aperture changes in each layer's
 /// spread: made from the layers before they are spread (and freed), and

@@ -134,9 +134,8 @@ DEFOCUS_KERNEL void spread_run(const ApertureCell& s, int x0, int x1, double cy,
             row_weight[count++] = splat(ys.weight[j]);
         }
     if (cut > 0)
-        for (int j = 0; j < count; ++j) {
+        for (int j = 0; j < count; ++j)
             store4(rows[j], load4(rows[j]) + row_weight[j] * left);
-        }
     // With the count known, the rows stay in registers (most runs take 4).
     auto add_to_rows = [&](auto rows_count) {
         for (int i = cut; i < end; ++i) {
@@ -391,11 +390,17 @@ void SignedLayer::set(const OIIO::ROI& pixels, const float* rgba, const float* r
 
 namespace {
 
-/// `roi` and as far again as a layer's footprints reach, and their corner
+/// How far from a pixel a layer's footprints reach, and their corner
 /// deltas a pixel past their edge.
+int footprint_margin(float reach)
+{
+    return int(std::ceil(reach)) + 2;
+}
+
+/// `roi` and footprint_margin() around it.
 OIIO::ROI grown_by_footprints(const OIIO::ROI& roi, float reach)
 {
-    const int r = int(std::ceil(reach)) + 2;
+    const int r = footprint_margin(reach);
     return OIIO::ROI(roi.xbegin - r, roi.xend + r, roi.ybegin - r, roi.yend + r);
 }
 
@@ -415,7 +420,7 @@ void SignedLayer::solid_in(const OIIO::ROI& window, std::vector<uint8_t>& solid)
 {
     solid.assign(size_t(window.npixels()), 0);
     // Only pixels whose every source lies within the lit box can be solid.
-    const int r = int(std::ceil(reach())) + 2;
+    const int r = footprint_margin(reach());
     if (!lit.defined())
         return;
     const OIIO::ROI inner = OIIO::roi_intersection(
