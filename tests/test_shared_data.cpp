@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebuf.h>
@@ -65,8 +66,8 @@ const std::string garden_camera = " --focal 85 --fstop 1.4";
 /// focus distance, with the box aperture unless told otherwise; `offset`
 /// places the truth's display window in the result (Blender's file has no
 /// overscan window).
-double score(const std::string& input, double focus, int offset = 0,
-             const std::string& aperture = "box")
+double render_score(const std::string& input, double focus, int offset = 0,
+                    const std::string& aperture = "box")
 {
     const std::string out = scratch_dir("garden") + "/out.exr";
     run_ok(DEFOCUS_BIN, format("{} -o {}{} --focus {} --aperture {}", input, out, garden_camera,
@@ -75,12 +76,24 @@ double score(const std::string& input, double focus, int offset = 0,
     return garden_psnr(read_float(out), read_float(garden(truth)), offset, offset);
 }
 
+/// render_score() of one of garden's files, which several tests compare
+/// against: each is rendered once.
+double score(const std::string& input, double focus, int offset = 0,
+             const std::string& aperture = "box")
+{
+    static std::map<std::string, double> scores;
+    const std::string key = format("{} {} {} {}", input, focus, offset, aperture);
+    if (const auto known = scores.find(key); known != scores.end())
+        return known->second;
+    return scores[key] = render_score(input, focus, offset, aperture);
+}
+
 /// The same, through layerize's multi-part output fed back to defocus.
 double score_via_layerize(const std::string& input, double focus, int offset = 0)
 {
     const std::string layers = scratch_dir("garden_layerize") + "/layers.exr";
     run_ok(LAYERIZE_BIN, format("{} -o {} --focal 85 --fstop 1.4 --focus {}", input, layers, focus));
-    return score(layers + (offset ? " --sensor 43.2" : ""), focus, offset);
+    return render_score(layers + (offset ? " --sensor 43.2" : ""), focus, offset);
 }
 
 bool finite_with_alpha_in_unit_range(const ImageBuf& image)
