@@ -14,7 +14,6 @@
 # (empty when not sanitizing).
 
 set(DEFOCUS_SANITIZER_PRELOAD "")
-set(DEFOCUS_SHARED_SANITIZER_RUNTIME "")
 set(DEFOCUS_FUZZ_COVERAGE_FLAGS "")
 set(DEFOCUS_PYTHON_SANITIZER_ENV "")
 set(DEFOCUS_SANITIZER_FLAGS "")
@@ -25,8 +24,9 @@ if(DEFOCUS_SANITIZE OR DEFOCUS_FUZZ)
     add_link_options(${DEFOCUS_SANITIZER_FLAGS})
     if(CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
         # clang links its runtime statically into executables by default; a
-        # shared runtime lets the plugin share it with its host. (libFuzzer
-        # wants the static one, and the fuzz build runs no host programs.)
+        # shared runtime lets the plugin share it with its host. (A fuzz
+        # build alone keeps the static one; beside the suite, the harnesses
+        # need the shared one preloaded: scripts/fuzz.sh.)
         set(_runtime libclang_rt.asan-x86_64.so)
     else()
         set(_runtime libasan.so)
@@ -38,7 +38,6 @@ if(DEFOCUS_SANITIZE OR DEFOCUS_FUZZ)
         # are told where it is.
         get_filename_component(_runtime_dir ${DEFOCUS_SANITIZER_PRELOAD} DIRECTORY)
         add_link_options(-shared-libasan -Wl,-rpath,${_runtime_dir})
-        set(DEFOCUS_SHARED_SANITIZER_RUNTIME ${DEFOCUS_SANITIZER_PRELOAD})
     endif()
     # With the runtime loaded before libstdc++ (python3 does not link it),
     # ASan cannot find the __cxa_throw it intercepts and aborts at the first

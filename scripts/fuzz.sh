@@ -20,6 +20,9 @@ configure_sanitized_build
 timed build cmake --build "$sanitized_build" -j"$(nproc)" --target "${harnesses[@]/#/fuzz_}"
 out="$sanitized_build/fuzz"
 data="${DEFOCUS_SHARED_DATA:-$(cd .. && pwd)/shared/data}"
+# The build's programs share clang's shared sanitizer runtime, which must
+# be the first library loaded: libFuzzer links libstdc++ before it.
+runtime=$(clang++ -print-file-name=libclang_rt.asan-x86_64.so)
 export ASAN_OPTIONS="detect_leaks=1"
 export LSAN_OPTIONS="suppressions=$PWD/tests/sanitizer/lsan.supp:print_suppressions=0"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
@@ -42,7 +45,7 @@ fuzz() {
     # the harness may use, above the 1 GB --memory-limit the scene harness
     # sets.
     local status=0
-    "$sanitized_build/bin/fuzz_$harness" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2560 \
+    LD_PRELOAD="$runtime" "$sanitized_build/bin/fuzz_$harness" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2560 \
         -max_len=65536 -print_final_stats=1 -artifact_prefix="$out/findings/$harness-" \
         "$out/corpus/$harness" "${seeds[@]}" 2>"$out/fuzz_$harness.log" || status=$?
     echo $status >"$out/fuzz_$harness.status"
