@@ -69,13 +69,18 @@ TEST_CASE("a header asking for more memory than the limit is refused before allo
     CHECK(one_line_error(refusal({ big }, { { "focus", "3" }, { "memory-limit", "300M" } }),
                           "big.exr: spreading a data window of 4000x3000 needs 595 MB, more "
                           "than the memory limit of 300 MB"));
-    // A strip of 8388616 x 6 pixels: 1 GB to read, 1.5 GB to spread into.
+    // A strip of 3145731 x 16 pixels: 1 GB to read, 1.5 GB to spread into.
     // Counting only the latter, the header passed 2 GB and the file was
-    // read (16 s under ASan) before the blur's estimate refused it.
+    // read (16 s under ASan) before the blur's estimate refused it. (Rows
+    // 8388616 wide, as found, are refused sooner now: OpenEXR's buffers
+    // for one chunk of 16 of them take 2.5 GB.)
     const std::string strip = dir + "/strip.exr";
-    write_exr_header_only(strip, 8388616, 6);
-    CHECK(one_line_error(refusal({ strip }, { { "focus", "3" }, { "memory-limit", "2G" } }),
-                          "strip.exr: spreading a data window of 8388616x6 needs 2.44 GB, more "
+    write_exr_header_only(strip, 3145731, 16);
+    const std::string strip_refusal
+        = refusal({ strip }, { { "focus", "3" }, { "memory-limit", "2G" } });
+    INFO(strip_refusal);
+    CHECK(one_line_error(strip_refusal,
+                          "strip.exr: spreading a data window of 3145731x16 needs 2.44 GB, more "
                           "than the memory limit of 2 GB"));
     // Spreading: a blur of 20000 px grows every layer by 10000 px a side.
     CHECK(one_line_error(refusal({ scene }, { { "focus", "0.01" }, { "fstop", "0.1" },

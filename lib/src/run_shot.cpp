@@ -166,7 +166,9 @@ ScheduleResult run_plan(const Shot& shot, const ShotAssets& assets, const RunPla
     const ScheduleResult run = run_frames(
         int(plan.frames.size()), request.threads, size_t(shot.read.memory_limit.for_frames()),
         request.stop_on_error, render_one,
-        [&](int i) { return declared_bytes(frame_inputs(shot, plan.frames[i])); });
+        [&](int i) {
+            return declared_bytes(frame_inputs(shot, plan.frames[i]), shot.read.memory_limit);
+        });
     if (cancelled)
         *cancelled = stop;
     return run;

@@ -57,7 +57,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     Scene scene;
     if (!read_scene({ image_file }, options, scene, error))
         defocus_fuzz::require_reason(error);
-    declared_bytes({ image_file });
+    declared_bytes({ image_file }, options.memory_limit);
     // The seeds that record this hash reach the completeness check.
     std::string why;
     if (!written_with_settings(image_file, "00000000f022f022", why))

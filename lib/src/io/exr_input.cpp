@@ -134,6 +134,38 @@ int64_t deep_chunk_pixels(exr_const_context_t file, int part)
     return 0;
 }
 
+/// The bytes one chunk of flat part `part` decodes to (a block of scanlines
+/// or a tile): OpenEXR's C++ interface allocates a buffer of it per reading
+/// thread when it opens the part, and its decompressor another, whatever
+/// the file holds (a 417-byte file declaring rows 100 million pixels wide
+/// asked for 3.2 GB). 0 for deep parts, which deep_chunk_pixels bounds.
+double flat_chunk_bytes(exr_const_context_t file, int part)
+{
+    exr_storage_t storage = EXR_STORAGE_SCANLINE;
+    const exr_attr_chlist_t* channels = nullptr;
+    if (exr_get_storage(file, part, &storage) != EXR_ERR_SUCCESS
+        || exr_get_channels(file, part, &channels) != EXR_ERR_SUCCESS || !channels)
+        return 0.0;
+    double pixel_bytes = 0.0;
+    for (int c = 0; c < channels->num_channels; ++c)
+        pixel_bytes += channels->entries[c].pixel_type == EXR_PIXEL_HALF ? 2.0 : 4.0;
+    if (storage == EXR_STORAGE_SCANLINE) {
+        exr_attr_box2i_t window {};
+        int32_t lines = 0;
+        exr_get_data_window(file, part, &window);
+        exr_get_scanlines_per_chunk(file, part, &lines);
+        return (double(window.max.x) - window.min.x + 1) * std::max(lines, 1) * pixel_bytes;
+    }
+    if (storage == EXR_STORAGE_TILED) {
+        uint32_t width = 0, height = 0;
+        exr_tile_level_mode_t level;
+        exr_tile_round_mode_t round;
+        exr_get_tile_descriptor(file, part, &width, &height, &level, &round);
+        return double(width) * double(height) * pixel_bytes;
+    }
+    return 0.0;
+}
+
 }  // namespace
 
 bool is_openexr_file(const std::string& filename)
@@ -169,7 +201,7 @@ ExrInput::~ExrInput()
     }
 }
 
-bool ExrInput::open(const std::string& filename, std::string& error)
+bool ExrInput::open(const std::string& filename, std::string& error, const MemoryLimit& limit)
 {
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = keep_message;
@@ -192,6 +224,7 @@ bool ExrInput::open(const std::string& filename, std::string& error)
     // window cost 1.9 GB and 4 s.
     int parts = 0;
     uint64_t table_bytes = 0;
+    double buffer_bytes = 0.0;
     exr_get_count(file, &parts);
     for (int part = 0; part < parts; ++part) {
         int32_t chunks = 0;
@@ -201,6 +234,9 @@ bool ExrInput::open(const std::string& filename, std::string& error)
             return false;
         }
         table_bytes += uint64_t(chunks) * sizeof(uint64_t);
+        // The buffers OpenEXR allocates to open each part, two at the least:
+        // counted over all parts, since a reader opens every one of them.
+        buffer_bytes += 2.0 * flat_chunk_bytes(file, part);
         const int64_t chunk_pixels = deep_chunk_pixels(file, part);
         if (chunk_pixels * int64_t(sizeof(unsigned)) > INT32_MAX) {
             exr_finish(&file);
@@ -215,6 +251,20 @@ bool ExrInput::open(const std::string& filename, std::string& error)
         exr_finish(&file);
         error = damaged(filename, format("its chunk tables take {} bytes, the file {}",
                                          table_bytes, file_bytes));
+        return false;
+    }
+    // Against the whole limit, not what the frame leaves of it: the flat
+    // reader decodes through the core library and never fills these
+    // buffers, so they are address space more than memory; but a header
+    // that asks for more than the whole limit is refused before they are
+    // made (under ASan, 3.2 GB of them took seconds).
+    const MemoryLimit whole(limit.bytes());
+    if (!whole.allows(buffer_bytes)) {
+        exr_finish(&file);
+        error = format("{}: {}", filename,
+                       whole.exceeded(parts > 1 ? "decoding one chunk of each part"
+                                                : "decoding one chunk",
+                                      buffer_bytes));
         return false;
     }
     m_context = new Context { file, filename };

@@ -39,8 +39,10 @@ public:
     ~ExrInput();
 
     /// Opens a file and checks its headers; false with `error` ("corrupt or
-    /// truncated OpenEXR file: ...").
-    bool open(const std::string& filename, std::string& error);
+    /// truncated OpenEXR file: ...", or a chunk whose decoding buffers the
+    /// memory limit does not allow).
+    bool open(const std::string& filename, std::string& error,
+              const MemoryLimit& limit = MemoryLimit());
     bool is_open() const { return m_context != nullptr; }
 
     /// The string attribute `name` of the first part, or "" when it has

@@ -44,14 +44,14 @@ struct FileLayout {
 /// OpenEXR's core library, kept in `exr` (when given) to decode its pixels:
 /// OpenImageIO 2.4 crashes or hangs on some corrupt EXRs that it rejects.
 std::unique_ptr<ImageInput> open_file(const std::string& filename, ExrInput* exr,
-                                      std::string& error)
+                                      const MemoryLimit& limit, std::string& error)
 {
     if (const char* why = not_a_file(filename)) {
         error = filename + ": " + why;
         return nullptr;
     }
     ExrInput headers_only;
-    if (is_openexr_file(filename) && !(exr ? exr : &headers_only)->open(filename, error))
+    if (is_openexr_file(filename) && !(exr ? exr : &headers_only)->open(filename, error, limit))
         return nullptr;
     auto in = ImageInput::open(filename);
     if (!in) {
@@ -298,7 +298,7 @@ bool read_depth_file(const std::string& filename, const ImageSpec& render,
                      const MemoryLimit& limit, Layer& layer, std::string& error)
 {
     ExrInput exr;
-    auto in = open_file(filename, &exr, error);
+    auto in = open_file(filename, &exr, limit, error);
     if (!in)
         return false;
     const Part part { 0, in->spec(), "part 0", {} };
@@ -345,7 +345,7 @@ bool read_file(const std::string& filename, const ReadOptions& options,
                Scene& scene, std::string& error)
 {
     ExrInput exr;
-    auto in = open_file(filename, &exr, error);
+    auto in = open_file(filename, &exr, options.memory_limit, error);
     FileLayout layout;
     if (!in || !choose_parts(*in, filename, options, layout, error)
         || !fits_memory_limit(layout, exr.is_open(), filename, options.memory_limit, error))
@@ -534,12 +534,12 @@ bool check_inputs(const std::vector<std::string>& filenames, const ReadOptions& 
 
 }  // namespace
 
-double declared_bytes(const std::vector<std::string>& filenames)
+double declared_bytes(const std::vector<std::string>& filenames, const MemoryLimit& limit)
 {
     double bytes = 0.0;
     std::string ignored;
     for (const std::string& filename : filenames) {
-        auto in = open_file(filename, nullptr, ignored);
+        auto in = open_file(filename, nullptr, limit, ignored);
         for (int subimage = 0; in && in->seek_subimage(subimage, 0); ++subimage)
             bytes += float_bytes(double(in->spec().image_pixels()), in->spec().nchannels);
     }
@@ -553,7 +553,7 @@ bool read_scene_spec(const std::vector<std::string>& filenames, const ReadOption
         return false;
     ROI data_window;
     for (size_t f = 0; f < filenames.size(); ++f) {
-        auto in = open_file(filenames[f], nullptr, error);
+        auto in = open_file(filenames[f], nullptr, options.memory_limit, error);
         FileLayout layout;
         if (!in || !choose_parts(*in, filenames[f], options, layout, error))
             return false;

@@ -27,8 +27,10 @@ namespace defocus {
 /// first file gives the display window and metadata; the others must share
 /// its display window.
 ///
-/// Every EXR is vetted with OpenEXR's file checker before it is read, so
-/// corrupt files end in an error rather than a crash. On failure returns
+/// Every EXR's headers are checked by OpenEXR's core library before
+/// OpenImageIO opens it, so corrupt files end in an error rather than a
+/// crash, and a chunk larger than the memory limit is refused before
+/// OpenEXR allocates it. On failure returns
 /// false and sets `error` to a one-line message naming the file and the
 /// problem.
 bool read_scene(const std::vector<std::string>& filenames,
@@ -37,8 +39,9 @@ bool read_scene(const std::vector<std::string>& filenames,
 /// What the files' headers declare, as float: every part's pixels times
 /// its channels (a deep part's samples are not in its header: one a pixel).
 /// A measure of how much reading them takes, before they are read; a file
-/// that cannot be opened counts nothing (reading it says why).
-double declared_bytes(const std::vector<std::string>& filenames);
+/// that cannot be opened, or whose one chunk `limit` cannot decode, counts
+/// nothing (reading it says why).
+double declared_bytes(const std::vector<std::string>& filenames, const MemoryLimit& limit);
 
 /// The spec read_scene() would give the scene (display window, metadata,
 /// the union of the data windows read), from the files' headers alone,
