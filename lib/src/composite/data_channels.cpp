@@ -251,7 +251,8 @@ bool data_channels(ImageBuf& dst, const ImageBuf& result, const LayeredScene& sc
                    std::vector<int>(ranked, -1), std::vector<ImageBuf>(scene.layers.size()) };
     std::string error;
     std::vector<std::vector<ObjectExtent>> objects;
-    const std::vector<QuantityPass> passes = quantity_passes(targets, takes_aperture_cells(spread, scene));
+    const std::vector<QuantityPass> passes
+        = quantity_passes(targets, takes_aperture_cells(spread, scene));
     spreader.total = int(passes.size());
     for (const ObjectSet& set : sets) {
         objects.push_back(find_objects(set, scene, lookups, nthreads));

@@ -75,13 +75,4 @@ bool Spreader::spread(std::vector<Layer>&& layers, const std::vector<size_t>& fr
                                error, nullptr, nullptr, nthreads);
 }
 
-std::vector<size_t> lit_layers(const LayeredScene& scene)
-{
-    std::vector<size_t> from;
-    for (size_t i = 0; i < scene.layers.size(); ++i)
-        if (scene.reports[i].pixels > 0)
-            from.push_back(i);
-    return from;
-}
-
 }  // namespace defocus

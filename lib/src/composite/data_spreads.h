@@ -85,7 +85,4 @@ struct Coverage {
     }
 };
 
-/// The layers with pixels, by index.
-std::vector<size_t> lit_layers(const LayeredScene& scene);
-
 }  // namespace defocus

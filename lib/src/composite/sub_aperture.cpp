@@ -314,10 +314,8 @@ void BandSums::all_changes(std::vector<float>& out) const
 
 bool takes_aperture_cells(const SpreadOptions& spread, const LayeredScene& scene)
 {
-    const auto lit = std::count_if(scene.reports.begin(), scene.reports.end(),
-                                   [](const LayerReport& r) { return r.pixels > 0; });
     return spread.aperture_cells != 1 && spread.aperture.shape != ApertureShape::Tent
-           && spread.aperture.shape != ApertureShape::Smooth && lit > 1;
+           && spread.aperture.shape != ApertureShape::Smooth && lit_layers(scene).size() > 1;
 }
 
 void SubApertureLayers::compute(const LayeredScene& scene, const CircleOfConfusion& coc,

@@ -109,61 +109,60 @@ bool attributes_fit(const std::string& filename, std::string& why)
     return ok;
 }
 
-/// OpenEXR 3.1's C++ deep readers size one chunk's table of sample counts
-/// in an int: a deep part whose chunk counts more than 2^31 bytes' worth of
-/// pixels (a data window 738 million pixels wide, found by fuzzing) has
-/// them allocate a negative size. The pixels of one chunk of `part`.
-int64_t deep_chunk_pixels(exr_const_context_t file, int part)
+/// The pixels of one chunk of `part`: a block of scanlines or a tile.
+int64_t chunk_pixels(exr_const_context_t file, int part, exr_storage_t storage)
 {
-    exr_storage_t storage = EXR_STORAGE_SCANLINE;
-    exr_get_storage(file, part, &storage);
-    if (storage == EXR_STORAGE_DEEP_SCANLINE) {
+    if (storage == EXR_STORAGE_SCANLINE || storage == EXR_STORAGE_DEEP_SCANLINE) {
         exr_attr_box2i_t window {};
         int32_t lines = 0;
         exr_get_data_window(file, part, &window);
         exr_get_scanlines_per_chunk(file, part, &lines);
         return (int64_t(window.max.x) - window.min.x + 1) * std::max(lines, 1);
     }
-    if (storage == EXR_STORAGE_DEEP_TILED) {
-        uint32_t width = 0, height = 0;
-        exr_tile_level_mode_t level;
-        exr_tile_round_mode_t round;
-        exr_get_tile_descriptor(file, part, &width, &height, &level, &round);
-        return int64_t(width) * int64_t(height);
-    }
-    return 0;
+    uint32_t width = 0, height = 0;
+    exr_tile_level_mode_t level;
+    exr_tile_round_mode_t round;
+    exr_get_tile_descriptor(file, part, &width, &height, &level, &round);
+    return int64_t(width) * int64_t(height);
 }
 
-/// The bytes one chunk of flat part `part` decodes to (a block of scanlines
-/// or a tile): OpenEXR's C++ interface allocates a buffer of it per reading
-/// thread when it opens the part, and its decompressor another, whatever
-/// the file holds (a 417-byte file declaring rows 100 million pixels wide
-/// asked for 3.2 GB). 0 for deep parts, which deep_chunk_pixels bounds.
-double flat_chunk_bytes(exr_const_context_t file, int part)
+/// The bytes of one pixel of `part`'s channels, as stored.
+double pixel_bytes(exr_const_context_t file, int part)
+{
+    const exr_attr_chlist_t* channels = nullptr;
+    double bytes = 0.0;
+    if (exr_get_channels(file, part, &channels) == EXR_ERR_SUCCESS && channels)
+        for (int c = 0; c < channels->num_channels; ++c)
+            bytes += channels->entries[c].pixel_type == EXR_PIXEL_HALF ? 2.0 : 4.0;
+    return bytes;
+}
+
+/// Whether OpenEXR's C++ interface can open `part` at the cost its chunks
+/// declare; false with `why`. A flat part's chunk (one block of scanlines or
+/// a tile) is decoded into a buffer per reading thread, allocated when the
+/// part is opened, and its decompressor takes another, whatever the file
+/// holds: their bytes are added to `buffer_bytes`. A deep part's chunk has
+/// its table of sample counts sized in an int in OpenEXR 3.1: one counting
+/// more than 2^31 bytes' worth of pixels (a data window 738 million pixels
+/// wide, found by fuzzing) had it allocate a negative size.
+bool chunks_openable(exr_const_context_t file, int part, double& buffer_bytes, std::string& why)
 {
     exr_storage_t storage = EXR_STORAGE_SCANLINE;
-    const exr_attr_chlist_t* channels = nullptr;
-    if (exr_get_storage(file, part, &storage) != EXR_ERR_SUCCESS
-        || exr_get_channels(file, part, &channels) != EXR_ERR_SUCCESS || !channels)
-        return 0.0;
-    double pixel_bytes = 0.0;
-    for (int c = 0; c < channels->num_channels; ++c)
-        pixel_bytes += channels->entries[c].pixel_type == EXR_PIXEL_HALF ? 2.0 : 4.0;
-    if (storage == EXR_STORAGE_SCANLINE) {
-        exr_attr_box2i_t window {};
-        int32_t lines = 0;
-        exr_get_data_window(file, part, &window);
-        exr_get_scanlines_per_chunk(file, part, &lines);
-        return (double(window.max.x) - window.min.x + 1) * std::max(lines, 1) * pixel_bytes;
+    if (exr_get_storage(file, part, &storage) != EXR_ERR_SUCCESS) {
+        why = core_message;
+        return false;
     }
-    if (storage == EXR_STORAGE_TILED) {
-        uint32_t width = 0, height = 0;
-        exr_tile_level_mode_t level;
-        exr_tile_round_mode_t round;
-        exr_get_tile_descriptor(file, part, &width, &height, &level, &round);
-        return double(width) * double(height) * pixel_bytes;
+    const int64_t pixels = chunk_pixels(file, part, storage);
+    if (storage == EXR_STORAGE_SCANLINE || storage == EXR_STORAGE_TILED) {
+        buffer_bytes += 2.0 * double(pixels) * pixel_bytes(file, part);
+        return true;
     }
-    return 0.0;
+    if (pixels * int64_t(sizeof(unsigned)) > INT32_MAX) {
+        why = format("part {}'s deep chunks hold {} pixels each, more than OpenEXR can count",
+                     part, pixels);
+        return false;
+    }
+    return true;
 }
 
 }  // namespace
@@ -234,15 +233,10 @@ bool ExrInput::open(const std::string& filename, std::string& error, const Memor
             return false;
         }
         table_bytes += uint64_t(chunks) * sizeof(uint64_t);
-        // The buffers OpenEXR allocates to open each part, two at the least:
-        // counted over all parts, since a reader opens every one of them.
-        buffer_bytes += 2.0 * flat_chunk_bytes(file, part);
-        const int64_t chunk_pixels = deep_chunk_pixels(file, part);
-        if (chunk_pixels * int64_t(sizeof(unsigned)) > INT32_MAX) {
+        // Buffers counted over all parts: a reader opens every one of them.
+        if (!chunks_openable(file, part, buffer_bytes, why)) {
             exr_finish(&file);
-            error = damaged(filename, format("part {}'s deep chunks hold {} pixels each, more "
-                                             "than OpenEXR can count",
-                                             part, chunk_pixels));
+            error = damaged(filename, why);
             return false;
         }
     }

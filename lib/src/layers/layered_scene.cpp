@@ -90,6 +90,15 @@ LayerReport describe_layer(const Layer& layer, const CircleOfConfusion& coc, int
     return rep;
 }
 
+std::vector<size_t> lit_layers(const LayeredScene& scene)
+{
+    std::vector<size_t> lit;
+    for (size_t i = 0; i < scene.layers.size(); ++i)
+        if (scene.reports[i].pixels > 0)
+            lit.push_back(i);
+    return lit;
+}
+
 OIIO::ImageSpec display_picture_spec(const LayeredScene& scene)
 {
     const OIIO::ImageSpec& s = scene.spec;

@@ -49,6 +49,10 @@ struct LayeredScene {
     std::shared_ptr<const DeepImage> holdout;
 };
 
+/// The layers of `scene` that carry light (pixels in their reports), by
+/// index, back to front.
+std::vector<size_t> lit_layers(const LayeredScene& scene);
+
 /// The spec of a false-colour picture of `scene` (the focus map, the
 /// layer view): float RGBA over its display window.
 OIIO::ImageSpec display_picture_spec(const LayeredScene& scene);
