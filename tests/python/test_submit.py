@@ -98,18 +98,22 @@ def run_script(script, folder):
 def test_control_characters_in_any_value_are_refused(scene, tmp_path, stub_sbatch):
     out = tmp_path / "out.#.exr"
     base = ["--chunk-size", "1", "--mem", "1G", "--focus", "3"]
-    for bad in ["x\ntouch PWNED", "x\rtouch PWNED", "x\x1b[2J", "x\x7f"]:
-        for option in ["-o", "--job-name", "--time", "--partition", "--job-dir", "input"]:
-            args = [*base, scene, "-o", out]
-            if option == "input":
-                args[args.index(scene)] = str(scene) + bad
-            elif option == "-o":
-                args[-1] = str(out) + bad
-            else:
-                args += [option, bad]
-            run = submit(*args)
-            assert run.returncode != 0, (option, bad)
-            assert run.stderr.count("\n") == 1 and "holds a control character" in run.stderr
+    # Every argument goes through one check, so each option is tried with
+    # one of the characters in turn, and each character with some option.
+    bad_values = ["x\ntouch PWNED", "x\rtouch PWNED", "x\x1b[2J", "x\x7f"]
+    options = ["-o", "--job-name", "--time", "--partition", "--job-dir", "input"]
+    for i, option in enumerate(options):
+        bad = bad_values[i % len(bad_values)]
+        args = [*base, scene, "-o", out]
+        if option == "input":
+            args[args.index(scene)] = str(scene) + bad
+        elif option == "-o":
+            args[-1] = str(out) + bad
+        else:
+            args += [option, bad]
+        run = submit(*args)
+        assert run.returncode != 0, (option, bad)
+        assert run.stderr.count("\n") == 1 and "holds a control character" in run.stderr
     assert os.listdir(stub_sbatch) == ["sbatch"]  # nothing submitted
     assert not (tmp_path / "defocus-farm").exists()
 
