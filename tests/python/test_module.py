@@ -39,11 +39,11 @@ def pixels(path):
 
 @pytest.fixture(scope="session")
 def example(tmp_path_factory):
-    """The example scene: a four-part layered EXR with overscan."""
+    """The example scene at 640x360: a four-part layered EXR with overscan."""
     folder = tmp_path_factory.mktemp("example")
     scene = folder / "scene.exr"
-    subprocess.run([os.environ["MAKE_EXAMPLE_SCENE_BIN"], str(scene)], check=True,
-                   capture_output=True)
+    subprocess.run([os.environ["MAKE_EXAMPLE_SCENE_BIN"], str(scene), "--width", "640",
+                    "--height", "360"], check=True, capture_output=True)
     return scene
 
 
@@ -87,9 +87,9 @@ def test_aperture_cells_composite_per_part_of_the_lens_as_the_command(example, t
 def test_crop_gives_the_display_window(example):
     shot = defocus.Shot(inputs=[example], **CAMERA)
     whole, cropped = defocus.render(shot), defocus.render(shot, crop=True)
-    assert cropped.shape == (720, 1280, 4)
-    # The example's data window starts 64 pixels before the display window.
-    assert np.array_equal(cropped, whole[64:64 + 720, 64:64 + 1280])
+    assert cropped.shape == (360, 640, 4)
+    # The example's data window starts 32 pixels before the display window.
+    assert np.array_equal(cropped, whole[32:32 + 360, 32:32 + 640])
 
 
 @pytest.mark.skipif(not os.path.exists(os.path.join(GARDEN, "layers.exr")),
@@ -372,7 +372,7 @@ def test_errors_name_python_keywords(example, tmp_path):
         (defocus.Shot(inputs=[example], focus=3, output="focusmap", aov="confidence"),
          'aov applies to the defocused image, not to output="focusmap"'),
         (defocus.Shot(inputs=[example], focus_at=(5000, 10)),
-         "focus_at=(5000, 10) is outside the 1280x720 display window"),
+         "focus_at=(5000, 10) is outside the 640x360 display window"),
         (defocus.Shot(inputs=[example], focus=3, memory_limit="1M"),
          "more than the memory limit of 1 MB (memory_limit)"),
         (defocus.Shot(inputs=[example], focus=3, depth_kind="coc"),
@@ -433,10 +433,10 @@ def test_the_confidence_aov_marks_rebuilt_light_as_the_command_does(example, tmp
 def test_a_holdout_and_the_coc_aov_as_the_command_and_a_dof_give_them(example, tmp_path):
     # A flat card at 2 m over the left half of the example's display window:
     # the holdout, one sample a pixel.
-    spec = oiio.ImageSpec(1280, 720, 5, oiio.FLOAT)
+    spec = oiio.ImageSpec(640, 360, 5, oiio.FLOAT)
     spec.channelnames = ("R", "G", "B", "A", "Z")
-    card = np.zeros((720, 1280, 5), np.float32)
-    card[:, :640] = (0.2, 0.2, 0.2, 1.0, 2.0)
+    card = np.zeros((360, 640, 5), np.float32)
+    card[:, :320] = (0.2, 0.2, 0.2, 1.0, 2.0)
     out = oiio.ImageOutput.create(str(tmp_path / "card.exr"))
     assert out.open(str(tmp_path / "card.exr"), spec)
     out.write_image(card)
@@ -604,7 +604,7 @@ def test_ctrl_c_raises_keyboard_interrupt_and_leaves_no_partial_file(example, tm
     assert 0 < len(files) < 40
     for name in files:
         assert name.startswith("out.") and name.endswith(".exr"), name  # no temporaries
-        assert pixels(tmp_path / name)[0].shape == (848, 1408, 4)
+        assert pixels(tmp_path / name)[0].shape == (424, 704, 4)
 
 
 def test_help_reads_well():
