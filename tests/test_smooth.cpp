@@ -98,7 +98,7 @@ TEST_CASE("smooth spreading stays exact at radius 200 on HDR data")
     CHECK(worst_relative_error(fast, direct, 1e-4, 1e-6) <= 1.0);
 }
 
-TEST_CASE("rows of HDR pixels filtered as runs stay exact at radius 200")
+TEST_CASE("rows of HDR pixels filtered as runs stay exact at radius 200", "[scale]")
 {
     // Long runs of one radius, so that their rows are filtered along x and
     // rounded as profiles: a run of 1e4 sets the fixed point's scale, and

@@ -158,7 +158,7 @@ TEST_CASE("a tilted plane shows no banding")
     CHECK(worst < 0.005);
 }
 
-TEST_CASE("prefix sums stay accurate on a 4096x2160 HDR layer")
+TEST_CASE("prefix sums stay accurate on a 4096x2160 HDR layer", "[scale]")
 {
     // Values 1e-3..1e4: the result must equal the direct reference within
     // 1e-4 of the local value plus 1e-6 everywhere.
