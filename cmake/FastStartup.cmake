@@ -58,7 +58,10 @@ if(NOT DEFINED CACHE{DEFOCUS_STARTUP_LIBRARIES})
     message(STATUS "Tools link ${_count} of OpenImageIO's dependencies first, to start faster")
 endif()
 
-# Makes `target` name the startup libraries as its own dependencies.
+# Makes `target` name the startup libraries as its own dependencies: the
+# tools, the Python module, and the test programs and scene generators,
+# which the suite starts hundreds of times (CTest runs each test case in a
+# process of its own: test_unit's start 0.47 s -> 0.33 s).
 function(defocus_fast_startup target)
     if(DEFOCUS_STARTUP_LIBRARIES)
         target_link_libraries(${target} PRIVATE
