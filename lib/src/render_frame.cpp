@@ -172,7 +172,8 @@ bool frame_fits(const Shot& shot, int frame, std::string& error)
     ImageSpec input;
     if (!read_scene_spec(inputs, frame_read_options(shot, frame), input, error))
         return false;
-    const double bytes = declared_bytes(inputs, shot.read.memory_limit) + result_bytes(double(input.image_pixels()));
+    const double bytes = declared_bytes(inputs, shot.read.memory_limit)
+                         + result_bytes(double(input.image_pixels()));
     if (shot.read.memory_limit.allows(bytes))
         return true;
     error = format("{}: {}", Strutil::join(inputs, " "),
