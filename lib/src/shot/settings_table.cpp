@@ -404,8 +404,8 @@ std::vector<SettingRule> spread_rules()
                  "different points of the lens (a branch's shadow across a far light's "
                  "bokeh), composite the layers per part of the aperture, cut into about N "
                  "cells: 1 = the whole aperture at once (the layered model of compositing "
-                 "tools); 0 = as many as each place needs: truer where near objects are "
-                 "blurred over detail, about 2 times slower (default: 1)" },
+                 "tools), about half the time where near objects are blurred over detail; "
+                 "0 = as many as each place needs (default: 0)" },
                [](auto& s) -> auto& { return s.spread.aperture_cells; }, 0, 256),
     };
 }

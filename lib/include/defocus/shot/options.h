@@ -25,9 +25,9 @@ struct SpreadOptions {
     /// cells, and where a near layer hides different parts of a far one
     /// from different points of the lens, the layers are composited within
     /// each cell and the cells added (composite/sub_aperture.h). 1 = one
-    /// composite of the whole aperture; 0 = as many as each place needs.
-    /// 1 by default until automatic cells cost what the layered model does.
-    int aperture_cells = 1;
+    /// composite of the whole aperture (the layered model of compositing
+    /// tools, faster); 0 = as many as each place needs.
+    int aperture_cells = 0;
 };
 
 /// How the readers take the input files.
