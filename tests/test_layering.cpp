@@ -190,6 +190,31 @@ TEST_CASE("deep samples are ordered by Z, then ZBack")
     CHECK(out[1] == Approx(0.25f));  // green behind it
 }
 
+TEST_CASE("a sample behind an opaque one adds nothing to its layer's depth")
+{
+    // 0 times the infinite depth of the sky behind an opaque sample made
+    // the layer's depth NaN (fuzz_scene), which put the layers out of
+    // order and gave aperture cells a NaN radius.
+    Scene scene;
+    scene.spec = OIIO::ImageSpec(120, 80, 4, OIIO::TypeFloat);
+    DeepImage deep;
+    deep.name = "wall";
+    deep.roi = ROI(0, 1, 0, 1);
+    deep.offsets = { 0, 2 };
+    deep.samples = { { 0.5f, 0.5f, 0.5f, 1.0f, 1000.0f, 1000.0f },
+                     { 0.2f, 0.3f, 0.9f, 1.0f, INFINITY, INFINITY } };
+    scene.deep.push_back(deep);
+    const LayeredScene layers = cut(std::move(scene), synthetic_camera(1.0)).layers;
+    int lit = 0;
+    for (const Layer& layer : layers.layers) {
+        if (!(layer.color.getchannel(0, 0, 0, 3) > 0.0f))
+            continue;
+        ++lit;
+        CHECK(layer.depth.getchannel(0, 0, 0, 0) == 1000.0f);
+    }
+    CHECK(lit == 1);
+}
+
 TEST_CASE("a surface crossing layer boundaries shows no seam")
 {
     // An opaque grey plane tilted in depth: its CoC runs from -20 to +20 px

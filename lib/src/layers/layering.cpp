@@ -114,7 +114,10 @@ HiddenPixels extract_layer(const Source& frags, int k, const ROI& window, Layer&
                 rgba[2] += t * w * f->b;
                 const double covered = t * w * f->a;
                 rgba[3] += covered;
-                zsum += covered * f->z;
+                // Behind full cover a sample adds nothing: 0 × an infinite
+                // depth would be NaN.
+                if (covered != 0.0)
+                    zsum += covered * f->z;
                 wsum += covered;
             }
             const size_t p = row + (x - window.xbegin);
