@@ -30,6 +30,7 @@ defocus checks them, so a job that every task would refuse is not
 submitted.
 """
 import argparse
+import importlib.util
 import json
 import math
 import os
@@ -44,7 +45,21 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 # Where this script finds the Python package: beside it in the build tree,
 # in <prefix>/lib/python3/dist-packages once installed (set by CMake).
 sys.path.insert(0, os.path.normpath(os.path.join(HERE, "@DEFOCUS_SUBMIT_PYTHONPATH@")))
-import defocus  # noqa: E402
+
+
+def imported_on_first_use(name):
+    """The module, run only when one of its names is first read: importing
+    defocus loads OpenImageIO's libraries (half a second), which --help
+    and a call refused for its own arguments need not wait for."""
+    spec = importlib.util.find_spec(name)
+    spec.loader = importlib.util.LazyLoader(spec.loader)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+defocus = imported_on_first_use("defocus")
 
 DEFOCUS = os.path.join(HERE, "defocus")
 
@@ -207,6 +222,18 @@ def job_name(given, output):
     return re.sub(r"[^A-Za-z0-9._-]", "_", stem).lstrip(".") or "defocus"
 
 
+class VersionAction(argparse.Action):
+    """--version, which alone of the options needs the module to answer."""
+
+    def __init__(self, option_strings, dest, **kwargs):
+        super().__init__(option_strings, dest, nargs=0,
+                         help="show program's version number and exit", **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(f"defocus-submit {defocus.__version__}")
+        parser.exit()
+
+
 class HelpFormatter(argparse.RawDescriptionHelpFormatter):
     """argparse's help with "Usage:" spelt as help2man and the other tools
     spell it, so that the man page's synopsis holds every form."""
@@ -245,7 +272,7 @@ def main():
     farm.add_argument("--check", action="store_true",
                       help="check a submitted job's frames (what its final job runs)")
     farm.add_argument("-o", dest="output", metavar="OUTPUT", help="output frame pattern")
-    farm.add_argument("--version", action="version", version=f"defocus-submit {defocus.__version__}")
+    farm.add_argument("--version", action=VersionAction)
     refuse_control_characters(sys.argv[1:])
     args, shot_args = parser.parse_known_args()
 
@@ -291,11 +318,11 @@ def main():
             os.makedirs(job_dir, exist_ok=True)
             if not args.resume:
                 keep_earlier_submission(job_dir)
-            # defocus saved it with paths relative to where it was saved.
-            run = subprocess.run([DEFOCUS, *shot_args, "--save-scene", earlier_shot, "-q"],
-                                 capture_output=True, text=True)
-            if run.returncode != 0:
-                fail(run.stderr.strip().removeprefix("defocus: "))
+            # Saved again, its paths relative to the job's folder where beneath it.
+            try:
+                shot.save(earlier_shot)
+            except defocus.Error as e:
+                fail(str(e))
         return submit(args, shot, earlier_shot, shot_file, name, job_dir, output, mem_mb)
 
 
