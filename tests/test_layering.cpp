@@ -41,6 +41,20 @@ Scene flat_scene(Shade&& shade, int width = 120, int height = 80)
     return scene;
 }
 
+/// A 120x80 scene of one deep pixel at (x, y) holding `samples`.
+Scene deep_pixel(const std::string& name, int x, int y, std::vector<DeepSample> samples)
+{
+    Scene scene;
+    scene.spec = OIIO::ImageSpec(120, 80, 4, OIIO::TypeFloat);
+    DeepImage deep;
+    deep.name = name;
+    deep.roi = ROI(x, x + 1, y, y + 1);
+    deep.offsets = { 0, samples.size() };
+    deep.samples = std::move(samples);
+    scene.deep.push_back(std::move(deep));
+    return scene;
+}
+
 /// A scene cut into layers through `camera`, its CoC over a 120 px frame.
 struct Cut {
     LayeredScene layers;
@@ -140,19 +154,13 @@ TEST_CASE("automatic boundaries fall in the gaps between objects")
 
 TEST_CASE("a deep volume sample split across layers composites back to itself")
 {
-    Scene scene;
-    scene.spec = OIIO::ImageSpec(120, 80, 4, OIIO::TypeFloat);
-    DeepImage deep;
-    deep.name = "volume";
-    deep.roi = ROI(10, 11, 10, 11);
-    deep.offsets = { 0, 2 };
     // A fog volume from 0.6 to 6 (CoC -22 to +28 px) behind a point sample.
-    deep.samples = { { 0.4f, 0.2f, 0.1f, 0.8f, 0.6f, 6.0f },
-                     { 0.1f, 0.1f, 0.1f, 0.2f, 0.55f, 0.55f } };
-    scene.deep.push_back(deep);
     LayeringOptions options;
     options.layers = 6;
-    const auto [layers, slicing] = cut(std::move(scene), synthetic_camera(1.0), options);
+    const auto [layers, slicing] = cut(deep_pixel("volume", 10, 10,
+                                                  { { 0.4f, 0.2f, 0.1f, 0.8f, 0.6f, 6.0f },
+                                                    { 0.1f, 0.1f, 0.1f, 0.2f, 0.55f, 0.55f } }),
+                                       synthetic_camera(1.0), options);
     REQUIRE(layers.layers.size() >= 3);
     // Back to front, each layer with its own report.
     REQUIRE(layers.reports.size() == layers.layers.size());
@@ -174,16 +182,12 @@ TEST_CASE("deep samples are ordered by Z, then ZBack")
 {
     // File order: the longer volume first. At equal Z the shorter one
     // (smaller ZBack) is in front.
-    Scene scene;
-    scene.spec = OIIO::ImageSpec(120, 80, 4, OIIO::TypeFloat);
-    DeepImage deep;
-    deep.name = "tie";
-    deep.roi = ROI(0, 1, 0, 1);
-    deep.offsets = { 0, 2 };
-    deep.samples = { { 0.0f, 0.5f, 0.0f, 0.5f, 2.0f, 4.0f },    // green, long
-                     { 0.5f, 0.0f, 0.0f, 0.5f, 2.0f, 2.0f } };  // red, point
-    scene.deep.push_back(deep);
-    const LayeredScene layers = cut(std::move(scene), synthetic_camera(1.0)).layers;
+    const LayeredScene layers
+        = cut(deep_pixel("tie", 0, 0,
+                         { { 0.0f, 0.5f, 0.0f, 0.5f, 2.0f, 4.0f },    // green, long
+                           { 0.5f, 0.0f, 0.0f, 0.5f, 2.0f, 2.0f } }),  // red, point
+              synthetic_camera(1.0))
+              .layers;
     float out[4];
     composite_pixel(layers.layers, 0, 0, out);
     CHECK(out[0] == Approx(0.5f));   // red in front
@@ -195,16 +199,12 @@ TEST_CASE("a sample behind an opaque one adds nothing to its layer's depth")
     // 0 times the infinite depth of the sky behind an opaque sample made
     // the layer's depth NaN (fuzz_scene), which put the layers out of
     // order and gave aperture cells a NaN radius.
-    Scene scene;
-    scene.spec = OIIO::ImageSpec(120, 80, 4, OIIO::TypeFloat);
-    DeepImage deep;
-    deep.name = "wall";
-    deep.roi = ROI(0, 1, 0, 1);
-    deep.offsets = { 0, 2 };
-    deep.samples = { { 0.5f, 0.5f, 0.5f, 1.0f, 1000.0f, 1000.0f },
-                     { 0.2f, 0.3f, 0.9f, 1.0f, INFINITY, INFINITY } };
-    scene.deep.push_back(deep);
-    const LayeredScene layers = cut(std::move(scene), synthetic_camera(1.0)).layers;
+    const LayeredScene layers
+        = cut(deep_pixel("wall", 0, 0,
+                         { { 0.5f, 0.5f, 0.5f, 1.0f, 1000.0f, 1000.0f },
+                           { 0.2f, 0.3f, 0.9f, 1.0f, INFINITY, INFINITY } }),
+              synthetic_camera(1.0))
+              .layers;
     int lit = 0;
     for (const Layer& layer : layers.layers) {
         if (!(layer.color.getchannel(0, 0, 0, 3) > 0.0f))
