@@ -39,11 +39,11 @@ def pixels(path):
 
 @pytest.fixture(scope="session")
 def example(tmp_path_factory):
-    """The example scene at 640x360: a four-part layered EXR with overscan."""
+    """The example scene at 320x180: a four-part layered EXR with overscan."""
     folder = tmp_path_factory.mktemp("example")
     scene = folder / "scene.exr"
-    subprocess.run([os.environ["MAKE_EXAMPLE_SCENE_BIN"], str(scene), "--width", "640",
-                    "--height", "360"], check=True, capture_output=True)
+    subprocess.run([os.environ["MAKE_EXAMPLE_SCENE_BIN"], str(scene), "--width", "320",
+                    "--height", "180"], check=True, capture_output=True)
     return scene
 
 
@@ -87,9 +87,9 @@ def test_aperture_cells_composite_per_part_of_the_lens_as_the_command(example, t
 def test_crop_gives_the_display_window(example):
     shot = defocus.Shot(inputs=[example], **CAMERA)
     whole, cropped = defocus.render(shot), defocus.render(shot, crop=True)
-    assert cropped.shape == (360, 640, 4)
-    # The example's data window starts 32 pixels before the display window.
-    assert np.array_equal(cropped, whole[32:32 + 360, 32:32 + 640])
+    assert cropped.shape == (180, 320, 4)
+    # The example's data window starts 16 pixels before the display window.
+    assert np.array_equal(cropped, whole[16:16 + 180, 16:16 + 320])
 
 
 @pytest.mark.skipif(not os.path.exists(os.path.join(GARDEN, "layers.exr")),
@@ -372,7 +372,7 @@ def test_errors_name_python_keywords(example, tmp_path):
         (defocus.Shot(inputs=[example], focus=3, output="focusmap", aov="confidence"),
          'aov applies to the defocused image, not to output="focusmap"'),
         (defocus.Shot(inputs=[example], focus_at=(5000, 10)),
-         "focus_at=(5000, 10) is outside the 640x360 display window"),
+         "focus_at=(5000, 10) is outside the 320x180 display window"),
         (defocus.Shot(inputs=[example], focus=3, memory_limit="1M"),
          "more than the memory limit of 1 MB (memory_limit)"),
         (defocus.Shot(inputs=[example], focus=3, depth_kind="coc"),
@@ -433,10 +433,10 @@ def test_the_confidence_aov_marks_rebuilt_light_as_the_command_does(example, tmp
 def test_a_holdout_and_the_coc_aov_as_the_command_and_a_dof_give_them(example, tmp_path):
     # A flat card at 2 m over the left half of the example's display window:
     # the holdout, one sample a pixel.
-    spec = oiio.ImageSpec(640, 360, 5, oiio.FLOAT)
+    spec = oiio.ImageSpec(320, 180, 5, oiio.FLOAT)
     spec.channelnames = ("R", "G", "B", "A", "Z")
-    card = np.zeros((360, 640, 5), np.float32)
-    card[:, :320] = (0.2, 0.2, 0.2, 1.0, 2.0)
+    card = np.zeros((180, 320, 5), np.float32)
+    card[:, :160] = (0.2, 0.2, 0.2, 1.0, 2.0)
     out = oiio.ImageOutput.create(str(tmp_path / "card.exr"))
     assert out.open(str(tmp_path / "card.exr"), spec)
     out.write_image(card)
@@ -448,7 +448,8 @@ def test_a_holdout_and_the_coc_aov_as_the_command_and_a_dof_give_them(example, t
     # Cut behind the card (all but the leaves at 1 m, in front of it), and
     # only there; the CoC channel is the wall's and the leaves'.
     assert not np.array_equal(ours[..., :4], plain)
-    assert np.array_equal(ours[:, 900:, :4], plain[:, 900:])
+    beyond_card = 16 + 160 + 16  # overscan, the card's half, more than its blur
+    assert np.array_equal(ours[:, beyond_card:, :4], plain[:, beyond_card:])
     assert ours[..., 4].min() < 0 < ours[..., 4].max()
     assert cli(example, "-o", tmp_path / "cli.exr", "--holdout", tmp_path / "card.exr",
                "--aov", "coc", "-d", "float", *CAMERA_ARGS) == (0, "")
@@ -582,8 +583,8 @@ def test_two_threads_render_at_once_with_identical_results(example):
 def test_ctrl_c_raises_keyboard_interrupt_and_leaves_no_partial_file(example, tmp_path):
     script = textwrap.dedent(f"""
         import sys, defocus
-        shot = defocus.Shot(inputs=[{str(example)!r}], frames="1-40", focal=50, fstop=1.8,
-                            focus={{1: 4.0, 40: 1.5}})
+        shot = defocus.Shot(inputs=[{str(example)!r}], frames="1-100", focal=50, fstop=1.8,
+                            focus={{1: 4.0, 100: 1.5}})
         def progress(frame, path):
             print("written", path, flush=True)
         try:
@@ -601,10 +602,10 @@ def test_ctrl_c_raises_keyboard_interrupt_and_leaves_no_partial_file(example, tm
     assert child.returncode == 3 and "interrupted" in out
     assert time.monotonic() - start < 10
     files = os.listdir(tmp_path)
-    assert 0 < len(files) < 40
+    assert 0 < len(files) < 100
     for name in files:
         assert name.startswith("out.") and name.endswith(".exr"), name  # no temporaries
-        assert pixels(tmp_path / name)[0].shape == (424, 704, 4)
+        assert pixels(tmp_path / name)[0].shape == (212, 352, 4)
 
 
 def test_help_reads_well():
