@@ -41,8 +41,8 @@ void describe_defocus(OIIO::ArgParse& ap)
     ap.epilog(
         "Examples:\n"
         "  defocus shot.exr -o shot_dof.exr --focal 85 --fstop 1.4 --focus 3\n"
-        "  defocus render.#.exr --frames 1001-1100 -o dof.#.exr --focal 35 --fstop 2 \\\n"
-        "          --focus 1001:3.0,1040:1.2 -d half --compression dwaa\n"
+        "  defocus render.#.exr --frames 1001-1024 -o dof.#.exr --focal 35 --fstop 2 \\\n"
+        "          --focus 1001:3.0,1012:1.2 -d half --compression dwaa\n"
         "  defocus shot.exr --frames 1-24 -o pull.#.exr --focus-at 1:300,160,24:100,150\n"
         "  defocus shot.exr -o focus.png --output focusmap \\\n"
         "          --focal 85 --fstop 1.4 --focus 3\n"

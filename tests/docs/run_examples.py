@@ -24,7 +24,7 @@ import numpy as np
 import OpenImageIO as oiio
 
 WIDTH, HEIGHT = 320, 180
-SEQUENCE = range(1001, 1101)  # render.1001.exr to render.1100.exr
+SEQUENCE = range(1001, 1025)  # render.1001.exr to render.1024.exr
 NOT_RUN = re.compile(r"<!--\s*not run:\s*\S.*-->")
 
 
