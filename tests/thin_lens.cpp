@@ -59,21 +59,21 @@ void shifted(const std::vector<LitPixel>& layer, double ux, double uy, const ROI
 
 }  // namespace
 
-ImageBuf thin_lens(const std::vector<LensLayer>& back_to_front, const ROI& window, int samples)
+ImageBuf thin_lens(const std::vector<LensLayer>& back_to_front, const ROI& window, int samples,
+                   const LensClip& clip)
 {
     const size_t n = size_t(window.npixels()) * 4;
     std::vector<std::vector<LitPixel>> layers;
     for (const LensLayer& l : back_to_front)
         layers.push_back(lit_pixels(l));
     std::vector<double> sum(n, 0.0), composite(n), layer(n);
-    int count = 0;
+    std::vector<int> count(n / 4, 0);
     for (int j = 0; j < samples; ++j)
         for (int i = 0; i < samples; ++i) {
             const double ux = -1.0 + (i + 0.5) * 2.0 / samples,
                          uy = -1.0 + (j + 0.5) * 2.0 / samples;
             if (ux * ux + uy * uy > 1.0)
                 continue;
-            ++count;
             std::fill(composite.begin(), composite.end(), 0.0);
             for (const std::vector<LitPixel>& l : layers) {
                 shifted(l, ux, uy, window, layer);
@@ -86,8 +86,15 @@ ImageBuf thin_lens(const std::vector<LensLayer>& back_to_front, const ROI& windo
                     composite[p + 3] = alpha + (1.0 - alpha) * composite[p + 3];
                 }
             }
-            for (size_t p = 0; p < n; ++p)
-                sum[p] += composite[p];
+            for (size_t p = 0; p < n / 4; ++p) {
+                if (clip
+                    && !clip(ux, uy, window.xbegin + int(p % window.width()),
+                             window.ybegin + int(p / window.width())))
+                    continue;
+                ++count[p];
+                for (int c = 0; c < 4; ++c)
+                    sum[p * 4 + c] += composite[p * 4 + c];
+            }
         }
     OIIO::ImageSpec spec(window.width(), window.height(), 4, OIIO::TypeFloat);
     spec.x = window.xbegin;
@@ -95,10 +102,11 @@ ImageBuf thin_lens(const std::vector<LensLayer>& back_to_front, const ROI& windo
     ImageBuf out(spec);
     for (int y = window.ybegin; y < window.yend; ++y)
         for (int x = window.xbegin; x < window.xend; ++x) {
-            const double* s = &sum[(size_t(y - window.ybegin) * window.width()
-                                    + (x - window.xbegin)) * 4];
-            const float p[4] = { float(s[0] / count), float(s[1] / count), float(s[2] / count),
-                                 float(s[3] / count) };
+            const size_t at = size_t(y - window.ybegin) * window.width() + (x - window.xbegin);
+            const double* s = &sum[at * 4];
+            const double k = std::max(count[at], 1);
+            const float p[4] = { float(s[0] / k), float(s[1] / k), float(s[2] / k),
+                                 float(s[3] / k) };
             out.setpixel(x, y, p);
         }
     return out;

@@ -487,7 +487,7 @@ bool finish_frame(const Shot& shot, int frame, const ApertureImages& images,
             return false;
         out.holdout = holdout_line(shot, frame, layered.holdout.get());
         out.data = plan.summary();
-        const double bytes = spread_bytes(layered, shot.spread, nthreads);
+        const double bytes = spread_bytes(layered, shot.spread, out.camera, nthreads);
         if (!shot.read.memory_limit.allows(bytes)) {
             error = shot.read.memory_limit.exceeded(
                 format("spreading {} layers with blur up to {:g} px", layered.layers.size(),

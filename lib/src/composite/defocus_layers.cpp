@@ -301,15 +301,29 @@ double layer_depth(const LayeredScene& scene, size_t i)
     return inverse > 0.0 ? 1.0 / inverse : INFINITY;
 }
 
+/// The layers' changes from compositing per cell of the aperture, for each
+/// CoC a pass takes (CocChannel): under axial chromatic aberration red and
+/// blue are composited on their own spread alpha, and so are their cells.
+struct ChannelCells {
+    SubApertureLayers green, red_blue;
+
+    SubApertureLayers& of(CocChannel coc) { return coc == CocChannel::RedBlue ? red_blue : green; }
+    const SubApertureLayers& of(CocChannel coc) const
+    {
+        return coc == CocChannel::RedBlue ? red_blue : green;
+    }
+};
+
 /// Composites one pass of a layer into the frame over `window`: as the
 /// engine spreads it (stored, `onto_black`, for the back-most layer), or
 /// from its spread image; a magnified pass from an image of its spread over
 /// `reach` (light from just outside the window lands inside it).
 void composite_pass(ImageBuf& frame, LayerPass& p, bool onto_black, const ImageSpec& scene,
                     const ROI& window, const ROI& reach, double lateral_ca,
-                    const Imath::V2d& centre, const SubApertureLayers& cells, size_t layer,
+                    const Imath::V2d& centre, const ChannelCells& channel_cells, size_t layer,
                     int nthreads)
 {
+    const SubApertureLayers& cells = channel_cells.of(p.channels.coc);
     if (p.channels.magnified) {
         const ChannelPass& c = p.channels;
         const bool direct = c.alpha || c.colour[0] || c.colour[1] || c.colour[2];
@@ -359,7 +373,7 @@ ROI lit_window(const LayerSpreads& layer, const ROI& window)
 /// composited, and cuts what is composited by the holdout in front of each
 /// layer up to the next. False with `error`.
 bool composite_layers(ImageBuf& frame, const LayeredScene& scene, FrameSpreads& layers,
-                      const SubApertureLayers& cells, size_t back, const ROI& window, const ROI& reach,
+                      const ChannelCells& cells, size_t back, const ROI& window, const ROI& reach,
                       double lateral_ca, const Imath::V2d& centre, std::string& error,
                       int nthreads)
 {
@@ -387,7 +401,7 @@ bool composite_layers(ImageBuf& frame, const LayeredScene& scene, FrameSpreads& 
 /// part of `window` it lights, back to front, and hands it to `sink`, each
 /// layer's spreads freed once composited.
 bool composite_apart(const LayeredScene& scene, FrameSpreads& layers,
-                     const SubApertureLayers& cells,
+                     const ChannelCells& cells,
                      const ROI& window, const ROI& reach,
                      double lateral_ca, const Imath::V2d& centre, const LayerSink& sink,
                      int nthreads)
@@ -415,26 +429,29 @@ bool composite_apart(const LayeredScene& scene, FrameSpreads& layers,
     return true;
 }
 
-/// The layers' changes from compositing per cell of the aperture, with its
-/// shape (a disc, polygon, mask or box; the soft PSFs of tent and smooth
-/// take none), over the frame's window: the display or data window, or
-/// both grown to wherever the layers' light lands.
-void compute_cells(SubApertureLayers& cells, const LayeredScene& scene, const Camera& camera,
+/// The layers' changes from compositing per cell of the aperture for each
+/// CoC the camera's passes take, with the aperture's shape (a disc,
+/// polygon, mask or box; the soft PSFs of tent and smooth take none) as the
+/// barrel clips it (a cat's eye), over the frame's window: the display or
+/// data window, or both grown to wherever the layers' light lands.
+void compute_cells(ChannelCells& cells, const LayeredScene& scene, const Camera& camera,
                    const SpreadOptions& spread, const SpreadPlan& plan, OutputWindow window,
                    const ROI& display, int nthreads)
 {
-    const BoxProfile box(plan.aspect);
-    const RowProfile* shape = plan.profile ? plan.profile.get()
-                              : spread.aperture.shape == ApertureShape::Box ? &box
-                                                                             : nullptr;
+    std::shared_ptr<const RowProfile> shape
+        = plan.profile ? plan.profile
+          : spread.aperture.shape == ApertureShape::Box ? std::make_shared<BoxProfile>(plan.aspect)
+                                                         : nullptr;
     if (!shape || !takes_aperture_cells(spread, scene))
         return;
-    cells.compute(scene, CircleOfConfusion(camera, scene.spec.roi_full()), *shape,
-                  spread.aperture_cells,
-                  window == OutputWindow::Display ? display
-                  : window == OutputWindow::Input ? scene.spec.roi()
-                                                  : roi_union(display, scene.spec.roi()),
-                  window == OutputWindow::Grown, nthreads);
+    const CircleOfConfusion coc(camera, scene.spec.roi_full());
+    const ROI where = window == OutputWindow::Display ? display
+                      : window == OutputWindow::Input ? scene.spec.roi()
+                                                      : roi_union(display, scene.spec.roi());
+    for (const ChannelPass& pass : channel_passes(camera))
+        cells.of(pass.coc).compute(scene, coc, pass.coc, shape, plan.cateye,
+                                   spread.aperture_cells, where, window == OutputWindow::Grown,
+                                   nthreads);
 }
 
 /// defocus_layers(), or with `apart` spread_layers_apart().
@@ -457,10 +474,10 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
     const bool magnified = camera.lateral_ca != 0.0;
     // The cells are made from the layers before they are spread, and
     // perhaps freed.
-    SubApertureLayers cells;
+    ChannelCells cells;
     if (!magnified)
         compute_cells(cells, scene, camera, spread, plan, output_window, display, nthreads);
-    stats.cells = cells.report();
+    stats.cells = cells.green.report();
     FrameSpreads layers(scene, camera, plan, freeing, nthreads);
 
     // The frame's window, and where magnified light comes from, depend on

@@ -90,7 +90,8 @@ double result_bytes(double pixels)
     return 2.0 * float_bytes(pixels, 4);
 }
 
-double spread_bytes(const LayeredScene& layered, const SpreadOptions& spread, int nthreads)
+double spread_bytes(const LayeredScene& layered, const SpreadOptions& spread,
+                    const Camera& camera, int nthreads)
 {
     const DeepImage* holdout = layered.holdout.get();
     const double holdout_bytes = holdout ? double(holdout->samples.size() * sizeof(DeepSample)
@@ -114,10 +115,11 @@ double spread_bytes(const LayeredScene& layered, const SpreadOptions& spread, in
     }
     spreading += result_bytes(double(all.npixels()));
     // The cells' changes are found before the layers are spread, and kept
-    // while they are.
+    // while they are: green's, and under axial aberration red and blue's.
     if (!takes_aperture_cells(spread, layered))
         return holdout_bytes + layers + spreading;
-    return holdout_bytes + layers + change_bytes(layered, all)
+    const double sets = camera.axial_ca != 0.0 ? 2.0 : 1.0;
+    return holdout_bytes + layers + sets * change_bytes(layered, all)
            + std::max(spreading, cell_work_bytes(layered, all, nthreads));
 }
 

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <defocus/layers/layered_scene.h>
+#include <defocus/optics/camera.h>
 #include <defocus/shot/options.h>
 
 namespace defocus {
@@ -15,7 +16,9 @@ double result_bytes(double pixels);
 /// render) grown by its blur's reach, with its blur field and highlight
 /// mask; the result and an accumulator over all of them; the holdout; and
 /// where the aperture may be cut into cells, what compositing per cell
-/// holds, on `nthreads` threads (0: all).
-double spread_bytes(const LayeredScene& layered, const SpreadOptions& spread, int nthreads);
+/// holds through `camera` (a set of cells for each CoC of its colours), on
+/// `nthreads` threads (0: all).
+double spread_bytes(const LayeredScene& layered, const SpreadOptions& spread,
+                    const Camera& camera, int nthreads);
 
 }  // namespace defocus

@@ -4,6 +4,7 @@
 #include <climits>
 #include <cmath>
 #include <map>
+#include <tuple>
 
 #include "spread/aperture_cells.h"
 #include "spread/coarse_layers.h"
@@ -23,9 +24,10 @@ enum class Cover : uint8_t { Open, Solid, Hidden };
 
 namespace {
 
-/// A layer's pixels as the cells spread them, with their signed radii.
-void make_source(const Layer& layer, const CircleOfConfusion& coc, double extent,
-                 FloatPixels& color, SignedLayer& signed_layer, int nthreads)
+/// A layer's pixels as the cells spread them, with their signed radii in
+/// the colours of `channel`.
+void make_source(const Layer& layer, const CircleOfConfusion& coc, CocChannel channel,
+                 double extent, FloatPixels& color, SignedLayer& signed_layer, int nthreads)
 {
     ROI roi = roi_intersection(layer.color.roi(), layer.depth.roi());
     roi.chbegin = 0;
@@ -38,7 +40,7 @@ void make_source(const Layer& layer, const CircleOfConfusion& coc, double extent
     parallel_for(roi.ybegin, roi.yend, [&](int64_t y) {
         for (int x = roi.xbegin; x < roi.xend; ++x)
             radius[size_t(y - roi.ybegin) * roi.width() + (x - roi.xbegin)]
-                = float(0.5 * coc.diameter(*depth(x, int(y)), x, int(y)));
+                = float(0.5 * coc.diameter(*depth(x, int(y)), x, int(y), channel));
     }, by_rows(nthreads));
     signed_layer.set(roi, roi.npixels() > 0 ? color(roi.xbegin, roi.ybegin) : nullptr,
                      radius.get(), float(extent), nthreads);
@@ -50,9 +52,10 @@ bool reaches(const SignedLayer& layer, const ROI& window)
     return has_pixels(layer.light_in(window));
 }
 
-/// One layer's row of light through a cell of share `weight`, taken front
-/// to back: adds it to the layer's light through the whole aperture, adds
-/// what of it reaches the camera (`reaching`: RGB, and in the 4th lane the
+/// One layer's row of light through a cell, taken front to back, the
+/// cell's share of the lens at pixel x being weight[x * step] (a step of 0:
+/// the same everywhere): adds it to the layer's light through the whole
+/// aperture, adds what of it reaches the camera (`reaching`: RGB, and in the 4th lane the
 /// share of the lens that the layers in front let through), and lets
 /// `passing` (what the layers in front let through) through this one.
 /// Where the layer is solid (SignedLayer::solid_in), it covers the pixel
@@ -66,25 +69,66 @@ bool reaches(const SignedLayer& layer, const ROI& window)
 /// the layer is hidden through every part of the lens, and nothing of it
 /// is taken: its change there is nothing, whatever its sums.
 DEFOCUS_CLONES
-void take_row(const double* light, const Cover* cover, double weight, float* whole,
-              float* reaching, double* passing, int pixels)
+void take_row(const double* light, const Cover* cover, const double* weight, size_t step,
+              float* whole, float* reaching, double* passing, int pixels)
 {
     for (int x = 0; x < pixels; ++x) {
         if (cover[x] == Cover::Hidden)
             continue;
+        const double share = weight[size_t(x) * step];
         const d4 raw = load4(light + x * 4);
-        store4(whole + x * 4, load4(whole + x * 4) + splat(weight) * raw);
+        store4(whole + x * 4, load4(whole + x * 4) + splat(share) * raw);
         const double a = raw[3];
         const bool whole_cover = cover[x] == Cover::Solid && a > 0.0;
         d4 seen = whole_cover || a > 1.0 ? raw * splat(1.0 / a) : raw;
         const double alpha = whole_cover ? 1.0 : std::clamp(a, 0.0, 1.0);
         seen.v[3] = 1.0;
-        store4(reaching + x * 4, load4(reaching + x * 4) + splat(weight * passing[x]) * seen);
+        store4(reaching + x * 4, load4(reaching + x * 4) + splat(share * passing[x]) * seen);
         passing[x] *= 1.0 - alpha;
     }
 }
 
 }  // namespace
+
+/// The cells' shares of the lens as the barrel clips it (the cat's eye)
+/// over a band: physically the clip is of the lens, at the pixel the light
+/// reaches, the same for every layer; the clip's offset is taken on
+/// cateye_cell's grid, and each offset's shares are found once.
+class ClippedShares {
+public:
+    ClippedShares(std::shared_ptr<const RowProfile> aperture, const CatEye& cateye)
+        : m_aperture(std::move(aperture))
+        , m_cateye(cateye)
+    {
+    }
+
+    /// Each pixel of `band`'s shares of `cells` (cut `across`), the band
+    /// being over blocks of `scale` pixels from (x0, y0), or pixels.
+    void over(const ROI& band, int scale, int x0, int y0, const std::vector<ApertureCell>& cells,
+              int across, std::vector<const double*>& out)
+    {
+        out.resize(size_t(band.npixels()));
+        size_t p = 0;
+        for (int y = band.ybegin; y < band.yend; ++y)
+            for (int x = band.xbegin; x < band.xend; ++x, ++p) {
+                const Imath::V2d centre = scale == 1 ? Imath::V2d(x + 0.5, y + 0.5)
+                                                     : Imath::V2d(x0 + (x + 0.5) * scale,
+                                                                  y0 + (y + 0.5) * scale);
+                const CatEyeCell at = cateye_cell(m_cateye, centre);
+                std::vector<double>& shares = m_found[{ across, at.x, at.y }];
+                if (shares.empty())
+                    shares = clipped_shares(ClippedProfile(m_aperture, cateye_cell_offset(at),
+                                                           m_cateye.clip_aspect),
+                                            cells, across);
+                out[p] = shares.data();
+            }
+    }
+
+private:
+    std::shared_ptr<const RowProfile> m_aperture;
+    CatEye m_cateye;
+    std::map<std::tuple<int, int, int>, std::vector<double>> m_found;
+};
 
 /// Tiles of a band that one cut of the aperture composites together: rows
 /// [first_row, end_row), columns [first_column, last_column], spread over
@@ -196,8 +240,11 @@ struct BandSums {
     std::vector<double> through;  ///< T_0: through every layer, all cells
     std::vector<std::vector<Cover>> cover;  ///< per layer, over the band
 
+    /// The sums over `pixels` through `cells`, each pixel's shares of
+    /// them `clipped[p]` where the barrel clips the lens (else their
+    /// weights).
     void sum(const std::vector<SignedLayer>& all, const std::vector<ApertureCell>& cells,
-             const ROI& pixels, CellBand& spread);
+             const std::vector<const double*>* clipped, const ROI& pixels, CellBand& spread);
 
     /// Layer i's (of `layers`) change at pixel (x, y) of the band.
     void change(size_t i, int x, int y, float* out) const;
@@ -211,7 +258,8 @@ private:
 };
 
 void BandSums::sum(const std::vector<SignedLayer>& all, const std::vector<ApertureCell>& cells,
-                   const ROI& pixels, CellBand& spread)
+                   const std::vector<const double*>* clipped, const ROI& pixels,
+                   CellBand& spread)
 {
     band = pixels;
     layers.clear();
@@ -248,18 +296,26 @@ void BandSums::sum(const std::vector<SignedLayer>& all, const std::vector<Apertu
     passing.assign(n, 1.0);
     through.assign(n, 0.0);
     spread.reset(band);
-    for (const ApertureCell& cell : cells) {
+    std::vector<double> shares(clipped ? n : 0);
+    const size_t step = clipped ? 1 : 0;
+    for (size_t k = 0; k < cells.size(); ++k) {
+        const ApertureCell& cell = cells[k];
+        if (clipped)
+            for (size_t p = 0; p < n; ++p)
+                shares[p] = (*clipped)[p][k];
+        const double* weight = clipped ? shares.data() : &cell.weight;
         for (size_t i = layers.size(); i-- > first_seen;) {
             spread.spread(all[layers[i]], cell);
             spread.integrate([&](int y, int x_begin, int x_end, const double* light) {
                 const size_t first = size_t(x_begin - band.xbegin);
                 const size_t at = size_t(y - band.ybegin) * row + first;
-                take_row(light + first * 4, &cover[i][at], cell.weight, &whole[(i * n + at) * 4],
-                         &reaching[(i * n + at) * 4], &passing[at], x_end - x_begin);
+                take_row(light + first * 4, &cover[i][at], weight + at * step, step,
+                         &whole[(i * n + at) * 4], &reaching[(i * n + at) * 4], &passing[at],
+                         x_end - x_begin);
             });
         }
         for (size_t p = 0; p < n; ++p) {
-            through[p] += cell.weight * passing[p];
+            through[p] += weight[p * step] * passing[p];
             passing[p] = 1.0;
         }
     }
@@ -319,14 +375,16 @@ bool takes_aperture_cells(const SpreadOptions& spread, const LayeredScene& scene
 }
 
 void SubApertureLayers::compute(const LayeredScene& scene, const CircleOfConfusion& coc,
-                                const RowProfile& profile, int cells, const ROI& window,
-                                bool grown, int nthreads)
+                                CocChannel channel, std::shared_ptr<const RowProfile> profile,
+                                const CatEye& cateye,
+                                int cells, const ROI& window, bool grown, int nthreads)
 {
     std::vector<FloatPixels> colors(scene.layers.size());
     std::vector<SignedLayer> layers(scene.layers.size());
     for (size_t l = 0; l < scene.layers.size(); ++l)
         if (scene.reports[l].pixels > 0)
-            make_source(scene.layers[l], coc, profile.extent(), colors[l], layers[l], nthreads);
+            make_source(scene.layers[l], coc, channel, profile->extent(), colors[l], layers[l],
+                        nthreads);
     ROI where = window;
     if (grown)
         for (const SignedLayer& layer : layers)
@@ -337,13 +395,13 @@ void SubApertureLayers::compute(const LayeredScene& scene, const CircleOfConfusi
     std::map<int, std::vector<ApertureCell>> cuts;
     for (uint8_t across : m_tiles.across)
         if (across > 1 && !cuts.count(across))
-            cuts[across] = cut_aperture(profile, across);
+            cuts[across] = cut_aperture(*profile, across);
     m_most_cells = 0;
     for (const auto& [across, cut] : cuts)
         m_most_cells = std::max(m_most_cells, int(cut.size()));
 
     const std::vector<std::vector<CellWindow>> bands
-        = plan_windows(m_tiles, cuts, layers, profile.extent());
+        = plan_windows(m_tiles, cuts, layers, profile->extent());
     // The pixels of the windows spread over blocks, by blocks' size.
     ROI over_blocks[5];
     m_tiles_over_blocks = 0;
@@ -366,12 +424,20 @@ void SubApertureLayers::compute(const LayeredScene& scene, const CircleOfConfusi
                                                      m_tiles.window.xbegin, m_tiles.window.ybegin,
                                                      block_colors.emplace_back(), nthreads));
     scaled[1] = std::move(layers);
+    const bool clips = cateye.amount != 0.0;
     parallel_for_each_item(0, int64_t(bands.size()), [&](int64_t b) {
         CellBand spread;
         BandSums sums;
+        ClippedShares clip(profile, cateye);
+        std::vector<const double*> shares;
         std::vector<float> changes;
         for (const CellWindow& window : bands[size_t(b)]) {
-            sums.sum(scaled[window.scale], cuts.at(window.across), window.spread(m_tiles), spread);
+            const std::vector<ApertureCell>& cut = cuts.at(window.across);
+            const ROI pixels = window.spread(m_tiles);
+            if (clips)
+                clip.over(pixels, window.scale, m_tiles.window.xbegin, m_tiles.window.ybegin, cut,
+                          window.across, shares);
+            sums.sum(scaled[window.scale], cut, clips ? &shares : nullptr, pixels, spread);
             if (window.scale > 1)
                 sums.all_changes(changes);
             for (int row = window.first_row; row < window.end_row; ++row)

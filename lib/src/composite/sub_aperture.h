@@ -41,6 +41,7 @@
 #include <defocus/layers/layered_scene.h>
 #include <defocus/optics/camera.h>
 #include <defocus/spread/aperture_profile.h>
+#include <defocus/spread/cateye.h>
 
 #include "spread/cell_plan.h"
 
@@ -58,13 +59,14 @@ bool takes_aperture_cells(const SpreadOptions& spread, const LayeredScene& scene
 /// applied to each as it is composited.
 class SubApertureLayers {
 public:
-    /// The changes over `window` for the layers of `scene` through `coc`,
-    /// with the aperture's shape `profile`; `cells` is the setting (0
+    /// The changes over `window` for the layers of `scene` through `coc`
+    /// of the colours of `channel`, with the aperture's shape `profile`,
+    /// clipped by the barrel as `cateye` says; `cells` is the setting (0
     /// automatic, 1 none, else about that many). With `grown`, the window
     /// grows to take in wherever the layers' light lands.
-    void compute(const LayeredScene& scene, const CircleOfConfusion& coc,
-                 const RowProfile& profile, int cells, const OIIO::ROI& window, bool grown,
-                 int nthreads);
+    void compute(const LayeredScene& scene, const CircleOfConfusion& coc, CocChannel channel,
+                 std::shared_ptr<const RowProfile> profile, const CatEye& cateye, int cells,
+                 const OIIO::ROI& window, bool grown, int nthreads);
 
     /// Layer `l`'s change at pixel (x, y), RGBA, and the next pixels' of
     /// its row up to column `end`, into `out` (room for a tile's row);

@@ -19,10 +19,19 @@ namespace defocus {
 struct ApertureCell {
     double u0, u1, v0, v1;
     double weight;
+    int grid;  ///< its place in the grid, row after row
 };
 
 /// The cells of a grid of `across` × `across` over the bounding square of
 /// the shape of `profile`, those the shape meets. Their weights add up to 1.
 std::vector<ApertureCell> cut_aperture(const RowProfile& profile, int across);
+
+/// The shares of `cells` (cut_aperture(profile, across)) in `clipped`, the
+/// same shape clipped (ClippedProfile: the barrel's cat's eye): each cell's
+/// area within it, over all of theirs. They add up to 1. A cell keeps its
+/// rectangle, so a cell the clip cuts is taken as its clipped share spread
+/// over all of it: finer cells follow the clip's edge closer.
+std::vector<double> clipped_shares(const RowProfile& clipped,
+                                   const std::vector<ApertureCell>& cells, int across);
 
 }  // namespace defocus
