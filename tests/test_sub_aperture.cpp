@@ -162,14 +162,23 @@ void add_bars(Stack& stack, float depth, int width)
 /// The light's bokeh: its 20 px CoC around the centre.
 const ROI bokeh(centre_x - 12, centre_x + 12, centre_y - 12, centre_y + 12, 0, 1, 0, 4);
 
+/// PSNR against `exact` over the light's bokeh with automatic cells, and
+/// with one.
+struct BokehScores {
+    double cells, one;
+};
+
+BokehScores bokeh_scores(const Stack& stack, const ImageBuf& exact)
+{
+    return { psnr_over(stack.engine(0), exact, bokeh), psnr_over(stack.engine(1), exact, bokeh) };
+}
+
 }  // namespace
 
 TEST_CASE("a fence before a far light cuts its shadow into the light's bokeh")
 {
     const Stack stack = fence([](int) { return true; });
-    const ImageBuf exact = thin_lens(stack.lens, bokeh);
-    const double cells = psnr_over(stack.engine(0), exact, bokeh);
-    const double one = psnr_over(stack.engine(1), exact, bokeh);
+    const auto [cells, one] = bokeh_scores(stack, thin_lens(stack.lens, bokeh));
     WARN("fence, against the thin lens over the light's bokeh: " << cells
          << " dB with cells, " << one << " dB with one cell");
     CHECK(cells >= 35.0);
@@ -191,9 +200,7 @@ TEST_CASE("a cat's eye clips every part of the lens alike: the fence's shadow in
         const Imath::V2d offset = (optical_centre - Imath::V2d(x + 0.5, y + 0.5)) / corner;
         return (Imath::V2d(ux, uy) - offset).length2() <= 1.0;
     };
-    const ImageBuf exact = thin_lens(stack.lens, bokeh, 48, clip);
-    const double cells = psnr_over(stack.engine(0), exact, bokeh);
-    const double one = psnr_over(stack.engine(1), exact, bokeh);
+    const auto [cells, one] = bokeh_scores(stack, thin_lens(stack.lens, bokeh, 48, clip));
     WARN("fence before a clipped bokeh, against the thin lens: " << cells << " dB with cells, "
          << one << " dB with one cell");
     // 30.3 dB while the cells took the unclipped lens's shares. What is
@@ -224,8 +231,7 @@ TEST_CASE("under axial aberration red and blue are cut by the fence as their own
     for (OIIO::ImageBuf::Iterator<float> it(exact, bokeh); !it.done(); ++it)
         for (int c : { 0, 2 })
             it[c] = red_blue.getchannel(it.x(), it.y(), 0, c);
-    const double cells = psnr_over(stack.engine(0), exact, bokeh);
-    const double one = psnr_over(stack.engine(1), exact, bokeh);
+    const auto [cells, one] = bokeh_scores(stack, exact);
     WARN("fence under axial aberration, against the thin lens: " << cells << " dB with cells, "
          << one << " dB with one cell");
     // 34.2 dB, below one cell, while red and blue took green's cells.
