@@ -162,6 +162,16 @@ void add_bars(Stack& stack, float depth, int width)
 /// The light's bokeh: its 20 px CoC around the centre.
 const ROI bokeh(centre_x - 12, centre_x + 12, centre_y - 12, centre_y + 12, 0, 1, 0, 4);
 
+/// The display window from here puts the optical centre 250 px left of the
+/// light, 360 px from the display's corners.
+const int off_centre_display_x = -250;
+
+/// The fence before the light, off the optical centre.
+Stack off_centre_fence()
+{
+    return fence([](int) { return true; }, centre_x, off_centre_display_x);
+}
+
 /// PSNR against `exact` over the light's bokeh with automatic cells, and
 /// with one.
 struct BokehScores {
@@ -191,10 +201,9 @@ TEST_CASE("a cat's eye clips every part of the lens alike: the fence's shadow in
     // display's corners: with the full clip the barrel leaves the part of
     // the lens within a unit disc 0.69 to the left of the aperture's centre
     // (Camera::cateye), at every pixel the light reaches, for both layers.
-    const int display_x = -250;
-    Stack stack = fence([](int) { return true; }, centre_x, display_x);
+    Stack stack = off_centre_fence();
     stack.camera.cateye = 1.0;
-    const Imath::V2d optical_centre(display_x + 300.0, 200.0);
+    const Imath::V2d optical_centre(off_centre_display_x + 300.0, 200.0);
     const double corner = std::hypot(300.0, 200.0);
     auto clip = [&](double ux, double uy, int x, int y) {
         const Imath::V2d offset = (optical_centre - Imath::V2d(x + 0.5, y + 0.5)) / corner;
@@ -235,6 +244,51 @@ TEST_CASE("under axial aberration red and blue are cut by the fence as their own
     WARN("fence under axial aberration, against the thin lens: " << cells << " dB with cells, "
          << one << " dB with one cell");
     // 34.2 dB, below one cell, while red and blue took green's cells.
+    CHECK(cells >= 35.0);
+    CHECK(one < cells - 5.0);
+}
+
+TEST_CASE("under lateral aberration the fence's shadow is magnified with red and blue")
+{
+    // The light 250 px right of the optical centre: red lands 1% farther
+    // from it and blue 1% nearer (Camera::lateral_ca), 2.5 px each way. The
+    // thin lens's picture, each of red and blue magnified as the camera
+    // magnifies it: a pixel's light spread bilinearly where it lands.
+    Stack stack = off_centre_fence();
+    stack.camera.lateral_ca = 0.01;
+    ROI around = bokeh;
+    around.xbegin -= 8;
+    around.xend += 8;
+    const ImageBuf seen = thin_lens(stack.lens, around);
+    ImageBuf exact;
+    exact.copy(seen);
+    const double optical_x = off_centre_display_x + 300.0, optical_y = 200.0;
+    for (const int c : { 0, 2 }) {
+        const double m = c == 0 ? 1.01 : 0.99;
+        for (OIIO::ImageBuf::Iterator<float> it(exact); !it.done(); ++it)
+            it[c] = 0.0f;
+        for (OIIO::ImageBuf::ConstIterator<float> it(seen); !it.done(); ++it) {
+            // Where the pixel's centre lands, as the corner of a pixel.
+            const double x = optical_x + (it.x() + 0.5 - optical_x) * m - 0.5,
+                         y = optical_y + (it.y() + 0.5 - optical_y) * m - 0.5;
+            const int ix = int(std::floor(x)), iy = int(std::floor(y));
+            const double fx = x - ix, fy = y - iy;
+            for (int k = 0; k < 4; ++k) {
+                const int px = ix + (k & 1), py = iy + (k >> 1);
+                if (!around.contains(px, py))
+                    continue;
+                const double w = (k & 1 ? fx : 1 - fx) * (k >> 1 ? fy : 1 - fy);
+                float pixel[4];
+                exact.getpixel(px, py, pixel);
+                pixel[c] += float(w * it[c]);
+                exact.setpixel(px, py, pixel);
+            }
+        }
+    }
+    const auto [cells, one] = bokeh_scores(stack, exact);
+    WARN("fence under lateral aberration, against the thin lens: " << cells
+         << " dB with cells, " << one << " dB with one cell");
+    // One cell's score while lateral aberration took no cells.
     CHECK(cells >= 35.0);
     CHECK(one < cells - 5.0);
 }

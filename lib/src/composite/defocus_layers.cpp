@@ -15,7 +15,7 @@
 #include <defocus/layers/edges.h>
 
 #include "composite/frame_spreads.h"
-#include "composite/magnified_axis.h"
+#include "composite/over_rows.h"
 #include "composite/sub_aperture.h"
 #include "spread/spread_engine.h"
 #include "spread/spread_plan.h"
@@ -57,221 +57,6 @@ bool coc_radius(ImageBuf& dst, const ImageBuf& depth,
 }
 
 namespace {
-
-/// Which of a pixel's four channels: all bits set, or none.
-using Lanes = int64_t __attribute__((vector_size(32)));
-
-/// "Over" (see Over) of n spread pixels onto the frame's, in the channels
-/// `written`; `onto_black`: the frame's pixels count as black. `change`,
-/// when given, is added to each spread pixel first (sub-aperture
-/// compositing, see SubApertureLayers), its alpha kept within [0, 1].
-DEFOCUS_CLONES
-void composite_over(float* out, const double* rgba, int n, const Lanes& written,
-                    bool onto_black, const float* change)
-{
-    for (int x = 0; x < n; ++x, rgba += 4, out += 4) {
-        d4 spread = load4(rgba);
-        const double a = spread[3];
-        const double scale = a > 1.0 ? 1.0 / a : 1.0;
-        double alpha = a > 1.0 ? 1.0 : std::max(0.0, a);
-        spread *= splat(scale);
-        spread.v[3] = alpha;
-        if (change) {
-            spread += load4(change + x * 4);
-            alpha = std::clamp(spread[3], 0.0, 1.0);
-            spread.v[3] = alpha;
-        }
-        const d4 under = onto_black ? splat(0.0) : load4(out);
-        store4(out, d4 { written ? (spread + splat(1.0 - alpha) * under).v : under.v });
-    }
-}
-
-/// Composites spread rows over the frame, back to front ("over" on the
-/// spread alpha), in the channels of one pass. Within one layer, pixels of
-/// different blur overlap additively, so where their coverage adds up past
-/// 1 the layer is scaled back to full coverage there (the overlapping
-/// parts average instead of adding), keeping alpha within [0, 1]; rounding
-/// residue of the prefix sums below 0 is cleared. `onto_black`: the
-/// frame's pixels in reach are unset and count as black (the back-most
-/// layer), so the frame need not be cleared there first; dark rows are
-/// cleared here.
-class Over final : public RowSink {
-public:
-    /// With `cells`, layer `layer`'s changes (see SubApertureLayers) are
-    /// composited with it.
-    Over(ImageBuf& frame, const ChannelPass& pass, bool onto_black,
-         const SubApertureLayers* cells = nullptr, size_t layer = 0)
-        : m_frame(frame)
-        , m_written { pass.colour[0] ? -1 : 0, pass.colour[1] ? -1 : 0, pass.colour[2] ? -1 : 0,
-                      pass.alpha ? -1 : 0 }
-        , m_onto_black(onto_black)
-        , m_cells(cells)
-        , m_layer(layer)
-    {
-    }
-    void row(int y, int x_begin, int x_end, const double* rgba) override
-    {
-        float change[CellTiles::size * 4];
-        for (int x = x_begin, end = x_end; x < x_end; rgba += size_t(end - x) * 4, x = end) {
-            const bool changed = m_cells && m_cells->change(m_layer, x, y, end, change);
-            end = std::min(end, x_end);
-            composite_over(static_cast<float*>(m_frame.pixeladdr(x, y)), rgba, end - x,
-                           m_written, m_onto_black, changed ? change : nullptr);
-        }
-    }
-    void dark(int y, int x_begin, int x_end) override
-    {
-        if (!m_onto_black)
-            return;
-        float* out = static_cast<float*>(m_frame.pixeladdr(x_begin, y));
-        for (int x = x_begin; x < x_end; ++x, out += 4)
-            for (int c = 0; c < 4; ++c)
-                if (m_written[c])
-                    out[c] = 0.0f;
-    }
-
-private:
-    ImageBuf& m_frame;
-    const Lanes m_written;  ///< the channels the pass writes
-    const bool m_onto_black;
-    const SubApertureLayers* m_cells;
-    size_t m_layer;
-};
-
-/// Keeps spread rows as an image, for a pass composited later.
-class Keep final : public RowSink {
-public:
-    explicit Keep(ImageBuf& image) : m_image(image) {}
-    void row(int y, int x_begin, int x_end, const double* rgba) override
-    {
-        float* out = static_cast<float*>(m_image.pixeladdr(x_begin, y));
-        for (size_t i = 0; i < size_t(x_end - x_begin) * 4; ++i)
-            out[i] = float(rgba[i]);
-    }
-
-private:
-    ImageBuf& m_image;
-};
-
-/// Keeps spread rows as an image, as Keep does, and composites what lies
-/// in the frame's window over it, as Over does, in the channels a pass
-/// composites as they are.
-class KeepAndOver final : public RowSink {
-public:
-    KeepAndOver(ImageBuf& image, ImageBuf& frame, const ChannelPass& pass)
-        : m_keep(image), m_over(frame, pass, false), m_window(frame.roi())
-    {
-    }
-    void row(int y, int x_begin, int x_end, const double* rgba) override
-    {
-        m_keep.row(y, x_begin, x_end, rgba);
-        const int begin = std::max(x_begin, m_window.xbegin),
-                  end = std::min(x_end, m_window.xend);
-        if (y >= m_window.ybegin && y < m_window.yend && begin < end)
-            m_over.row(y, begin, end, rgba + size_t(begin - x_begin) * 4);
-    }
-
-private:
-    Keep m_keep;
-    Over m_over;
-    const ROI m_window;
-};
-
-/// Composites colour channel `c` of a layer's spread (RGBA) over the frame
-/// magnified by `m` about `centre` (lateral chromatic aberration): the
-/// light of each spread pixel lands m times as far from the centre, split
-/// bilinearly over the four pixels around where it lands, so that the
-/// channel keeps its light and its centroid exactly. Alpha is coverage, not
-/// light: the frame samples it bilinearly where each pixel came from.
-void composite_magnified(ImageBuf& frame, const ImageBuf& spread, int c, double m,
-                         const Imath::V2d& centre, int nthreads)
-{
-    ChannelPass pass { CocChannel::Green, { false, false, false }, false };
-    pass.colour[c] = true;
-    Over over(frame, pass, false);
-    const ROI in = spread.roi();
-    // Beyond the spread's reach, "over" of nothing leaves the frame as it is.
-    const auto [x_begin, x_end] = MagnifiedAxis::reached(in.xbegin, in.xend, m, centre.x);
-    const auto [y_begin, y_end] = MagnifiedAxis::reached(in.ybegin, in.yend, m, centre.y);
-    const ROI out = roi_intersection(frame.roi(), ROI(x_begin, x_end, y_begin, y_end, 0, 1, 0, 4));
-    if (out.npixels() <= 0)
-        return;
-    const FloatPixels pixels(spread, in);
-    // Rows of the spread by index, null outside it, where everything is 0.
-    auto row_at = [&](int y) {
-        return y < in.ybegin || y >= in.yend ? nullptr : pixels(in.xbegin, y);
-    };
-    const int stride = pixels.nchannels();
-    auto at = [&](const float* r, int x, int ch) {
-        return r && x >= in.xbegin && x < in.xend ? double(r[(x - in.xbegin) * stride + ch])
-                                                  : 0.0;
-    };
-    const MagnifiedAxis columns(out.xbegin, out.xend, m, centre.x),
-                        rows(out.ybegin, out.yend, m, centre.y);
-    parallel_for(out.ybegin, out.yend, [&](int y) {
-        std::vector<double> row(size_t(out.width()) * 4, 0.0);
-        const MagnifiedAxis::Pixel& ry = rows[y];
-        const float *r0 = row_at(ry.from), *r1 = row_at(ry.from + 1);
-        std::vector<const float*> sources;
-        for (int ky = 0; ky < ry.sources; ++ky)
-            sources.push_back(row_at(ry.first_source + ky));
-        const bool rows_inside =
-            r0 && r1 && std::find(sources.begin(), sources.end(), nullptr) == sources.end();
-        const double fy = ry.fraction;
-        // `checked`: some of the pixel's sources may lie outside the spread.
-        auto magnify = [&](int x, auto checked) {
-            auto value = [&](const float* r, int sx, int ch) {
-                if constexpr (decltype(checked)::value)
-                    return at(r, sx, ch);
-                else
-                    return double(r[(sx - in.xbegin) * stride + ch]);
-            };
-            const MagnifiedAxis::Pixel& rx = columns[x];
-            const int x0 = rx.from;
-            const double fx = rx.fraction;
-            double* p = &row[size_t(x - out.xbegin) * 4];
-            p[3] = (1 - fy) * ((1 - fx) * value(r0, x0, 3) + fx * value(r0, x0 + 1, 3))
-                   + fy * ((1 - fx) * value(r1, x0, 3) + fx * value(r1, x0 + 1, 3));
-            double light = 0.0;
-            for (int ky = 0; ky < ry.sources; ++ky) {
-                const double wy = rows.weight(ry, ky);
-                for (int kx = 0; kx < rx.sources && wy > 0.0; ++kx) {
-                    const double wx = columns.weight(rx, kx);
-                    if (wx > 0.0)
-                        light += wx * wy * value(sources[size_t(ky)], rx.first_source + kx, c);
-                }
-            }
-            p[c] = light;
-        };
-        for (int x = out.xbegin; x < out.xend; ++x) {
-            const MagnifiedAxis::Pixel& rx = columns[x];
-            const bool inside = rows_inside && rx.from >= in.xbegin && rx.from + 1 < in.xend
-                                && rx.first_source >= in.xbegin
-                                && rx.first_source + rx.sources <= in.xend;
-            if (inside)
-                magnify(x, std::false_type());
-            else
-                magnify(x, std::true_type());
-        }
-        over.row(y, out.xbegin, out.xend, row.data());
-    }, by_rows(nthreads));
-}
-
-/// Composites a layer spread apart over the frame, within the frame's
-/// window, in the channels of `pass`, with its changes in `cells`.
-void composite_image(ImageBuf& frame, const ImageBuf& layer, const ChannelPass& pass,
-                     const SubApertureLayers& cells, size_t index, int nthreads)
-{
-    const ROI both = roi_intersection(frame.roi(), layer.roi());
-    Over over(frame, pass, false, &cells, index);
-    if (both.width() <= 0)
-        return;
-    parallel_for(both.ybegin, both.yend, [&](int y) {
-        over.float_row(y, both.xbegin, both.xend,
-                       static_cast<const float*>(layer.pixeladdr(both.xbegin, y)),
-                       layer.nchannels());
-    }, by_rows(nthreads));
-}
 
 /// Where a magnified pass's light can come from: the window, grown by the
 /// largest displacement lateral aberration gives within it, as far as
@@ -327,6 +112,10 @@ void composite_pass(ImageBuf& frame, LayerPass& p, bool onto_black, const ImageS
     if (p.channels.magnified) {
         const ChannelPass& c = p.channels;
         const bool direct = c.alpha || c.colour[0] || c.colour[1] || c.colour[2];
+        // The layer's changes go into its spread, which the magnified
+        // channels are composited from: then the direct ones are composited
+        // from it too, after.
+        const bool changed = cells.changes(layer);
         if (p.spread.rows) {
             // Kept where it lights anything: the rest is nothing to composite.
             ROI lit = roi_intersection(reach, p.spread.rows->extent());
@@ -337,18 +126,21 @@ void composite_pass(ImageBuf& frame, LayerPass& p, bool onto_black, const ImageS
             reset_zeroed(p.spread.apart, result_spec(scene, lit, TypeFloat), nthreads);
             Keep keep(p.spread.apart);
             KeepAndOver keep_and_over(p.spread.apart, frame, c);
-            p.spread.rows->run(lit, direct ? static_cast<RowSink&>(keep_and_over) : keep,
-                                 nthreads);
-        } else if (direct) {
-            composite_image(frame, p.spread.apart, c, cells, layer, nthreads);
+            p.spread.rows->run(lit,
+                               direct && !changed ? static_cast<RowSink&>(keep_and_over) : keep,
+                               nthreads);
         }
+        if (changed)
+            add_changes(p.spread.apart, cells, layer, nthreads);
+        if (direct && (changed || !p.spread.rows))
+            composite_image(frame, p.spread.apart, c, nullptr, layer, nthreads);
         composite_magnified(frame, p.spread.apart, 0, 1.0 + lateral_ca, centre, nthreads);
         composite_magnified(frame, p.spread.apart, 2, 1.0 - lateral_ca, centre, nthreads);
     } else if (p.spread.rows) {
         Over over(frame, p.channels, onto_black, &cells, layer);
         p.spread.rows->run(window, over, nthreads);
     } else if (p.spread.apart.initialized()) {
-        composite_image(frame, p.spread.apart, p.channels, cells, layer, nthreads);
+        composite_image(frame, p.spread.apart, p.channels, &cells, layer, nthreads);
     }
 }
 
@@ -475,8 +267,7 @@ bool spread_and_composite(ImageBuf& dst, const LayeredScene& scene, const Camera
     // The cells are made from the layers before they are spread, and
     // perhaps freed.
     ChannelCells cells;
-    if (!magnified)
-        compute_cells(cells, scene, camera, spread, plan, output_window, display, nthreads);
+    compute_cells(cells, scene, camera, spread, plan, output_window, display, nthreads);
     stats.cells = cells.green.report();
     FrameSpreads layers(scene, camera, plan, freeing, nthreads);
 

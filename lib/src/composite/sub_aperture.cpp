@@ -586,6 +586,12 @@ bool SubApertureLayers::change(size_t l, int x, int y, int& end, float* out) con
     return true;
 }
 
+bool SubApertureLayers::changes(size_t l) const
+{
+    return l < m_offset.size()
+           && std::any_of(m_offset[l].begin(), m_offset[l].end(), [](int64_t at) { return at >= 0; });
+}
+
 SubApertureReport SubApertureLayers::report() const
 {
     return { m_tiles.count(), m_tiles.with_cells(), m_most_cells, m_tiles_over_blocks };

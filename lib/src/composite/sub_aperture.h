@@ -72,6 +72,8 @@ public:
     /// its row up to column `end`, into `out` (room for a tile's row);
     /// false where it has none, up to `end`.
     bool change(size_t l, int x, int y, int& end, float* out) const;
+    /// Whether layer `l` has a change anywhere.
+    bool changes(size_t l) const;
 
     SubApertureReport report() const;
 
