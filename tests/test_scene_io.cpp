@@ -13,6 +13,7 @@
 
 #include <defocus/io/file_stamps.h>
 #include <defocus/io/frames.h>
+#include <defocus/io/image_output.h>
 #include <defocus/io/scene_io.h>
 
 #include "test_support.h"
@@ -282,6 +283,51 @@ TEST_CASE("deep scanline and tiled files are read, and several are merged pixel 
     REQUIRE(both.deep.size() == 1);
     CHECK(both.deep[0].offsets[1] == 3);  // 1 + 2 samples in the first pixel
     CHECK(both.deep[0].samples.size() == 36);
+}
+
+TEST_CASE("a deep image is written sample for sample, whatever room its pixels hold")
+{
+    // 37 rows: bands of rows and a short last one. Pixel p holds p % 3
+    // samples; every seventh has room for two more than it holds, so
+    // that its samples do not follow the previous pixel's.
+    ImageSpec spec(11, 37, 6, TypeFloat);
+    spec.channelnames = { "R", "G", "B", "A", "Z", "ZBack" };
+    spec.channelformats = { TypeHalf, TypeHalf, TypeHalf, TypeHalf, TypeFloat, TypeFloat };
+    spec.alpha_channel = 3;
+    spec.z_channel = 4;
+    spec.deep = true;
+    for (const bool room : { false, true }) {
+        ImageBuf image(spec);
+        DeepData& deep = *image.deepdata();
+        for (int64_t p = 0; p < deep.pixels(); ++p) {
+            deep.set_samples(p, int(p % 3));
+            if (room && p % 7 == 0)
+                deep.set_capacity(p, int(p % 3) + 2);
+        }
+        auto value = [](int64_t p, int c, int s) {
+            return float((p * 8 + c * 2 + s) % 1024) / 4.0f;  // exact in half
+        };
+        for (int64_t p = 0; p < deep.pixels(); ++p)
+            for (int s = 0; s < deep.samples(p); ++s)
+                for (int c = 0; c < 6; ++c)
+                    deep.set_deep_value(p, c, s, value(p, c, s));
+        const std::string file = scratch_dir("deep_write") + (room ? "/room.exr" : "/tight.exr");
+        std::string error;
+        REQUIRE(write_image_atomic(image, file, TypeUnknown, "none", error));
+        ImageBuf back(file);
+        REQUIRE(back.read(0, 0, true));
+        const DeepData& read = *back.deepdata();
+        REQUIRE(read.pixels() == deep.pixels());
+        int64_t wrong = 0;
+        for (int64_t p = 0; p < deep.pixels(); ++p) {
+            wrong += read.samples(p) != deep.samples(p);
+            for (int s = 0; s < std::min(read.samples(p), deep.samples(p)); ++s)
+                for (int c = 0; c < 6; ++c)
+                    wrong += read.deep_value(p, c, s) != value(p, c, s);
+        }
+        INFO((room ? "with room" : "tight"));
+        CHECK(wrong == 0);
+    }
 }
 
 TEST_CASE("inputs with different display windows are refused")
