@@ -4,16 +4,19 @@ of ../shared/data is laid out:
   layers.exr  a part a layer (back to front), R, G, B, A half and Z float
   flat.exr    the whole scene at once, the same channels
   deep.exr    the layers merged into one deep image (oiiotool --deepen
-              --deepmerge, which drops samples behind an opaque one)
+              --deepmerge, which drops samples behind an opaque one), each
+              partly covered pixel at its surface's depth
   truth_focus<F>.exr  the thin lens, R, G, B, A over the display window
 The inputs carry the overscan margin the renders have around the display
 window.
-  assemble_scene.py RENDERS OUTDIR"""
+  assemble_scene.py RENDERS OUTDIR
+  assemble_scene.py --deep OUTDIR    deep.exr again, from OUTDIR/layers.exr"""
 import glob
 import os
 import subprocess
 import sys
 
+import numpy as np
 import OpenImageIO as oiio
 
 LAYERS = ("far", "lights", "mid", "near")
@@ -49,7 +52,57 @@ def write(image, path, half=True):
     out.close()
 
 
+EMPTY = 1e9  # Blender's depth where a pixel's first sample hit nothing is 1e10
+
+
+def surface_depths(part, reach=3):
+    """`part` with each partly covered pixel at the depth of its surface.
+    Blender writes a pixel's depth from one sample, so a pixel its surface
+    covers in part has the empty depth when that sample missed it; a
+    renderer's deep output holds the surface's sample there, at the
+    surface's depth. It takes the nearest depth within `reach` pixels."""
+    pixels = part.get_pixels(oiio.FLOAT)
+    alpha, depth = pixels[..., 3], pixels[..., 4]
+    missing = (alpha > 0) & (depth >= EMPTY)
+    best = np.full(depth.shape, np.inf)
+    nearest = np.full(depth.shape, np.inf)
+    height, width = depth.shape
+    for dy in range(-reach, reach + 1):
+        for dx in range(-reach, reach + 1):
+            shifted = np.full(depth.shape, EMPTY * 10, dtype=depth.dtype)
+            shifted[max(dy, 0):height + min(dy, 0), max(dx, 0):width + min(dx, 0)] = \
+                depth[max(-dy, 0):height + min(-dy, 0), max(-dx, 0):width + min(-dx, 0)]
+            distance = dx * dx + dy * dy
+            closer = (shifted < EMPTY) & (distance < nearest)
+            nearest[closer], best[closer] = distance, shifted[closer]
+    fixed = missing & np.isfinite(best)
+    depth[fixed] = best[fixed]
+    out = oiio.ImageBuf(part.spec())
+    out.set_pixels(oiio.ROI(), pixels)
+    return out
+
+
+def write_deep(parts, outdir):
+    single = []
+    for k, part in enumerate(parts):
+        single.append(f"{outdir}/.part{k}.exr")
+        write(surface_depths(part), single[-1])
+    command = ["oiiotool"]
+    for k, path in enumerate(single):
+        command += [path, "--deepen"] + (["--deepmerge"] if k > 0 else [])
+    subprocess.run(command + ["-d", "half", "-d", "Z=float", "--compression", "zips",
+                              "--scanline", "-o", f"{outdir}/deep.exr"],
+                   check=True)
+    for path in single:
+        os.remove(path)
+
+
 def main():
+    if sys.argv[1] == "--deep":
+        outdir = sys.argv[2]
+        layers = f"{outdir}/layers.exr"
+        write_deep([oiio.ImageBuf(layers, k, 0) for k in range(len(LAYERS))], outdir)
+        return
     renders, outdir = sys.argv[1:3]
     os.makedirs(outdir, exist_ok=True)
     parts = [rgbaz(f"{renders}/layer_{name}.exr", name) for name in LAYERS]
@@ -67,18 +120,7 @@ def main():
         out.write_image(part.get_pixels(oiio.FLOAT))
     out.close()
     write(rgbaz(f"{renders}/flat.exr"), f"{outdir}/flat.exr")
-    single = []
-    for k, part in enumerate(parts):
-        single.append(f"{outdir}/.part{k}.exr")
-        write(part, single[-1])
-    command = ["oiiotool"]
-    for k, path in enumerate(single):
-        command += [path, "--deepen"] + (["--deepmerge"] if k > 0 else [])
-    subprocess.run(command + ["-d", "half", "-d", "Z=float", "--compression", "zips",
-                              "--scanline", "-o", f"{outdir}/deep.exr"],
-                   check=True)
-    for path in single:
-        os.remove(path)
+    write_deep(parts, outdir)
     for path in sorted(glob.glob(f"{renders}/truth_focus*.exr")):
         write(rgbaz(path, truth=True), f"{outdir}/{os.path.basename(path)}")
 
