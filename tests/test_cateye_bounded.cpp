@@ -35,9 +35,12 @@ CatEye corner_clip()
 
 TEST_CASE("bounded cat's eye: below radius 7.5 each pixel is its cell's clipped shape")
 {
-    const CatEye cateye = corner_clip();
+    // In front of the focus too, where the clip is mirrored.
+    CatEye cateye = corner_clip();
+    for (const double side : { 1.0, -1.0 })
     for (const Aperture& shape : { Aperture(), hexagon() }) {
-        INFO(aperture_shape_name(shape.shape));
+        cateye.side = side;
+        INFO(aperture_shape_name(shape.shape) << ", side " << side);
         auto profile = std::make_shared<ApertureProfile>(shape);
         ImageBuf color, radius;
         random_layer(ROI(-5, 45, 2, 40), 0.0, 7.49, 11, color, radius);

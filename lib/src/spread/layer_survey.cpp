@@ -166,7 +166,7 @@ void survey_rows(const SpreadSource& source, SpreadMethod method, const ShapePro
     std::vector<int> open(nlevels, INT_MIN);  // the block row each level's sums hold
     std::vector<FamilyFinder> families;
     for (int l = 0; l < nlevels; ++l)
-        families.emplace_back(*shape, levels[l]->grid_shift());
+        families.emplace_back(*shape, levels[l]->grid_shift(), source.cateye_side);
     auto finish = [&](int l) {
         if (open[l] == INT_MIN)
             return;

@@ -281,7 +281,7 @@ void prepare_dense_row(const SpreadSource& src, SpreadMethod method, const Shape
                        std::vector<float>& blend)
 {
     const ProgramFamily& pixels = shape.pixels();
-    FamilyFinder families(shape, 0);
+    FamilyFinder families(shape, 0, src.cateye_side);
     const size_t base = size_t(sy - src.roi.ybegin) * src.roi.width() - src.roi.xbegin;
     row.clear();
     color.resize(size_t(std::max(0, x1 - x0)) * 4);

@@ -151,6 +151,7 @@ bool spread_image(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const OIIO::Im
     source.color = color;
     source.radius = in.radii(roi.xbegin, roi.ybegin);
     source.box_aspect = box_aspect;
+    source.cateye_side = cateye.side;
     std::vector<uint8_t> visible;
     if (highlights.threshold > 0.0 && in.max_radius >= smallest_merged_radius()) {
         auto view = [&](int nchannels, const float* pixels) {

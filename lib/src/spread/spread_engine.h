@@ -122,11 +122,14 @@ private:
 /// mostly share it).
 class FamilyFinder {
 public:
-    FamilyFinder(const ShapePrograms& shape, int level)
+    /// `side`: CatEye::side of the layer spread.
+    FamilyFinder(const ShapePrograms& shape, int level, double side)
         : m_shape(shape)
+        , m_cateye(shape.cateye())
         , m_level(level)
         , m_family(&shape.blocks(level))
     {
+        m_cateye.side = side;
     }
 
     /// For a pixel (block 1) or block of `block` pixels of CoC radius r
@@ -135,7 +138,7 @@ public:
     {
         if (!m_shape.clipped())
             return m_family;
-        const CatEyeCell cell = cateye_cell(m_shape.cateye(), Imath::V2d(x, y),
+        const CatEyeCell cell = cateye_cell(m_cateye, Imath::V2d(x, y),
                                             cateye_fineness(block, r));
         if (!m_found || cell != m_cell) {
             m_family = &m_shape.clipped_blocks(m_level, cell);
@@ -147,6 +150,7 @@ public:
 
 private:
     const ShapePrograms& m_shape;
+    CatEye m_cateye;
     int m_level;
     const ProgramFamily* m_family;
     CatEyeCell m_cell { 0, 0, 0 };
@@ -163,6 +167,7 @@ struct SpreadSource {
     const uint8_t* keep_exact = nullptr;
     /// The box's rectangles: width over height, of the CoC disc's area.
     double box_aspect = 1.0;
+    double cateye_side = 1.0;  ///< CatEye::side of the layer
 };
 
 /// The smallest CoC radius the Bounded method merges into blocks: below

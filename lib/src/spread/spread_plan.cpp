@@ -153,6 +153,7 @@ bool spread_pass(const SpreadPlan& plan, const Layer& layer, const FloatPixels& 
                  std::string& error, int nthreads)
 {
     out.radius = std::move(radius);
+    const CatEye cateye = plan.cateye.of_layer(report.coc_min, report.coc_max);
     if (plan.smooth_order) {
         out.rows = SmoothRows::make(layer.color, out.radius, plan.smooth_order, {}, error,
                                     nthreads);
@@ -160,7 +161,7 @@ bool spread_pass(const SpreadPlan& plan, const Layer& layer, const FloatPixels& 
     }
     if (!plan.in_engine) {
         if (!spread_apart(out.apart, layer.color, out.radius, *plan.options, *plan.images,
-                          plan.profile.get(), plan.aspect, plan.cateye, plan.luma, out.psf_pixels,
+                          plan.profile.get(), plan.aspect, cateye, plan.luma, out.psf_pixels,
                           nthreads)) {
             error = out.apart.geterror();
             return false;
@@ -175,6 +176,7 @@ bool spread_pass(const SpreadPlan& plan, const Layer& layer, const FloatPixels& 
     source.color = color(roi.xbegin, roi.ybegin);
     source.radius = out.radius_pixels(roi.xbegin, roi.ybegin);
     source.box_aspect = plan.aspect;
+    source.cateye_side = cateye.side;
     const double layer_radius = 0.5 * std::max(std::abs(report.coc_min), std::abs(report.coc_max));
     if (plan.method == SpreadMethod::Bounded && layer_radius >= smallest_merged_radius()) {
         out.highlights = visible_bokeh(layer.color, out.radius,

@@ -1,9 +1,11 @@
 // Optical vignetting, the "cat's eye" bokeh: towards the frame's edges the
 // lens barrel clips the aperture, so a pixel's bokeh becomes the aperture's
 // shape intersected with a second disc of the CoC's radius, offset from
-// the pixel towards the optical centre.
+// the pixel towards the optical centre; in front of the focus, away from
+// it (the bokeh is the lens seen mirrored there, and so is its clip).
 #pragma once
 
+#include <cmath>
 #include <memory>
 #include <vector>
 
@@ -31,13 +33,28 @@ struct CatEye {
     /// as the aperture is squeezed (effective_aperture). The clip has the
     /// area of the CoC disc.
     double clip_aspect = 1.0;
+    /// 1 for what lies behind the focus, -1 in front of it: a near point's
+    /// light lands at p + rho u from lens point u with rho < 0, so its
+    /// footprint is the clipped lens turned half a turn.
+    double side = 1.0;
 
     /// The clip disc's centre relative to the footprint's centre, for a
-    /// pixel centred at `at` with CoC radius r: towards the optical centre,
-    /// amount · r · (distance from the centre / corner_distance) away.
+    /// pixel centred at `at` with CoC radius r: towards the optical centre
+    /// (away from it on the near side), amount · r · (distance from the
+    /// centre / corner_distance) away.
     Imath::V2d offset(const Imath::V2d& at, double r) const
     {
-        return (centre - at) * (amount * r / corner_distance);
+        return (centre - at) * (side * amount * r / corner_distance);
+    }
+
+    /// The clip of a layer whose CoC reaches from coc_min to coc_max (signed,
+    /// negative in front of the focus): the side of its largest blur.
+    CatEye of_layer(double coc_min, double coc_max) const
+    {
+        CatEye layer = *this;
+        const double widest = std::abs(coc_min) > std::abs(coc_max) ? coc_min : coc_max;
+        layer.side = widest < 0.0 ? -1.0 : 1.0;
+        return layer;
     }
 };
 
