@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <regex>
+#include <tuple>
 #include <set>
 
 #include <OpenImageIO/deepdata.h>
@@ -1294,7 +1295,8 @@ TEST_CASE("the memory limit bounds the peak memory of a render's process", "[sca
     // aperture holds: each layer's changes, the layers as the cells read
     // them and each thread's bands. Rendered under the least limit its
     // refusals ask for, the process stays within it: a flat frame, and
-    // fences in many layers with automatic cells.
+    // fences in many layers with automatic cells, also under axial
+    // aberration (red and blue take cells of their own).
     const std::string dir = scratch_dir("cli_memory_limit_flat");
     std::string log;
     REQUIRE(run(format("{} {}/layers.exr --width 1920 --height 1080", MAKE_EXAMPLE_SCENE_BIN,
@@ -1307,14 +1309,16 @@ TEST_CASE("the memory limit bounds the peak memory of a render's process", "[sca
     // the limit it asks for is M + N - L (M + N - M without the program).
     const std::regex refusal("needs ([0-9.]+) MB, more than the (?:([0-9.]+) (MB|bytes) the )?"
                              "memory limit of ([0-9.]+) MB");
-    for (const auto& [input, cells] : { std::pair(flat, "1"), std::pair(fence, "0") }) {
+    for (const auto& [input, cells, axial] : { std::tuple(flat, "1", "0"),
+                                               std::tuple(fence, "0", "0"),
+                                               std::tuple(fence, "0", "0.3") }) {
         double limit_mb = 64.0;
         Finished rendered { -1, 0.0 };
         for (int attempt = 0; attempt < 6 && rendered.exit_code != 0; ++attempt) {
             const std::string limit = format("{}M", int(std::ceil(limit_mb)));
             rendered = run_to_end({ input, "-o", dir + "/o.exr", "--focal", "50", "--fstop",
                                     "1.8", "--focus", "4", "--aperture-cells", cells,
-                                    "--memory-limit", limit },
+                                    "--axial-ca", axial, "--memory-limit", limit },
                                   dir + "/said.txt");
             if (rendered.exit_code == 0)
                 break;
@@ -1328,8 +1332,8 @@ TEST_CASE("the memory limit bounds the peak memory of a render's process", "[sca
             const double left = !m[2].matched ? given : m[3] == "MB" ? std::stod(m[2]) : 0.0;
             limit_mb = given + need - left + 1.0;
         }
-        INFO(input << ", --aperture-cells " << cells << ": limit " << limit_mb << " MB, peak "
-                   << rendered.peak_kb / 1024 << " MB");
+        INFO(input << ", --aperture-cells " << cells << " --axial-ca " << axial << ": limit "
+                   << limit_mb << " MB, peak " << rendered.peak_kb / 1024 << " MB");
         REQUIRE(rendered.exit_code == 0);
         if (under_address_sanitizer) {
             WARN("peak not checked: AddressSanitizer's shadow memory is in it");
