@@ -134,16 +134,13 @@ void add_changes(ImageBuf& spread, const SubApertureLayers& cells, size_t index,
     const ROI roi = spread.roi();
     const int stride = spread.nchannels();
     parallel_for(roi.ybegin, roi.yend, [&](int y) {
-        float change[CellTiles::size * 4];
-        for (int x = roi.xbegin, end = roi.xend; x < roi.xend; x = end) {
-            const bool changed = cells.change(index, x, y, end, change);
-            end = std::min(end, roi.xend);
-            if (!changed)
-                continue;
+        cells.each_run(index, y, roi.xbegin, roi.xend, [&](int x, int end, const float* change) {
+            if (!change)
+                return;
             float* pixel = static_cast<float*>(spread.pixeladdr(x, y));
             for (int i = 0; i < end - x; ++i, pixel += stride)
                 store4(pixel, composited(load4(pixel), change + i * 4));
-        }
+        });
     }, by_rows(nthreads));
 }
 

@@ -68,13 +68,15 @@ public:
     }
     void row(int y, int x_begin, int x_end, const double* rgba) override
     {
-        float change[CellTiles::size * 4];
-        for (int x = x_begin, end = x_end; x < x_end; rgba += size_t(end - x) * 4, x = end) {
-            const bool changed = m_cells && m_cells->change(m_layer, x, y, end, change);
-            end = std::min(end, x_end);
-            composite_over(static_cast<float*>(m_frame.pixeladdr(x, y)), rgba, end - x,
-                           m_written, m_onto_black, changed ? change : nullptr);
-        }
+        auto put = [&](int x, int end, const float* change) {
+            composite_over(static_cast<float*>(m_frame.pixeladdr(x, y)),
+                           rgba + size_t(x - x_begin) * 4, end - x, m_written, m_onto_black,
+                           change);
+        };
+        if (m_cells)
+            m_cells->each_run(m_layer, y, x_begin, x_end, put);
+        else
+            put(x_begin, x_end, nullptr);
     }
     void dark(int y, int x_begin, int x_end) override
     {

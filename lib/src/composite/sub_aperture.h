@@ -30,6 +30,7 @@
 // and one cell leaves the engine's frame as it was.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -72,6 +73,19 @@ public:
     /// its row up to column `end`, into `out` (room for a tile's row);
     /// false where it has none, up to `end`.
     bool change(size_t l, int x, int y, int& end, float* out) const;
+    /// visit(x, end, change) for the runs of row y that cover [x_begin,
+    /// x_end): `change` is layer `l`'s over [x, end), RGBA a pixel, or null
+    /// where it has none.
+    template<typename Visit>
+    void each_run(size_t l, int y, int x_begin, int x_end, Visit&& visit) const
+    {
+        float out[CellTiles::size * 4];
+        for (int x = x_begin, end = x_end; x < x_end; x = end) {
+            const bool changed = change(l, x, y, end, out);
+            end = std::min(end, x_end);
+            visit(x, end, changed ? out : nullptr);
+        }
+    }
     /// Whether layer `l` has a change anywhere.
     bool changes(size_t l) const;
 
