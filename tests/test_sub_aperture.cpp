@@ -172,6 +172,20 @@ Stack off_centre_fence()
     return fence([](int) { return true; }, centre_x, off_centre_display_x);
 }
 
+/// The lens as the barrel clips it with --cateye 1 over the off-centre
+/// display (Camera::cateye): the unit disc around an offset towards the
+/// optical centre, 1 at the display's corners, at the pixel the light
+/// reaches.
+LensClip full_cateye_clip()
+{
+    const Imath::V2d optical_centre(off_centre_display_x + 300.0, 200.0);
+    const double corner = std::hypot(300.0, 200.0);
+    return [=](double ux, double uy, int x, int y) {
+        const Imath::V2d offset = (optical_centre - Imath::V2d(x + 0.5, y + 0.5)) / corner;
+        return (Imath::V2d(ux, uy) - offset).length2() <= 1.0;
+    };
+}
+
 /// PSNR against `exact` over the light's bokeh with automatic cells, and
 /// with one.
 struct BokehScores {
@@ -203,12 +217,7 @@ TEST_CASE("a cat's eye clips every part of the lens alike: the fence's shadow in
     // (Camera::cateye), at every pixel the light reaches, for both layers.
     Stack stack = off_centre_fence();
     stack.camera.cateye = 1.0;
-    const Imath::V2d optical_centre(off_centre_display_x + 300.0, 200.0);
-    const double corner = std::hypot(300.0, 200.0);
-    auto clip = [&](double ux, double uy, int x, int y) {
-        const Imath::V2d offset = (optical_centre - Imath::V2d(x + 0.5, y + 0.5)) / corner;
-        return (Imath::V2d(ux, uy) - offset).length2() <= 1.0;
-    };
+    const LensClip clip = full_cateye_clip();
     const auto [cells, one] = bokeh_scores(stack, thin_lens(stack.lens, bokeh, 48, clip));
     WARN("fence before a clipped bokeh, against the thin lens: " << cells << " dB with cells, "
          << one << " dB with one cell");
@@ -233,12 +242,7 @@ TEST_CASE("a cat's eye clips a near light's bokeh on the side away from the opti
         if (std::hypot(x + 0.5 - centre_x, y + 0.5 - centre_y) < 3.0)
             rgba[0] = rgba[1] = rgba[2] = rgba[3] = 1.0f;
     });
-    const Imath::V2d optical_centre(off_centre_display_x + 300.0, 200.0);
-    const double corner = std::hypot(300.0, 200.0);
-    auto clip = [&](double ux, double uy, int x, int y) {
-        const Imath::V2d offset = (optical_centre - Imath::V2d(x + 0.5, y + 0.5)) / corner;
-        return (Imath::V2d(ux, uy) - offset).length2() <= 1.0;
-    };
+    const LensClip clip = full_cateye_clip();
     const ROI near_bokeh(centre_x - 36, centre_x + 36, centre_y - 36, centre_y + 36, 0, 1, 0, 4);
     const ImageBuf exact = thin_lens(stack.lens, near_bokeh, 48, clip);
     const double score = psnr_over(stack.engine(1), exact, near_bokeh);
